@@ -1,0 +1,197 @@
+"""Syllable-aligner accuracy and speed on the real Mandarin recordings in ../shared/bench/zh/.
+
+For every set: the error of each syllable onset against the reference (median and 90th
+percentile in ms, share within 20 / 50 / 100 ms) for `align_syllables` and for an
+equal-split baseline over the same speaking parts, and the speed in times real time.
+
+Speaking parts come from the reference itself: each run of syllables between two `sil`
+intervals is one part, from the first syllable's start to the last one's end (short `sp`
+pauses and Chao's unlabelled gaps stay inside the part). Because the first onset of a part
+is then given, the table also reports the share within 50 ms over the inner onsets only.
+A second Chao run widens every part by up to 0.25 s of the surrounding silence, as a loose
+segmenter would, so that the first onset has to be found too.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import soundfile
+
+from cartoonface.speech.align import align_syllables
+from cartoonface.speech.audio import Audio
+
+ZH = Path(__file__).resolve().parents[1].parent / "shared" / "bench" / "zh"
+TUNING = range(1, 36)     # Biaobei 000001-000035: the only sentences the aligner was tuned on
+SILENCE = {"sil", "[SIL]"}
+LOOSE = 0.25              # seconds of surrounding silence added to each part in the loose run
+
+
+@dataclass(frozen=True)
+class Part:
+    """One speaking part: span in seconds, its syllables, the reference onset of each."""
+
+    start: float
+    end: float
+    syllables: tuple[str, ...]
+    onsets: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Recording:
+    name: str
+    audio: Audio
+    parts: tuple[Part, ...]
+
+
+@dataclass(frozen=True)
+class SpanStandIn:
+    start: float
+    end: float
+
+
+def read_tiers(path: Path) -> dict[str, list[tuple[float, float, str]]]:
+    """Interval tiers of a Praat TextGrid (long or short text format): name -> [(xmin, xmax, text)]."""
+    text = re.sub(r"\[\d+\]", "", path.read_text(encoding="utf-8"))
+    tokens = re.findall(r'"((?:[^"]|"")*)"|(?<![\w.])(-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)', text)
+    values = [q if q or not n else n for q, n in tokens]
+    tiers: dict[str, list[tuple[float, float, str]]] = {}
+    i = values.index("IntervalTier")
+    while i < len(values) and values[i] == "IntervalTier":
+        name, count = values[i + 1], int(values[i + 4])
+        rows = values[i + 5:i + 5 + 3 * count]
+        tiers[name] = [(float(rows[k]), float(rows[k + 1]), rows[k + 2]) for k in range(0, len(rows), 3)]
+        i += 5 + 3 * count
+    return tiers
+
+
+def load_audio(path: Path) -> Audio:
+    samples, rate = soundfile.read(path, dtype="float32", always_2d=True)
+    return Audio(samples=samples.mean(axis=1), rate=rate, source=str(path))
+
+
+def parts_from_intervals(intervals: list[tuple[float, float, str | None]]) -> tuple[Part, ...]:
+    """Speaking parts from (xmin, xmax, pinyin or None for a gap) runs between silences (None text = sil)."""
+    parts, run = [], []
+    for xmin, xmax, label in intervals + [(0.0, 0.0, "sil")]:
+        if label in SILENCE:
+            syll = [(a, b, s) for a, b, s in run if s]
+            if syll:
+                parts.append(Part(syll[0][0], syll[-1][1], tuple(s for _, _, s in syll), tuple(a for a, _, _ in syll)))
+            run = []
+        else:
+            run.append((xmin, xmax, label))
+    return tuple(parts)
+
+
+def biaobei() -> list[Recording]:
+    out = []
+    for grid in sorted((ZH / "biaobei" / "TextGrid").glob("*.TextGrid")):
+        tier = read_tiers(grid)["syllables_pinyin"]
+        rows = [(a, b, None if t == "sp" else t) for a, b, t in tier]
+        out.append(Recording(grid.stem, load_audio(ZH / "biaobei" / "wav" / f"{grid.stem}.wav"), parts_from_intervals(rows)))
+    return out
+
+
+def aishell3() -> list[Recording]:
+    """SSB00050015 by its character tier, SSB16240001 by its phone tier (syllable = its phones)."""
+    folder = ZH / "aishell3_charsiu"
+    table = {row["wav"]: row for row in csv.DictReader((folder / "transcripts.tsv").open(encoding="utf-8"), delimiter="\t")}
+    out = []
+    for wav, row in table.items():
+        tiers = read_tiers(folder / wav.replace("_16k.wav", ".TextGrid"))
+        pinyin = row["pinyin"].split()
+        if "words" in tiers:
+            words = [t for t in tiers["words"] if t[2] not in SILENCE]
+            rows = [(a, b, p) for (a, b, _), p in zip(words, pinyin)]
+        else:
+            phones = [t for t in tiers["phones"] if t[2] not in SILENCE]
+            rows, k = [], 0
+            for p, spelled in zip(pinyin, row["phone_tier_syllables"].split()):
+                n = len(spelled.split("+"))
+                rows.append((phones[k][0], phones[k + n - 1][1], p))
+                k += n
+        first, last = rows[0][0], rows[-1][1]
+        intervals = [(0.0, first, "sil"), *rows, (last, last, "sil")]
+        out.append(Recording(wav, load_audio(folder / wav), parts_from_intervals(intervals)))
+    return out
+
+
+def chao(loose: bool) -> list[Recording]:
+    folder = ZH / "chao1922_tone_change"
+    tier = read_tiers(folder / "chao1922_tone_paradigm.TextGrid")["hehe"]
+    rows = [(a, b, t if t else None) for a, b, t in tier]
+    parts = parts_from_intervals(rows)
+    if loose:
+        silences = [(a, b) for a, b, t in tier if t == "sil"]
+        widened = []
+        for p in parts:
+            before = max((b - a for a, b in silences if abs(b - p.start) < 1e-6), default=0.0)
+            after = max((b - a for a, b in silences if abs(a - p.end) < 1e-6), default=0.0)
+            widened.append(Part(p.start - min(LOOSE, before / 2), p.end + min(LOOSE, after / 2), p.syllables, p.onsets))
+        parts = tuple(widened)
+    return [Recording("chao1922", load_audio(folder / "chao1922_tone_paradigm.wav"), parts)]
+
+
+def equal_split(part: Part) -> np.ndarray:
+    """Baseline onsets: the part cut into syllables of equal length."""
+    n = len(part.syllables)
+    return part.start + (part.end - part.start) * np.arange(n) / n
+
+
+def evaluate(recordings: list[Recording]) -> dict[str, object]:
+    """Onset errors (s) of the aligner and of the baseline, inner-onset mask, aligner seconds, speech seconds."""
+    errors, base, inner, seconds, speech, confidence = [], [], [], 0.0, 0.0, []
+    for rec in recordings:
+        for part in rec.parts:
+            started = time.perf_counter()
+            timings = align_syllables(rec.audio, SpanStandIn(part.start, part.end), part.syllables)
+            seconds += time.perf_counter() - started
+            speech += part.end - part.start
+            reference = np.array(part.onsets)
+            errors.extend(np.abs(np.array([t.start for t in timings]) - reference))
+            base.extend(np.abs(equal_split(part) - reference))
+            inner.extend([False] + [True] * (len(part.onsets) - 1))
+            confidence.extend(t.confidence for t in timings)
+    return {"errors": np.array(errors), "base": np.array(base), "inner": np.array(inner),
+            "seconds": seconds, "speech": speech, "confidence": np.array(confidence)}
+
+
+def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
+    ms = errors * 1000
+    within = [100 * np.mean(ms <= limit) for limit in (20, 50, 100)]
+    inner50 = 100 * np.mean(ms[inner] <= 50) if inner.any() else float("nan")
+    return (f"  {label:<12} n={len(ms):4d}  median {np.median(ms):6.1f} ms  p90 {np.percentile(ms, 90):6.1f} ms"
+            f"  within 20/50/100 ms {within[0]:5.1f}% {within[1]:5.1f}% {within[2]:5.1f}%  inner@50 {inner50:5.1f}%")
+
+
+def report(name: str, recordings: list[Recording]) -> None:
+    result = evaluate(recordings)
+    print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result['speech']:.1f} s of speech, "
+          f"aligner {result['speech'] / max(result['seconds'], 1e-9):.0f}x real time")
+    print(row("aligner", result["errors"], result["inner"]))
+    print(row("equal split", result["base"], result["inner"]))
+    bad = result["errors"] > 0.05
+    conf = result["confidence"]
+    if bad.any() and (~bad).any():
+        print(f"  mean confidence: onsets within 50 ms {conf[~bad].mean():.2f}, beyond {conf[bad].mean():.2f}")
+
+
+def main() -> None:
+    records = biaobei()
+    tuning = [r for r in records if int(r.name) in TUNING]
+    held_out = [r for r in records if int(r.name) not in TUNING]
+    report("Biaobei tuning 000001-000035", tuning)
+    report("Biaobei held-out 000036-000070", held_out)
+    report("AISHELL-3 (2 speakers)", aishell3())
+    report("Chao 1922, reference parts", chao(loose=False))
+    report(f"Chao 1922, parts widened by <= {LOOSE} s", chao(loose=True))
+
+
+if __name__ == "__main__":
+    main()

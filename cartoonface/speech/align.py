@@ -1,0 +1,258 @@
+"""Syllable timing inside one speaking part, without a Mandarin acoustic model.
+
+The thesis (002, section 3.3) aligned syllables with an HMM and Mandarin acoustic models we
+cannot ship. This module finds the N known syllables of a speaking part by dynamic
+programming over 10 ms frames: the part is cut into exactly N syllables, optionally with
+pauses between them (and before the first / after the last), maximising
+
+    sum over syllables of  onset evidence at its start (by the class of its initial)
+                         + log duration prior (by syllable type, scaled to the speaking rate)
+    + sum over pause frames of their silence evidence - a penalty per pause.
+
+Onset evidence: the syllable starts where the vowel of the one before it ends, i.e. where the
+100-1000 Hz band energy falls (stops, affricates, fricatives: their closure or frication
+begins) or sits in a dip (nasals, laterals, glides, vowel-initial syllables). The fall and
+dip measures, the duration factors per syllable type and the pause penalty were tuned on
+Biaobei sentences 000001-000035 only (bench/align.py; docs/BENCHMARKS.md).
+
+Pauses: a pause inside the part (Biaobei's `sp`) or silence at its edges is modelled as a
+gap: the syllable before it ends where the silence starts, the next starts where it ends.
+Otherwise one syllable ends where the next starts. Syllables are ordered, do not overlap and
+lie inside the span; without detected silence at the edges the first starts at span.start
+and the last ends at span.end.
+
+Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
+all give a duration-prior split with low confidence.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, Sequence
+
+import numpy as np
+
+from cartoonface.speech.features import HOP, frames
+
+if TYPE_CHECKING:
+    from cartoonface.speech.audio import Audio
+
+
+class SpanLike(Protocol):
+    start: float
+    end: float
+
+
+@dataclass(frozen=True)
+class SyllableTiming:
+    """One syllable: start and end in seconds (absolute in the recording), confidence 0..1."""
+
+    start: float
+    end: float
+    confidence: float
+
+
+@dataclass(frozen=True)
+class SyllableType:
+    """What the duration prior and onset evidence need of a pinyin syllable.
+
+    initial: pinyin initial ("" when none; y and w count as initials here), final: the rest
+    without tone digit and erhua r, tone 1-5 (5 = neutral or unknown), erhua: ends in r.
+    """
+
+    initial: str
+    final: str
+    tone: int
+    erhua: bool
+
+
+_INITIALS = ("zh", "ch", "sh", "b", "p", "m", "f", "d", "t", "n", "l", "g", "k", "h",
+             "j", "q", "x", "r", "z", "c", "s", "y", "w")
+
+# Initial classes (standard Mandarin phonology): closure = silent stop or affricate onset,
+# frication = voiceless fricative, sonorant = nasal, lateral or r, glide = y/w, none = vowel.
+_CLASS = {**dict.fromkeys(("b", "d", "g", "z", "zh", "j"), "closure"),
+          **dict.fromkeys(("p", "t", "k", "c", "ch", "q"), "aspirated"),
+          **dict.fromkeys(("f", "s", "sh", "x", "h"), "frication"),
+          **dict.fromkeys(("m", "n", "l", "r"), "sonorant"),
+          **dict.fromkeys(("y", "w"), "glide"),
+          "": "none"}
+
+
+def syllable_type(pinyin: str) -> SyllableType:
+    """Tone-numbered pinyin ("hang2", "wanr1", "lü4", "lv4") -> SyllableType; never raises."""
+    text = pinyin.strip().lower().replace("ü", "v").replace("u:", "v")
+    tone = 5
+    if text and text[-1].isdigit():
+        tone = int(text[-1]) if text[-1] in "12345" else 5
+        text = text[:-1]
+    text = re.sub(r"[^a-z]", "", text)
+    erhua = len(text) > 2 and text.endswith("r") and text != "er"
+    if erhua:
+        text = text[:-1]
+    initial = next((i for i in _INITIALS if text.startswith(i) and len(text) > len(i)), "")
+    return SyllableType(initial, text[len(initial):], tone, erhua)
+
+
+# Relative duration of a syllable by type, multiplied together; fitted on Biaobei 000001-000035
+# (log-linear least squares of each syllable's share of its part): see docs/BENCHMARKS.md.
+_INITIAL_FACTOR = {"closure": 1.0, "aspirated": 1.0, "frication": 1.0, "sonorant": 1.0,
+                   "glide": 1.0, "none": 1.0}
+_FINAL_LETTER_FACTOR = 1.0      # per letter of the final beyond the first
+_NASAL_FACTOR = 1.0             # final ends in n / ng
+_TONE_FACTOR = {1: 1.0, 2: 1.0, 3: 1.0, 4: 1.0, 5: 1.0}
+_ERHUA_FACTOR = 1.0
+_LAST_FACTOR = 1.0              # last syllable of the part (phrase-final lengthening)
+
+
+def relative_durations(syllables: Sequence[str]) -> np.ndarray:
+    """(N,) relative duration weights of the syllables of one part (mean 1)."""
+    weights = []
+    for k, pinyin in enumerate(syllables):
+        t = syllable_type(pinyin)
+        w = _INITIAL_FACTOR[_CLASS[t.initial]] * _TONE_FACTOR[t.tone]
+        w *= _FINAL_LETTER_FACTOR ** max(len(t.final) - 1, 0)
+        w *= _NASAL_FACTOR if t.final.endswith(("n", "ng")) else 1.0
+        w *= _ERHUA_FACTOR if t.erhua else 1.0
+        w *= _LAST_FACTOR if k == len(syllables) - 1 else 1.0
+        weights.append(w)
+    weights = np.array(weights, dtype=float)
+    return weights / weights.mean() if weights.size else weights
+
+
+# Tuned on Biaobei 000001-000035 (bench/align.py).
+DURATION_SPREAD = 0.35     # sd of log(duration / expected duration)
+FALL_WEIGHT = 0.25         # per dB of band-energy fall across an obstruent onset
+DIP_WEIGHT = 0.15          # per dB of dip depth at a sonorant / glide / vowel onset
+SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pause evidence
+PAUSE_PENALTY = 3.0        # per pause, in units of evidence
+MIN_PAUSE = 6              # frames: shorter silences are closures, not pauses
+MIN_FRAMES = 3             # frames: the shortest syllable
+MARGIN = 20                # frames of context read on each side of the span
+LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
+
+
+def _smooth(x: np.ndarray, width: int = 3) -> np.ndarray:
+    return np.convolve(np.pad(x, width // 2, mode="edge"), np.ones(width) / width, mode="valid")
+
+
+def onset_evidence(low: np.ndarray, klass: str) -> np.ndarray:
+    """(T,) smoothed 100-1000 Hz dB per boundary position -> (T,) evidence that a syllable
+    of initial class `klass` starts there (higher is likelier)."""
+    pad = np.pad(low, 12, mode="edge")
+    if klass in ("closure", "aspirated", "frication"):
+        fall = pad[10:-14] - pad[14:-10]          # dB fall from 2 frames before to 2 after
+        return FALL_WEIGHT * np.clip(fall, 0.0, 30.0)
+    windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
+    left, right = windows[:-13].max(axis=1), windows[13:].max(axis=1)
+    dip = np.minimum(left, right) - low
+    return DIP_WEIGHT * np.clip(dip, 0.0, 30.0)
+
+
+def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
+    ratio = np.log(np.maximum(d, 1) / mean)
+    return -0.5 * (ratio / DURATION_SPREAD) ** 2
+
+
+def _segment(evidence: np.ndarray, silence: np.ndarray, means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Best cut of T frames into N syllables with optional pauses between and around them.
+
+    evidence: (N, T + 1) onset evidence of syllable i starting at boundary k; silence: (T,)
+    per-frame pause evidence; means: (N,) expected durations in frames. Returns (starts,
+    ends) boundary indices (N,) each, starts[i] < ends[i] <= starts[i + 1].
+    """
+    n, positions = evidence.shape
+    total = positions - 1
+    cum = np.concatenate([[0.0], np.cumsum(silence)])
+    neg = -1e18
+    after_syllable = np.full((n + 1, positions), neg)   # i syllables done, the last ends at k
+    after_pause = np.full((n + 1, positions), neg)      # i syllables done, then a pause ending at k
+    pause_from = np.zeros((n + 1, positions), dtype=int)
+    length = np.zeros((n, positions), dtype=int)
+    from_pause = np.zeros((n, positions), dtype=bool)
+    after_syllable[0, 0] = 0.0
+    k = np.arange(positions)
+    for i in range(n + 1):
+        # pause: best start s <= k - MIN_PAUSE of  after_syllable[i, s] - cum[s]
+        base = after_syllable[i] - cum
+        best = np.maximum.accumulate(base)
+        arg = np.zeros(positions, dtype=int)
+        running, where = neg, 0
+        for s in range(positions):
+            if base[s] > running:
+                running, where = base[s], s
+            arg[s] = where
+        shifted = np.full(positions, neg)
+        shifted[MIN_PAUSE:] = best[:-MIN_PAUSE]
+        after_pause[i] = shifted + cum - PAUSE_PENALTY
+        pause_from[i, MIN_PAUSE:] = arg[:-MIN_PAUSE]
+        if i == n:
+            break
+        start_score = np.maximum(after_syllable[i], after_pause[i]) + evidence[i]
+        start_pause = after_pause[i] > after_syllable[i]
+        longest = min(total, int(4 * means[i]) + MIN_FRAMES)
+        d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
+        starts = k[:, None] - d[None, :]
+        valid = starts >= 0
+        cand = np.where(valid, start_score[np.clip(starts, 0, None)], neg) + _duration_score(d, means[i])[None, :]
+        choice = cand.argmax(axis=1)
+        after_syllable[i + 1] = cand[k, choice]
+        length[i] = d[choice]
+        from_pause[i] = start_pause[np.clip(k - d[choice], 0, None)]
+    starts, ends = np.zeros(n, dtype=int), np.zeros(n, dtype=int)
+    pos = total
+    in_pause = after_pause[n, total] > after_syllable[n, total]
+    for i in range(n, 0, -1):
+        if in_pause:
+            pos = pause_from[i, pos]
+        ends[i - 1] = pos
+        starts[i - 1] = pos - length[i - 1, pos]
+        in_pause = from_pause[i - 1, pos]
+        pos = starts[i - 1]
+    return starts, ends
+
+
+def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> tuple[SyllableTiming, ...]:
+    """The span cut in proportion to the duration prior, every syllable with `confidence`."""
+    weights = relative_durations(syllables)
+    edges = span.start + (span.end - span.start) * np.concatenate([[0.0], np.cumsum(weights)]) / max(weights.sum(), 1e-9)
+    edges[-1] = span.end
+    return tuple(SyllableTiming(float(a), float(b), confidence) for a, b in zip(edges[:-1], edges[1:]))
+
+
+def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> tuple[SyllableTiming, ...]:
+    """Start, end and confidence of each of `syllables` (tone-numbered pinyin) inside `span`.
+
+    audio: samples (n,) float mono and rate; span: .start/.end in seconds. Returns one
+    SyllableTiming per syllable, in order, inside the span (see the module docstring for
+    pauses). Never raises for odd input: an empty list gives (), a span too short, silent or
+    outside the audio gives a duration-prior split with low confidence.
+    """
+    n = len(syllables)
+    if n == 0:
+        return ()
+    total = int(round((span.end - span.start) / HOP))
+    if total < n * MIN_FRAMES or audio.rate <= 0:
+        return prior_split(span, syllables, LOW_CONFIDENCE)
+    first = int(round(span.start * audio.rate)) - MARGIN * int(round(HOP * audio.rate))
+    last = int(round(span.end * audio.rate)) + MARGIN * int(round(HOP * audio.rate))
+    clip = np.asarray(audio.samples[max(first, 0):max(last, 0)], dtype=np.float64)
+    clip = np.concatenate([np.zeros(max(-first, 0)), clip, np.zeros(max(last - max(first, 0) - clip.size - max(-first, 0), 0))])
+    feats = frames(clip, audio.rate)
+    low = _smooth(feats.low)
+    # boundary k (time span.start + k * HOP) sits at the centre of feature frame MARGIN + k - 1.
+    index = np.clip(MARGIN + np.arange(total + 1) - 1, 0, low.size - 1)
+    inner = low[index[:-1]]
+    loud, floor = np.percentile(inner, 95), np.percentile(low, 5)
+    if not np.isfinite(loud) or loud - floor < 10.0:
+        return prior_split(span, syllables, LOW_CONFIDENCE)
+    threshold = floor + 0.3 * (loud - floor)
+    silence = np.clip((threshold - inner) / SILENCE_SCALE, -3.0, 1.0)
+    speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
+    means = relative_durations(syllables) * speech_frames / n
+    evidence = np.stack([onset_evidence(low, _CLASS[syllable_type(p).initial])[index] for p in syllables])
+    starts, ends = _segment(evidence, silence, means)
+    times = span.start + HOP * np.stack([starts, ends], axis=1)
+    times = np.clip(times, span.start, span.end)
+    return tuple(SyllableTiming(float(a), float(b), 0.8) for a, b in times)

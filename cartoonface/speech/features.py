@@ -1,0 +1,98 @@
+"""Frame features of speech for the syllable aligner: log-mel spectra, MFCCs, band energies.
+
+Every function works on 16 kHz mono samples cut into 25 ms Hann windows every 10 ms
+(frame i covers [i * 0.01, i * 0.01 + 0.025) s; its centre is at i * 0.01 + 0.0125 s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import gcd
+
+import numpy as np
+from scipy.fft import dct, rfft
+from scipy.signal import resample_poly
+
+RATE = 16000
+HOP = 0.010          # seconds between frames
+WINDOW = 400         # samples (25 ms at 16 kHz)
+NFFT = 512
+MELS = 40
+CEPSTRA = 13
+
+
+@dataclass(frozen=True)
+class Frames:
+    """Features of one stretch of audio, one row per 10 ms frame.
+
+    logmel: (T, 40) natural-log mel band energies; mfcc: (T, 13); energy: (T,) dB of the
+    whole band; low, mid, high: (T,) dB of 100-1000, 1000-3000 and 3000-8000 Hz.
+    """
+
+    logmel: np.ndarray
+    mfcc: np.ndarray
+    energy: np.ndarray
+    low: np.ndarray
+    mid: np.ndarray
+    high: np.ndarray
+
+
+def to_rate(samples: np.ndarray, rate: int) -> np.ndarray:
+    """Resample (n,) float samples from `rate` Hz to 16 kHz; returns float64 (m,)."""
+    samples = np.asarray(samples, dtype=np.float64)
+    if rate == RATE:
+        return samples
+    g = gcd(int(rate), RATE)
+    return resample_poly(samples, RATE // g, int(rate) // g)
+
+
+def mel_filters() -> np.ndarray:
+    """Triangular mel filter bank, (NFFT // 2 + 1, 40), 50-7600 Hz."""
+    def mel(f):
+        return 2595.0 * np.log10(1.0 + f / 700.0)
+
+    edges = 700.0 * (10 ** (np.linspace(mel(50.0), mel(7600.0), MELS + 2) / 2595.0) - 1.0)
+    freqs = np.fft.rfftfreq(NFFT, 1.0 / RATE)
+    bank = np.zeros((freqs.size, MELS))
+    for m in range(MELS):
+        lo, mid, hi = edges[m:m + 3]
+        bank[:, m] = np.clip(np.minimum((freqs - lo) / (mid - lo), (hi - freqs) / (hi - mid)), 0.0, None)
+    return bank
+
+
+_BANK = mel_filters()
+
+
+def power_spectrum(samples: np.ndarray) -> np.ndarray:
+    """(n,) 16 kHz samples -> (T, 257) power spectra of pre-emphasised Hann-windowed frames.
+
+    T = max(1, 1 + (n - 400) // 160); shorter input is zero-padded to one frame.
+    """
+    x = np.append(samples[:1], samples[1:] - 0.97 * samples[:-1]) if samples.size else np.zeros(1)
+    if x.size < WINDOW:
+        x = np.pad(x, (0, WINDOW - x.size))
+    hop = int(RATE * HOP)
+    count = 1 + (x.size - WINDOW) // hop
+    index = np.arange(WINDOW)[None, :] + hop * np.arange(count)[:, None]
+    return np.abs(rfft(x[index] * np.hanning(WINDOW), n=NFFT, axis=1)) ** 2
+
+
+def band_db(power: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """(T, 257) power spectra -> (T,) dB of the energy between lo and hi Hz."""
+    freqs = np.fft.rfftfreq(NFFT, 1.0 / RATE)
+    band = (freqs >= lo) & (freqs < hi)
+    return 10.0 * np.log10(power[:, band].sum(axis=1) + 1e-10)
+
+
+def frames(samples: np.ndarray, rate: int) -> Frames:
+    """(n,) mono samples at `rate` Hz -> Frames at 100 frames per second."""
+    power = power_spectrum(to_rate(samples, rate))
+    logmel = np.log(power @ _BANK + 1e-8)
+    return Frames(
+        logmel=logmel,
+        mfcc=dct(logmel, type=2, norm="ortho", axis=1)[:, :CEPSTRA],
+        energy=band_db(power, 0.0, 8000.0),
+        low=band_db(power, 100.0, 1000.0),
+        mid=band_db(power, 1000.0, 3000.0),
+        high=band_db(power, 3000.0, 8000.0),
+    )
