@@ -1,0 +1,248 @@
+"""Curves of the cartoon face: Bezier arcs, corner cutting, and each part's SVG path data.
+
+Thesis 002, Alg. 2.2 draws the face with `arc(P1..Pn)`, "a curve composed by the
+points P1..Pn" (its Fig. 2.8 is missing from the text), as cubic Bezier curves for the
+contours and as corner-cutting subdivision curves for the eyebrows and the hair.
+
+How `arc(P1..Pn)` becomes cubic Bezier control points (our choice, Fig. 2.8 being lost):
+the curve passes through every point; piece i runs from P_i to P_i+1 with control points
+P_i + T_i/3 and P_i+1 - T_i+1/3 (a cubic Hermite spline). The tangent at an inner point is
+the Catmull-Rom tangent T_i = (P_i+1 - P_i-1)/2. At an end of the arc the tangent is the
+"natural" one, T_1 = (3 (P_2 - P_1) - T_2)/2, which makes the curvature vanish there, unless a
+neighbour point beyond the end is given (see `contour`).
+
+How the arcs of a closed contour join: Alg. 2.2 lists each contour as several arcs that
+share their end points. Where the thesis's figure shows a soft outline (the face: forehead,
+cheeks, jaw) the joins are smooth: each shared point gets the Catmull-Rom tangent from its
+neighbours on both arcs. Where a real corner is drawn (eye corners, mouth corners, the
+Cupid's bow at 8.1, the tips of the eyebrows) the arcs keep their own natural end tangents
+and meet at an angle.
+
+Corner cutting (Chaikin): every edge (P, Q) of the polygon is replaced by the two points
+3/4 P + 1/4 Q and 1/4 P + 3/4 Q; an open arc keeps its two end points so that the two arcs
+of an eyebrow meet at pointed tips. Every new point is a convex combination of old ones, so
+the curve stays inside the control polygon's convex hull.
+
+All of this is linear in the points. `face_shapes` therefore compiles, once per face layout,
+one matrix that maps the posed points to every control point of every part, and a format
+template; drawing a state is then one matrix product, a rounding to 0.1 px (what a screen
+shows), a table look-up of the number strings and one string format.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+# Eyebrows and hair: rounds of corner cutting. Three rounds turn each polygon edge into
+# eight short pieces, which read as a smooth outline at the sizes a face is drawn.
+CHAIKIN_ROUNDS = 3
+
+# Coordinates are written in tenths of a pixel: the finest step a screen shows.
+_SCALE = 10
+
+
+class Posed(Protocol):
+    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace`."""
+
+    xy: np.ndarray
+    hair: np.ndarray
+    nose_side: int
+
+
+def arc(points: np.ndarray, before: np.ndarray | None = None, after: np.ndarray | None = None) -> np.ndarray:
+    """Cubic Bezier pieces of the curve through `points`.
+
+    Takes `points` (n, D), n >= 2 (D = 2 for image points; any D works, the map is linear),
+    and optionally the neighbour `before` the first point and `after` the last (D,) that
+    set the end tangents (smooth joins in a contour); without them the ends are natural.
+    Returns (n-1, 3, D): for piece i the first control point, the second control point
+    and the end point (the start of piece i is points[i], or the end of piece i-1).
+    """
+    pts = np.asarray(points, dtype=float)
+    n = len(pts)
+    if n < 2:
+        raise ValueError("arc needs at least two points")
+    tangents = np.empty_like(pts)
+    tangents[1:-1] = (pts[2:] - pts[:-2]) / 2
+    if before is not None:
+        tangents[0] = (pts[1] - np.asarray(before, dtype=float)) / 2
+    if after is not None:
+        tangents[-1] = (np.asarray(after, dtype=float) - pts[-2]) / 2
+    if n == 2 and before is None and after is None:
+        tangents[:] = pts[1] - pts[0]
+    else:
+        if before is None:
+            tangents[0] = (3 * (pts[1] - pts[0]) - tangents[1]) / 2
+        if after is None:
+            tangents[-1] = (3 * (pts[-1] - pts[-2]) - tangents[-2]) / 2
+    pieces = np.empty((n - 1, 3, pts.shape[1]))
+    pieces[:, 0] = pts[:-1] + tangents[:-1] / 3
+    pieces[:, 1] = pts[1:] - tangents[1:] / 3
+    pieces[:, 2] = pts[1:]
+    return pieces
+
+
+def contour(arcs: list[np.ndarray], smooth: bool) -> np.ndarray:
+    """Bezier pieces of a closed contour made of arcs that share their end points.
+
+    Takes `arcs`, a list of (n_i, D) arrays where each arc ends where the next one starts
+    (and the last ends where the first starts), and `smooth`: True joins them with
+    Catmull-Rom tangents across the shared points, False leaves corners there.
+    Returns (sum(n_i - 1), 3, D) Bezier pieces starting at arcs[0][0].
+    """
+    count = len(arcs)
+    pieces = []
+    for i, points in enumerate(arcs):
+        before = arcs[i - 1][-2] if smooth else None
+        after = arcs[(i + 1) % count][1] if smooth else None
+        pieces.append(arc(points, before, after))
+    return np.concatenate(pieces)
+
+
+def chaikin(points: np.ndarray, rounds: int = CHAIKIN_ROUNDS, closed: bool = False) -> np.ndarray:
+    """Corner-cutting subdivision of a polygon.
+
+    Takes `points` (n, D) and the number of `rounds`; an open polygon keeps its first and
+    last points, a `closed` one wraps around. Returns the refined polygon: (2n, D) per round
+    for both kinds (open: the two end points plus two cuts on each of the n-1 edges).
+    """
+    pts = np.asarray(points, dtype=float)
+    for _ in range(rounds):
+        nxt = np.roll(pts, -1, axis=0) if closed else pts[1:]
+        cur = pts if closed else pts[:-1]
+        cuts = np.empty((2 * len(cur), pts.shape[1]))
+        cuts[0::2] = 0.75 * cur + 0.25 * nxt
+        cuts[1::2] = 0.25 * cur + 0.75 * nxt
+        pts = cuts if closed else np.concatenate([pts[:1], cuts, pts[-1:]])
+    return pts
+
+
+# The parts, thesis 002 Alg. 2.2 steps 2-13 (with Alg. 2.3 step 8 for the nose), by the
+# point names of cartoonface.face.lift.LIFTED_NAMES. Left and right follow the thesis's
+# wording ("the left eye" is drawn from 3.12, 3.2, 3.8, 3.4). Each entry: part name, kind,
+# arcs. Kinds: "smooth"/"corner" closed Bezier contours, "open" separate Bezier arcs (one
+# sub-path each), "cut" a closed shape of open corner-cut arcs (eyebrows).
+_FACE = (("11.2", "11.2a", "11.1", "11.3a", "11.3"), ("11.3", "10.9", "2.13"),
+         ("2.13", "2.1", "2.14"), ("2.14", "10.10", "11.2"))        # step 3
+_NOSE_TAIL = (("9.14", "9.2", "9.4"), ("9.13", "9.1", "9.5"), ("D", "9.15", "E"))  # step 6
+PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
+    ("face", "smooth", _FACE),
+    ("ear_l", "open", (("10.8", "10.2", "A"),)),                         # step 4
+    ("ear_r", "open", (("10.7", "10.1", "B"),)),                         # step 5
+    ("nose", "open", (("9.6", "C", "9.14"), *_NOSE_TAIL)),               # step 6
+    ("brow_l", "cut", (("4.6", "4.4a", "4.4", "4.2"), ("4.2", "G", "F", "4.6"))),  # step 7
+    ("brow_r", "cut", (("4.5", "4.3a", "4.3", "4.1"), ("4.1", "H", "I", "4.5"))),  # step 8
+    ("eye_l", "corner", (("3.12", "3.2", "3.8"), ("3.8", "3.4", "3.12"))),         # step 9
+    ("eye_r", "corner", (("3.7", "3.1", "3.11"), ("3.11", "3.3", "3.7"))),         # step 10
+    ("lid_l", "open", (("3.12", "3.2", "3.8"),)),    # upper lid line, drawn bolder
+    ("lid_r", "open", (("3.7", "3.1", "3.11"),)),
+    ("mouth", "corner", (("8.1", "8.9", "8.4"), ("8.4", "8.2", "8.3"), ("8.3", "8.10", "8.1"))),  # step 13
+    ("mouth_inner", "corner", (("R", "2.2", "S"), ("S", "2.3", "R"))),             # step 13
+    ("lips_line", "open", (("R", "2.2", "S"),)),     # the line where the lips meet
+)
+# Thesis 002, Alg. 2.3 step 8: when the head turns the other way (beta > 0) the nose
+# bridge is drawn on the visible side, arc(9.7, C, 9.13) instead of arc(9.6, C, 9.14).
+_NOSE_OTHER_SIDE = ("nose", "open", (("9.7", "C", "9.13"), *_NOSE_TAIL))
+# Which PosedFace.nose_side value selects that variant.
+NOSE_SIDE_OTHER = -1
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """A compiled drawing: `matrix` (K, P) maps the P points (posed xy then hair) to the K
+    coordinates written; `template` %-formats K*2 number strings into every part's path
+    data, parts separated by "|"; `names` lists the parts in that order."""
+
+    matrix: np.ndarray
+    template: str
+    names: tuple[str, ...]
+
+
+def _move(rows: list[np.ndarray], start: np.ndarray, pieces: np.ndarray) -> str:
+    """Append the start point and Bezier pieces to `rows`; return "M..C.." template text."""
+    rows.append(start)
+    rows.extend(pieces.reshape(-1, pieces.shape[-1]))
+    return "M%s %s" + "C%s %s %s %s %s %s" * len(pieces)
+
+
+def _polygon(rows: list[np.ndarray], points: np.ndarray) -> str:
+    """Append polygon vertices to `rows`; return closed "M..L..Z" template text."""
+    rows.extend(points)
+    return "M%s %s" + "L%s %s" * (len(points) - 1) + "Z"
+
+
+@functools.lru_cache(maxsize=32)
+def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
+    """Compile the linear map and template for points named `names` plus `hair_count` hair
+    points, with the nose drawn for `nose_side`."""
+    index = {name: i for i, name in enumerate(names)}
+    basis = np.eye(len(names) + hair_count)
+    rows: list[np.ndarray] = []
+    texts = []
+    part_names = ["hair"]
+    hair = basis[len(names):]
+    texts.append(_polygon(rows, chaikin(hair, closed=True)) if hair_count >= 3 else "")
+    parts = [_NOSE_OTHER_SIDE if p[0] == "nose" and nose_side == NOSE_SIDE_OTHER else p for p in PARTS]
+    for name, kind, arc_names in parts:
+        arcs = [basis[[index[n] for n in names_]] for names_ in arc_names]
+        if kind in ("smooth", "corner"):
+            texts.append(_move(rows, arcs[0][0], contour(arcs, kind == "smooth")) + "Z")
+        elif kind == "open":
+            texts.append("".join(_move(rows, a[0], arc(a)) for a in arcs))
+        else:  # "cut": open corner-cut arcs joined end to end into one closed outline
+            outline = np.concatenate([chaikin(a)[:-1] for a in arcs])
+            texts.append(_polygon(rows, outline))
+        part_names.append(name)
+    return _Plan(np.array(rows), "|".join(texts), tuple(part_names))
+
+
+@functools.lru_cache(maxsize=1)
+def _number_table() -> tuple[np.ndarray, int]:
+    """Strings for every tenth of a pixel in +-3276.8 px, indexed by tenths + offset."""
+    offset = 1 << 15
+    return np.array([_tenths_text(v) for v in range(-offset, offset)], dtype=object), offset
+
+
+def _tenths_text(tenths: int) -> str:
+    """The shortest SVG number text for `tenths`/10: 12, 12.5, .5, -.5."""
+    sign = "-" if tenths < 0 else ""
+    whole, frac = divmod(abs(tenths), _SCALE)
+    if frac == 0:
+        return f"{sign}{whole}"
+    return f"{sign}{whole or ''}.{frac}"
+
+
+def number_texts(values: np.ndarray) -> tuple[str, ...]:
+    """Takes any float array (pixels); returns its values, flattened, as SVG number text
+    rounded to 0.1 px with the fewest characters."""
+    tenths = np.rint(np.asarray(values, dtype=float).ravel() * _SCALE).astype(np.int64)
+    table, offset = _number_table()
+    if tenths.size and (tenths.min() < -offset or tenths.max() >= offset):
+        return tuple(_tenths_text(int(v)) for v in tenths)
+    return tuple(table[tenths + offset])
+
+
+def number_text(value: float) -> str:
+    """One number (pixels) as SVG text rounded to 0.1 px, e.g. 12.5 -> "12.5", 3.0 -> "3"."""
+    return _tenths_text(int(round(float(value) * _SCALE)))
+
+
+def face_shapes(posed: Posed) -> dict[str, str]:
+    """SVG path data of every drawn part of a posed face (thesis 002, Alg. 2.2 steps 2-13).
+
+    Takes a `cartoonface.face.pose.PosedFace` (`xy` (N, 2) image pixels in LIFTED_NAMES
+    order with the contour replacement of Alg. 2.3 already applied, `hair` (H, 2),
+    `nose_side`). Returns {part: path d} for "hair" (empty if fewer than 3 hair points),
+    "face", "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
+    "lid_r", "mouth", "mouth_inner", "lips_line"; coordinates in pixels rounded to 0.1.
+    """
+    from cartoonface.face.lift import LIFTED_NAMES
+
+    plan = _plan(tuple(LIFTED_NAMES), len(posed.hair), int(posed.nose_side))
+    points = np.concatenate([posed.xy, np.asarray(posed.hair, dtype=float).reshape(-1, 2)])
+    text = plan.template % number_texts(plan.matrix @ points)
+    return dict(zip(plan.names, text.replace(" -", "-").split("|")))

@@ -1,0 +1,104 @@
+"""Curve maths of the drawing: Bezier arcs, contours, corner cutting, number text."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import Delaunay
+
+from cartoonface.render.geometry import arc, chaikin, contour, number_text, number_texts
+
+
+def bezier(start: np.ndarray, pieces: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Sample Bezier pieces (k, 3, 2) starting at `start` at parameters t: returns (k, len(t), 2)."""
+    p0 = np.concatenate([start[None], pieces[:-1, 2]])[:, None]
+    c1, c2, p3 = (pieces[:, i][:, None] for i in range(3))
+    t = t[None, :, None]
+    return (1 - t) ** 3 * p0 + 3 * (1 - t) ** 2 * t * c1 + 3 * (1 - t) * t**2 * c2 + t**3 * p3
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(7)
+
+
+@pytest.mark.parametrize("n", [2, 3, 5, 8])
+def test_arc_passes_through_every_point(rng: np.random.Generator, n: int) -> None:
+    points = rng.uniform(0, 100, (n, 2))
+    pieces = arc(points)
+    assert pieces.shape == (n - 1, 3, 2)
+    ends = bezier(points[0], pieces, np.array([0.0, 1.0]))
+    np.testing.assert_allclose(ends[:, 0], points[:-1])
+    np.testing.assert_allclose(ends[:, 1], points[1:])
+
+
+def test_arc_is_smooth_at_inner_points(rng: np.random.Generator) -> None:
+    points = rng.uniform(0, 100, (6, 2))
+    pieces = arc(points)
+    incoming = pieces[:-1, 2] - pieces[:-1, 1]
+    outgoing = pieces[1:, 0] - pieces[:-1, 2]
+    np.testing.assert_allclose(incoming, outgoing)
+
+
+def test_arc_of_collinear_points_stays_on_the_line() -> None:
+    points = np.array([[0.0, 0.0], [1.0, 2.0], [3.0, 6.0], [4.0, 8.0]])
+    samples = bezier(points[0], arc(points), np.linspace(0, 1, 9)).reshape(-1, 2)
+    np.testing.assert_allclose(samples[:, 1], 2 * samples[:, 0], atol=1e-9)
+
+
+def test_arc_reversed_is_the_same_curve(rng: np.random.Generator) -> None:
+    points = rng.uniform(0, 100, (5, 2))
+    forward = bezier(points[0], arc(points), np.linspace(0, 1, 7))
+    backward = bezier(points[-1], arc(points[::-1]), np.linspace(1, 0, 7))[::-1]
+    np.testing.assert_allclose(forward, backward, atol=1e-9)
+
+
+def test_smooth_contour_has_no_corner_at_joins(rng: np.random.Generator) -> None:
+    pts = rng.uniform(0, 100, (6, 2))
+    arcs = [pts[[0, 1, 2]], pts[[2, 3, 4]], pts[[4, 5, 0]]]
+    for smooth in (True, False):
+        pieces = contour(arcs, smooth)
+        assert pieces.shape == (6, 3, 2)
+        np.testing.assert_allclose(pieces[-1, 2], pts[0])
+        joint = pieces[1, 2]  # point 2, where arcs 0 and 1 meet
+        incoming, outgoing = joint - pieces[1, 1], pieces[2, 0] - joint
+        cross = incoming[0] * outgoing[1] - incoming[1] * outgoing[0]
+        assert (abs(cross) < 1e-9) == smooth
+
+
+def test_arc_is_linear_in_its_points(rng: np.random.Generator) -> None:
+    a, b = rng.uniform(0, 100, (2, 4, 2))
+    np.testing.assert_allclose(arc(2 * a - b), 2 * arc(a) - arc(b), atol=1e-9)
+
+
+@pytest.mark.parametrize("closed", [False, True])
+@pytest.mark.parametrize("rounds", [1, 3])
+def test_chaikin_stays_inside_the_control_hull(rng: np.random.Generator, closed: bool, rounds: int) -> None:
+    polygon = rng.uniform(0, 100, (7, 2))
+    refined = chaikin(polygon, rounds, closed=closed)
+    assert len(refined) == len(polygon) * 2**rounds
+    assert (Delaunay(polygon).find_simplex(refined, tol=1e-9) >= 0).all()
+
+
+def test_open_chaikin_keeps_its_end_points(rng: np.random.Generator) -> None:
+    polygon = rng.uniform(0, 100, (4, 2))
+    refined = chaikin(polygon, 3)
+    np.testing.assert_allclose(refined[[0, -1]], polygon[[0, -1]])
+
+
+def test_chaikin_cuts_corners_and_shortens_the_polygon(rng: np.random.Generator) -> None:
+    polygon = rng.uniform(0, 100, (6, 2))
+
+    def perimeter(p: np.ndarray) -> float:
+        return float(np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1).sum())
+
+    lengths = [perimeter(chaikin(polygon, r, closed=True)) for r in range(4)]
+    assert all(a > b for a, b in zip(lengths, lengths[1:]))
+
+
+@pytest.mark.parametrize("value", [0.0, 3.0, -3.0, 0.04, 0.26, -0.5, 12.349, -1234.56, 9999.9, -4000.25])
+def test_number_text_rounds_to_a_tenth_with_fewest_characters(value: float) -> None:
+    text = number_text(value)
+    assert abs(float(text) - value) <= 0.05 + 1e-9
+    assert not text.endswith(".0") and not text.startswith(("0.", "-0."))
+    assert number_texts(np.array([value])) == (text,)
