@@ -1,0 +1,231 @@
+"""Statistical behaviour of an announcer's face: blinks, eyebrow raises, head movements.
+
+`schedule(duration, pauses, seed)` draws the timing of every non-speech facial
+behaviour of thesis 002, chapter 4, as a tuple of `Action` values that the
+timeline turns into key frames and that a user can edit (actions.json).
+
+Kinds and what they drive (Pose is (tilt, turn, roll) about X, Y, Z):
+
+- ``blink``: both eyes close and reopen; `amplitude` is the closed amount 0..1.
+- ``brow``: both eyebrows rise and fall back; `amplitude` is the raise 0..1.
+- ``tilt``: the thesis's "head tilting" (4.5.1), a sideways lean, i.e. Pose.roll
+  about Z; the head moves to the angle `amplitude` (degrees) over `duration`
+  and stays there until the next tilt.
+- ``turn``: the thesis's "horizontal head turning" (4.5.2), Pose.turn about Y;
+  moves to `amplitude` degrees over `duration` and stays.
+- ``nod``: the thesis's "vertical head turning" (4.5.3), Pose.tilt about X; the
+  head goes down by `amplitude` degrees over `attack`, holds, and comes back up
+  over `release`.
+
+Envelope kinds (blink, brow, nod) rise from 0 to `amplitude` over `attack`
+seconds, hold, and fall back to 0 over `release` seconds, all inside
+`duration`. Amplitudes are docs/animation.md's announcer-like choices.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+KINDS = ("blink", "brow", "tilt", "turn", "nod")
+ENVELOPE_KINDS = ("blink", "brow", "nod")
+ANGLE_KINDS = ("tilt", "turn", "nod")
+MAX_ANGLE = 15.0  # degrees: the pose limit of the face model (ARCHITECTURE.md, Pose)
+
+# Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
+# The thesis measures a behaviour's interval from the end of one to the start of
+# the next (section 4.2); we use that definition for blinks as well, so blinks
+# never overlap.
+BLINK_ALPHA = 2
+BLINK_THETA = 1.48
+# Blink shape: closing faster than opening. Stern, Walrath and Goldstein (1984):
+# about 100 ms to full closure; Sforza et al., Ophthalmic Physiol Opt 28(4), 2008:
+# closing 40-47 % faster than opening; Kwon et al., J R Soc Interface 10(85), 2013:
+# phases closing, closed, opening. We use 0.10 s close, 0.05 s closed, 0.15 s open.
+BLINK_CLOSE = 0.10
+BLINK_CLOSED = 0.05
+BLINK_OPEN = 0.15
+BLINK_AMOUNT = 1.0
+
+# Uniform intervals and durations (seconds), drawn with two decimals as in
+# thesis 002, section 4.4 ("[0.90, 12.54] is divided into 1165 discrete numbers").
+BROW_INTERVAL = (0.90, 12.54)  # thesis 002, section 4.4 (mean 6.72, sd 5.82)
+BROW_DURATION = (0.51, 0.99)  # thesis 002, section 4.4 (mean 0.75, sd 0.24)
+TILT_INTERVAL = (0.0, 6.64)  # thesis 002, section 4.5.1 ([0, 3.32] doubled for a normal pace)
+TILT_DURATION = (0.4, 1.0)  # thesis 002, section 4.5.1 ([0.2, 0.5] doubled)
+TURN_INTERVAL = (0.08, 7.92)  # thesis 002, Table 4.7 (adjusted interval)
+TURN_DURATION = (0.4, 0.92)  # thesis 002, Table 4.7 (adjusted interval)
+# Nods, thesis 002, section 4.5.3 and Table 4.12: the nod goes down during
+# [t_silence - t1 - d1, t_silence - t1], the head stays down for t1 and rises
+# during [t_silence, t_silence + d2], t_silence being the start of a pause.
+NOD_T1 = (0.07, 0.35)
+NOD_D1 = (0.34, 0.94)
+NOD_D2 = (0.34, 0.70)
+
+# Amplitudes: our choice (the thesis gives none); small, like a news announcer.
+BROW_AMOUNT = (0.40, 0.80)  # share of the full eyebrow raise of the face model
+TILT_ANGLE = 3.0  # sideways lean targets uniform in [-3, 3] degrees
+TURN_ANGLE = 6.0  # horizontal turn targets uniform in [-6, 6] degrees
+NOD_ANGLE = (3.0, 6.0)  # nod depth in degrees, head down
+BROW_RAMP = 0.3  # a brow raise rises over 30 % of its duration and falls over 30 %
+
+
+@dataclass(frozen=True)
+class Action:
+    """One facial behaviour: `kind` in KINDS, `start` and `duration` in seconds.
+
+    `amplitude`: 0..1 for blink/brow, degrees for tilt/turn (target angle) and nod
+    (depth, positive = head down). `attack`/`release` (seconds) shape the
+    envelope kinds: time to reach `amplitude` and time to return to 0; for a
+    nod they are the thesis's d1 and d2, and the hold between them is t1. They
+    are 0 for tilt and turn, which move over their whole duration.
+    """
+
+    kind: str
+    start: float
+    duration: float
+    amplitude: float
+    attack: float = 0.0
+    release: float = 0.0
+
+    @property
+    def end(self) -> float:
+        """Time in seconds when the behaviour is over."""
+        return self.start + self.duration
+
+
+def schedule(duration: float, pauses: Sequence[tuple[float, float]], seed: int) -> tuple[Action, ...]:
+    """Draw the behaviour of a face talking for `duration` seconds.
+
+    `pauses`: (start, end) seconds of the silent parts of the speech (see
+    `speech_pauses`); a nod is placed before each pause where it fits.
+    `seed`: any int; the same arguments give the same schedule. Each kind has
+    its own random stream, so e.g. the pauses do not change the blinks.
+    Returns every action sorted by start, all inside [0, duration]; no tilt or
+    turn overlaps a nod; actions of one kind never overlap.
+    """
+    blink_rng, brow_rng, tilt_rng, turn_rng, nod_rng = (
+        np.random.Generator(np.random.PCG64(child)) for child in np.random.SeedSequence(seed).spawn(5)
+    )
+    nods = _nods(duration, pauses, nod_rng)
+    busy = tuple((nod.start, nod.end) for nod in nods)
+    actions = (
+        *_blinks(duration, blink_rng),
+        *_brows(duration, brow_rng),
+        *_moves("tilt", duration, TILT_INTERVAL, TILT_DURATION, TILT_ANGLE, busy, tilt_rng),
+        *_moves("turn", duration, TURN_INTERVAL, TURN_DURATION, TURN_ANGLE, busy, turn_rng),
+        *nods,
+    )
+    return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))
+
+
+def speech_pauses(alignment) -> tuple[tuple[float, float], ...]:
+    """The pauses of an Alignment: (start, end) seconds of the silence after each sentence.
+
+    The silence between consecutive sentences, and after the last one if the
+    recording goes on; leading silence is no pause (nothing is said before it).
+    """
+    sentences = sorted(alignment.sentences, key=lambda s: s.start)
+    ends = [s.end for s in sentences]
+    starts = [s.start for s in sentences[1:]] + [alignment.duration]
+    return tuple((end, nxt) for end, nxt in zip(ends, starts, strict=True) if nxt > end)
+
+
+def blink_interval(rng: np.random.Generator) -> float:
+    """One Gamma(2, 1.48 s) interval drawn as thesis 002, section 4.3 does.
+
+    X = -theta * log(U1 * U2) with U1, U2 uniform on (0, 1]: the sum of two
+    exponential waiting times of rate 1/theta.
+    """
+    product = math.prod(1.0 - rng.random() for _ in range(BLINK_ALPHA))
+    return -BLINK_THETA * math.log(product)
+
+
+def _uniform2(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
+    """A value drawn uniformly among the two-decimal numbers of `bounds` (thesis 002, 4.4)."""
+    low, high = round(bounds[0] * 100), round(bounds[1] * 100)
+    return int(rng.integers(low, high + 1)) / 100
+
+
+def _ms(t: float) -> float:
+    """`t` seconds rounded to whole milliseconds, the resolution of the timeline."""
+    return round(t, 3)
+
+
+def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
+    length = BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN
+    blinks, end = [], 0.0
+    while True:
+        start = _ms(end + blink_interval(rng))
+        if start + length > duration:
+            return blinks
+        blinks.append(Action("blink", start, length, BLINK_AMOUNT, BLINK_CLOSE, BLINK_OPEN))
+        end = blinks[-1].end
+
+
+def _brows(duration: float, rng: np.random.Generator) -> list[Action]:
+    brows, end = [], 0.0
+    while True:
+        start = _ms(end + _uniform2(rng, BROW_INTERVAL))
+        length = _uniform2(rng, BROW_DURATION)
+        amount = round(float(rng.uniform(*BROW_AMOUNT)), 2)
+        if start + length > duration:
+            return brows
+        ramp = _ms(BROW_RAMP * length)
+        brows.append(Action("brow", start, length, amount, ramp, ramp))
+        end = brows[-1].end
+
+
+def _moves(
+    kind: str,
+    duration: float,
+    interval: tuple[float, float],
+    length: tuple[float, float],
+    angle: float,
+    busy: Sequence[tuple[float, float]],
+    rng: np.random.Generator,
+) -> list[Action]:
+    """Head tilts or turns: each waits its interval after the previous move or nod.
+
+    A move that would overlap a nod (`busy` spans) is put off: its interval is
+    counted again from the end of that nod.
+    """
+    moves, end = [], 0.0
+    while True:
+        gap, span = _uniform2(rng, interval), _uniform2(rng, length)
+        target = round(float(rng.uniform(-angle, angle)), 1)
+        start = _ms(end + gap)
+        blocking = _overlap(start, start + span, busy)
+        while blocking is not None:
+            start = _ms(blocking[1] + gap)
+            blocking = _overlap(start, start + span, busy)
+        if start + span > duration:
+            return moves
+        moves.append(Action(kind, start, span, target))
+        end = moves[-1].end
+
+
+def _overlap(start: float, end: float, spans: Sequence[tuple[float, float]]) -> tuple[float, float] | None:
+    """The first of `spans` that overlaps [start, end], or None."""
+    return next((span for span in spans if start < span[1] and span[0] < end), None)
+
+
+def _nods(duration: float, pauses: Sequence[tuple[float, float]], rng: np.random.Generator) -> list[Action]:
+    """One nod before each pause (thesis 002, 4.5.3), skipped where it would not fit.
+
+    A nod is skipped when it would start before 0, end after `duration`, or
+    overlap the previous nod (pauses closer together than a nod is long).
+    """
+    nods: list[Action] = []
+    for pause_start, _ in sorted(pauses):
+        t1, d1, d2 = _uniform2(rng, NOD_T1), _uniform2(rng, NOD_D1), _uniform2(rng, NOD_D2)
+        depth = round(float(rng.uniform(*NOD_ANGLE)), 1)
+        start = _ms(pause_start - t1 - d1)
+        end = pause_start + d2
+        if start < 0 or end > duration or (nods and start < nods[-1].end):
+            continue
+        nods.append(Action("nod", start, _ms(end - start), depth, d1, d2))
+    return nods
