@@ -1,0 +1,191 @@
+"""Decode a speech recording to mono float samples.
+
+WAV (8/16/24/32-bit integer or float, any rate) and FLAC are read by
+soundfile (libsndfile); every other format (MP3, OGG Vorbis/Opus, M4A/AAC,
+...) is decoded by the ffmpeg that imageio-ffmpeg bundles, to a temporary
+float WAV first (pydub would need ffprobe, which is not bundled). Stereo and
+multichannel audio is mixed to mono by averaging the channels. The sample
+rate is kept as recorded.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import soundfile
+
+from cartoonface.errors import AudioError
+from cartoonface.files import write_bytes_atomic
+
+# Longest recording accepted (issue 3, item 1): 30 minutes.
+MAX_SECONDS = 30 * 60
+# A recording whose peak is below this is silent: -70 dBFS, far below the
+# noise floor of any microphone recording.
+SILENT_PEAK = 10 ** (-70 / 20)
+# Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
+_SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
+# Formats every current browser plays in an <audio> element, kept as they are by browser_copy.
+_BROWSER_SUFFIXES = (".wav", ".mp3", ".m4a", ".aac")
+
+
+@dataclass(frozen=True, eq=False)
+class Audio:
+    """A decoded recording: `samples` (n,) float32 mono in [-1, 1] at `rate` Hz, read from `source`."""
+
+    samples: np.ndarray
+    rate: int
+    source: str
+
+    @property
+    def duration(self) -> float:
+        """Length in seconds."""
+        return len(self.samples) / self.rate
+
+
+def ffmpeg_exe() -> str:
+    """Path of the ffmpeg executable bundled by imageio-ffmpeg."""
+    import imageio_ffmpeg
+
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def load_audio(path: str | os.PathLike[str]) -> Audio:
+    """Decode the audio file at `path` to an `Audio` (mono float32, original rate).
+
+    Raises AudioError naming the file when it is missing, empty (0 bytes or no
+    samples), not audio, truncated or corrupt, silent, or longer than 30 minutes.
+    """
+    file = Path(path)
+    if not file.is_file():
+        raise AudioError(f"{file}: no such audio file")
+    size = file.stat().st_size
+    if size == 0:
+        raise AudioError(f"{file}: the file is empty (0 bytes); expected a recording (WAV, MP3, OGG, M4A, FLAC)")
+    with file.open("rb") as handle:
+        head = handle.read(12)
+    if head[:4] in _SOUNDFILE_MAGIC:
+        samples, rate = _read_soundfile(file, head)
+    else:
+        samples, rate = _read_ffmpeg(file)
+    if len(samples) == 0:
+        raise AudioError(f"{file}: the recording holds no samples; expected speech")
+    if len(samples) > MAX_SECONDS * rate:
+        raise AudioError(
+            f"{file}: the recording is longer than {MAX_SECONDS // 60} minutes; split it into parts of at most 30 minutes"
+        )
+    np.clip(samples, -1.0, 1.0, out=samples)
+    peak = float(np.max(np.abs(samples)))
+    if peak < SILENT_PEAK:
+        level = "digital silence" if peak == 0 else f"peak {20 * np.log10(peak):.0f} dBFS"
+        raise AudioError(f"{file}: the recording is silent ({level}); expected audible speech")
+    return Audio(samples=samples, rate=int(rate), source=str(file))
+
+
+def _read_soundfile(file: Path, head: bytes) -> tuple[np.ndarray, int]:
+    """Read a WAV/FLAC/AIFF file with libsndfile; return (mono float32 samples, rate)."""
+    if head[:4] == b"RIFF" and head[8:12] == b"WAVE":
+        _check_wav_complete(file)
+    try:
+        info = soundfile.info(str(file))
+    except (soundfile.LibsndfileError, RuntimeError) as exc:
+        if head[:4] in (b"RIFF", b"RF64"):
+            # A WAV codec libsndfile lacks (e.g. MP3 inside WAV): let ffmpeg try.
+            return _read_ffmpeg(file)
+        raise AudioError(f"{file}: not a readable audio file ({exc})") from None
+    if info.frames > (MAX_SECONDS + 1) * info.samplerate:
+        raise AudioError(
+            f"{file}: the recording lasts {info.frames / info.samplerate / 60:.1f} minutes; "
+            f"at most {MAX_SECONDS // 60} minutes are accepted"
+        )
+    try:
+        mono = np.empty(info.frames, dtype=np.float32)
+        filled = 0
+        for block in soundfile.blocks(str(file), blocksize=1 << 20, dtype="float32", always_2d=True):
+            mono[filled : filled + len(block)] = block.mean(axis=1)
+            filled += len(block)
+    except (soundfile.LibsndfileError, RuntimeError) as exc:
+        raise AudioError(f"{file}: corrupt audio data ({exc})") from None
+    return mono[:filled], info.samplerate
+
+
+def _check_wav_complete(file: Path) -> None:
+    """Raise AudioError when a RIFF/WAVE file's data chunk is shorter than its header declares.
+
+    Sizes of 0 or 0xFFFFFFFF are streaming placeholders and accepted.
+    """
+    size = file.stat().st_size
+    with file.open("rb") as handle:
+        pos = 12
+        while pos + 8 <= size:
+            handle.seek(pos)
+            chunk = handle.read(8)
+            length = int.from_bytes(chunk[4:8], "little")
+            if chunk[:4] == b"data":
+                available = size - pos - 8
+                if 0 < length < 0xFFFFFFFF and available < length:
+                    raise AudioError(
+                        f"{file}: truncated WAV file: the header declares {length} bytes of samples "
+                        f"but only {available} are present"
+                    )
+                return
+            pos += 8 + length + (length & 1)
+    raise AudioError(f"{file}: truncated or corrupt WAV file: no sample data (no 'data' chunk)")
+
+
+def _read_ffmpeg(file: Path) -> tuple[np.ndarray, int]:
+    """Decode any format ffmpeg knows to a temporary float WAV; return (mono float32 samples, rate)."""
+    with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as tmp:
+        wav = Path(tmp) / "decoded.wav"
+        command = [
+            ffmpeg_exe(), "-nostdin", "-v", "error", "-i", str(file),
+            "-map", "0:a:0", "-vn", "-ac", "1", "-c:a", "pcm_f32le",
+            # Decode a little past the limit only: enough to know it is too long.
+            "-t", str(MAX_SECONDS + 1), "-f", "wav", str(wav),
+        ]  # fmt: skip
+        done = subprocess.run(command, capture_output=True, text=True, errors="replace")
+        if done.returncode != 0 or not wav.is_file():
+            reason = _ffmpeg_reason(done.stderr)
+            raise AudioError(f"{file}: not a readable audio file ({reason}); expected WAV, MP3, OGG, M4A or FLAC")
+        samples, rate = soundfile.read(str(wav), dtype="float32", always_2d=True)
+    return np.ascontiguousarray(samples.mean(axis=1), dtype=np.float32), int(rate)
+
+
+def _ffmpeg_reason(stderr: str) -> str:
+    """The most telling line of ffmpeg's error output, without the file path."""
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    if any("matches no streams" in line for line in lines):
+        return "it contains no audio stream"
+    if not lines:
+        return "ffmpeg could not decode it"
+    reason = lines[-1].split(": ", 1)[-1] if ": " in lines[-1] else lines[-1]
+    return reason[:200]
+
+
+def browser_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], stem: str = "audio") -> Path:
+    """Put a copy of the recording at `path` that browsers play into `out_dir`; return its path.
+
+    WAV, MP3 and M4A/AAC are copied as they are (named `stem` + suffix);
+    anything else (OGG, Opus, FLAC, ...) is converted to MP3 (128 kbit/s)
+    with the bundled ffmpeg. Raises AudioError when the conversion fails.
+    """
+    source = Path(path)
+    folder = Path(out_dir)
+    suffix = source.suffix.lower()
+    if suffix in _BROWSER_SUFFIXES:
+        return write_bytes_atomic(folder / f"{stem}{suffix}", source.read_bytes())
+    with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as tmp:
+        mp3 = Path(tmp) / "copy.mp3"
+        command = [
+            ffmpeg_exe(), "-nostdin", "-v", "error", "-i", str(source),
+            "-map", "0:a:0", "-vn", "-c:a", "libmp3lame", "-b:a", "128k", str(mp3),
+        ]  # fmt: skip
+        done = subprocess.run(command, capture_output=True, text=True, errors="replace")
+        if done.returncode != 0 or not mp3.is_file():
+            raise AudioError(f"{source}: cannot convert for the browser ({_ffmpeg_reason(done.stderr)})")
+        return write_bytes_atomic(folder / f"{stem}.mp3", mp3.read_bytes())
+

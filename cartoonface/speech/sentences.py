@@ -1,0 +1,260 @@
+"""Sentence utterances by silence (thesis 002, section 3.2, Alg. 3.1).
+
+Two modes:
+
+* the thesis's mode (`pause=(start, end)`): the user selects the first
+  pause between sentences; its loudest frame V and its length give the noise
+  level V * c2 and the shortest sentence pause (end - start) * c1;
+* the automatic mode (default): the noise floor and the speech level are
+  learned from the distribution of frame energies of the whole recording,
+  speech is told from noise by voicing, and the shortest sentence pause is
+  learned from the lengths of the pauses in the recording. No initial
+  silence is needed. docs/alignment.md explains the rules and constants.
+
+Both work on the energy of 10 ms frames of the recording high-passed at
+80 Hz (so mains hum does not count as sound), which takes well under a
+second for 30 minutes of audio.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+from cartoonface.errors import OptionError
+from cartoonface.speech.audio import Audio
+
+# thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
+C1 = 0.95
+# thesis 002, Alg. 3.1 step 4 and the paragraph after it: c2 = 1.45. The
+# thesis says "volume" without a unit; we apply c2 to the linear RMS
+# amplitude of a frame (+3.2 dB), because a product on a dB scale depends on
+# the arbitrary reference level (45 dB * 1.45 = 65 dB would swallow speech).
+C2 = 1.45
+
+HOP = 0.01  # seconds per energy frame
+HIGH_PASS_HZ = 80.0  # removes mains hum (50/60 Hz) from the energy
+# Automatic mode: frames louder than floor + max(MIN_CONTRAST_DB, SHARE * (speech - floor)) are sound.
+FLOOR_PERCENTILE = 5.0
+SPEECH_PERCENTILE = 98.0
+MIN_CONTRAST_DB = 6.0
+THRESHOLD_SHARE = 0.3
+# Sound runs closer than this belong to one syllable group (consonant closures are shorter).
+JOIN_GAP = 0.15
+# A group is speech when at least VOICED_MIN seconds of it are voiced (Mandarin syllables all carry a voiced final).
+VOICED_MIN = 0.05
+VOICING_R = 0.5  # normalised autocorrelation peak at a pitch lag (70..400 Hz) that counts as voiced
+PITCH_RANGE_HZ = (70.0, 400.0)
+# Unvoiced sound kept before the first / after the last voiced frame of a group (fricatives, aspiration).
+UNVOICED_EDGE = 0.2
+# A group whose loudest frame is this far below the speech level is a click or a breath, not speech.
+GROUP_BELOW_SPEECH_DB = 25.0
+# Learned sentence pause: between these bounds; the default when the pauses show no two clusters.
+PAUSE_MIN, PAUSE_MAX = 0.25, 0.5
+CLUSTER_RATIO = 1.5
+# Silence kept around each speaking part, so soft onsets and releases are not cut.
+PAD = 0.05
+# Parts shorter than this are clicks, not speech (both modes).
+MIN_PART = 0.06
+
+
+@dataclass(frozen=True)
+class Span:
+    """A stretch of the recording from `start` to `end` seconds."""
+
+    start: float
+    end: float
+
+    @property
+    def duration(self) -> float:
+        """Length in seconds."""
+        return self.end - self.start
+
+
+def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None) -> tuple[Span, ...]:
+    """Split `audio` into speaking parts separated by sentence pauses (Alg. 3.1).
+
+    `pause` = (start, end) seconds of the first pause between sentences
+    selects the thesis's mode; None (default) the automatic mode. Returns the
+    speaking parts in time order (possibly one part covering all speech).
+    Raises OptionError when `pause` lies outside the recording or is empty.
+    """
+    power = frame_power(audio)
+    if pause is not None:
+        return _thesis_parts(audio, power, pause)
+    return _automatic_parts(audio, power)
+
+
+def frame_power(audio: Audio) -> np.ndarray:
+    """Mean square of each 10 ms frame of the 80 Hz high-passed audio, smoothed over 30 ms; shape (frames,)."""
+    hop = max(1, round(audio.rate * HOP))
+    sos = signal.butter(2, HIGH_PASS_HZ, "highpass", fs=audio.rate, output="sos")
+    filtered = signal.sosfilt(sos, audio.samples).astype(np.float32)
+    count = max(1, len(filtered) // hop)
+    padded = np.zeros(count * hop, dtype=np.float32)
+    usable = min(len(filtered), count * hop)
+    padded[:usable] = filtered[:usable]
+    power = np.mean(np.square(padded.reshape(count, hop), dtype=np.float64), axis=1)
+    return np.convolve(power, np.ones(3) / 3, mode="same")
+
+
+def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -> tuple[Span, ...]:
+    """Alg. 3.1 steps 2-8 with the user's first pause."""
+    start, end = (float(value) for value in pause)
+    if not (0 <= start < end <= audio.duration) or end - start < 2 * HOP:
+        raise OptionError(
+            f"pause {start:g},{end:g}: expected START,END seconds of the first pause between sentences, "
+            f"with 0 <= START < END <= {audio.duration:.2f} (the recording's length)"
+        )
+    rms = np.sqrt(power)
+    inside = rms[int(np.ceil(start / HOP)) : max(int(np.ceil(start / HOP)) + 1, int(end / HOP))]
+    v_noise = float(inside.max()) * C2  # steps 2 and 4
+    d_pause = (end - start) * C1  # step 3
+    silent = rms < v_noise
+    # Steps 5-8: silences of at least d_pause; the rest are speaking parts.
+    # The whole recording is searched (not only from t_s), so a leading silence is cut off too.
+    parts = []
+    for run_start, run_end in _runs(~silent):
+        parts.append([run_start * HOP, run_end * HOP])
+    merged: list[list[float]] = []
+    for part in parts:
+        if merged and part[0] - merged[-1][1] < d_pause:
+            merged[-1][1] = part[1]
+        else:
+            merged.append(part)
+    return tuple(
+        Span(round(s, 3), round(min(e, audio.duration), 3)) for s, e in merged if e - s >= MIN_PART
+    )
+
+
+def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
+    """Speaking parts with the noise floor, speech level and pause length learned from the recording."""
+    level = 10 * np.log10(power + 1e-12)
+    floor = float(np.percentile(level, FLOOR_PERCENTILE))
+    loud = float(np.percentile(level, SPEECH_PERCENTILE))
+    threshold = floor + max(MIN_CONTRAST_DB, THRESHOLD_SHARE * (loud - floor))
+    runs = _runs(level > threshold)
+    if not runs:
+        return ()
+    groups = _join(runs, round(JOIN_GAP / HOP))
+    voiced = _voiced_frames(audio, groups)
+    speech = []
+    for (first, last), flags in zip(groups, voiced, strict=True):
+        hits = np.flatnonzero(flags)
+        if len(hits) * HOP * 2 < VOICED_MIN or level[first:last].max() < loud - GROUP_BELOW_SPEECH_DB:  # voicing is measured on every second frame
+            continue
+        edge = round(UNVOICED_EDGE / HOP)
+        speech.append((max(first, first + hits[0] * 2 - edge), min(last, first + hits[-1] * 2 + 1 + edge)))
+    if not speech:
+        return ()
+    gaps = np.array([(b[0] - a[1]) * HOP for a, b in zip(speech, speech[1:])])
+    parts = _join(speech, round(learn_pause(gaps) / HOP))
+    spans = []
+    for index, (first, last) in enumerate(parts):
+        before = parts[index - 1][1] if index else 0
+        after = parts[index + 1][0] if index + 1 < len(parts) else len(level)
+        start = max(first - round(PAD / HOP), (before + first) // 2 if index else 0) * HOP
+        end = min(last + round(PAD / HOP), (last + after) // 2 if index + 1 < len(parts) else len(level)) * HOP
+        spans.append(Span(round(start, 3), round(min(end, audio.duration), 3)))
+    return tuple(span for span in spans if span.duration >= MIN_PART)
+
+
+def learn_pause(gaps: np.ndarray) -> float:
+    """The shortest sentence pause (seconds) learned from the pause lengths `gaps` (seconds, any order).
+
+    Pauses between syllables and words are short, pauses between sentences
+    long; the split is put at the largest ratio between consecutive sorted
+    pause lengths (geometric middle), kept within PAUSE_MIN..PAUSE_MAX, so a
+    pause of PAUSE_MAX or more always ends a speaking part. Without a clear
+    split (ratio below CLUSTER_RATIO, or fewer than two pauses) PAUSE_MAX.
+    """
+    values = np.sort(gaps[gaps > 0])
+    if len(values) < 2:
+        return PAUSE_MAX
+    ratios = values[1:] / values[:-1]
+    best = int(np.argmax(ratios))
+    if ratios[best] < CLUSTER_RATIO:
+        return PAUSE_MAX
+    return float(np.clip(np.sqrt(values[best] * values[best + 1]), PAUSE_MIN, PAUSE_MAX))
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open index ranges [first, last) where the boolean `mask` (n,) is True, in order."""
+    padded = np.concatenate(([False], mask, [False])).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def _join(runs: list[tuple[int, int]], max_gap: int) -> list[tuple[int, int]]:
+    """Merge frame ranges separated by fewer than `max_gap` frames."""
+    joined = [list(runs[0])]
+    for first, last in runs[1:]:
+        if first - joined[-1][1] < max_gap:
+            joined[-1][1] = last
+        else:
+            joined.append([first, last])
+    return [(first, last) for first, last in joined]
+
+
+def _voiced_frames(audio: Audio, groups: list[tuple[int, int]]) -> list[np.ndarray]:
+    """For each frame range in `groups`, a boolean array: voicing of every second 10 ms frame.
+
+    Voiced = the normalised autocorrelation of a 40 ms window (audio low-passed
+    and decimated to about 8 kHz) peaks above VOICING_R at a lag of a pitch in
+    PITCH_RANGE_HZ.
+    """
+    factor = max(1, audio.rate // 8000)
+    low = signal.resample_poly(audio.samples, 1, factor).astype(np.float32) if factor > 1 else audio.samples
+    rate = audio.rate / factor
+    window = round(0.04 * rate)
+    hop = rate * HOP
+    lag_lo, lag_hi = int(rate / PITCH_RANGE_HZ[1]), int(np.ceil(rate / PITCH_RANGE_HZ[0]))
+    nfft = 1 << int(np.ceil(np.log2(2 * window)))
+    padded = np.concatenate((low, np.zeros(window, dtype=np.float32)))
+    frames_of = [np.arange(first, last, 2) for first, last in groups]
+    every = np.concatenate(frames_of)
+    starts = np.minimum((every * hop).astype(np.int64), len(low) - 1)
+    result = np.empty(len(every), dtype=bool)
+    correction = window / (window - np.arange(lag_lo, lag_hi + 1))
+    for chunk in range(0, len(every), 4096):
+        idx = starts[chunk : chunk + 4096, None] + np.arange(window)
+        block = padded[idx]
+        block = block - block.mean(axis=1, keepdims=True)
+        spectrum = np.fft.rfft(block * np.hanning(window), n=nfft, axis=1)
+        acf = np.fft.irfft(np.abs(spectrum) ** 2, n=nfft, axis=1)
+        energy = np.maximum(acf[:, 0], 1e-12)
+        peak = np.max(acf[:, lag_lo : lag_hi + 1] * correction, axis=1) / energy
+        result[chunk : chunk + 4096] = peak > VOICING_R
+    split = np.cumsum([len(f) for f in frames_of])[:-1]
+    return np.split(result, split)
+
+
+def dips(audio: Audio, span: Span, margin: float = 0.25) -> tuple[tuple[float, float], ...]:
+    """Candidate places to split the speaking part `span`: local energy minima inside it.
+
+    Returns (time seconds, plateau seconds) pairs, time order, at least
+    `margin` seconds from either end; `plateau` is how long the energy stays
+    within 6 dB of the minimum, so a real pause scores longer than a dip
+    between two syllables.
+    """
+    first = int(span.start * audio.rate)
+    part = Audio(audio.samples[first : int(span.end * audio.rate)], audio.rate, audio.source)
+    if part.duration < 2 * margin + HOP:
+        return ()
+    level = 10 * np.log10(frame_power(part) + 1e-12)
+    level = np.convolve(level, np.ones(5) / 5, mode="same")
+    edge = round(margin / HOP)
+    minima, _ = signal.find_peaks(-level[edge:-edge], distance=round(0.12 / HOP), prominence=3.0)
+    found = []
+    for index in minima + edge:
+        near = level <= level[index] + 6.0
+        left = index
+        while left > 0 and near[left - 1]:
+            left -= 1
+        right = index
+        while right + 1 < len(level) and near[right + 1]:
+            right += 1
+        found.append((round(span.start + (left + right + 1) / 2 * HOP, 3), (right - left + 1) * HOP))
+    return tuple(found)

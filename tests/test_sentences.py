@@ -1,0 +1,182 @@
+"""Sentence utterances by silence (Alg. 3.1): both modes on synthesised speech-like audio."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cartoonface.errors import OptionError
+from cartoonface.speech.audio import Audio, load_audio
+from cartoonface.speech.sentences import Span, dips, find_speech_parts, learn_pause
+
+RATE = 16000
+
+
+def syllables(count: int, seed: int, level: float = 0.3) -> np.ndarray:
+    """`count` speech-like syllables: voiced harmonic tones 0.16-0.26 s with 30-60 ms gaps; float32 samples."""
+    rng = np.random.default_rng(seed)
+    pieces = []
+    for _ in range(count):
+        length = rng.uniform(0.16, 0.26)
+        t = np.arange(int(length * RATE)) / RATE
+        f0 = rng.uniform(110, 230) * (1 + 0.15 * t / length * rng.choice([-1, 1]))
+        phase = 2 * np.pi * np.cumsum(f0) / RATE
+        tone = sum(np.sin(k * phase) / k for k in range(1, 8))
+        envelope = np.sin(np.pi * t / length) ** 0.5
+        pieces.append(level * rng.uniform(0.5, 1.0) * tone / 2.6 * envelope)
+        pieces.append(np.zeros(int(rng.uniform(0.03, 0.06) * RATE)))
+    return np.concatenate(pieces[:-1]).astype(np.float32)
+
+
+def recording(counts: list[int], pauses: list[float], lead: float = 0.5, tail: float = 0.5, seed: int = 1):
+    """Sentences of `counts` syllables separated by `pauses` seconds; returns (samples, true spans)."""
+    parts = [np.zeros(int(lead * RATE), np.float32)]
+    truth = []
+    position = lead
+    for index, count in enumerate(counts):
+        sentence = syllables(count, seed + index)
+        truth.append(Span(position, position + len(sentence) / RATE))
+        parts.append(sentence)
+        position += len(sentence) / RATE
+        gap = pauses[index] if index < len(pauses) else tail
+        parts.append(np.zeros(int(gap * RATE), np.float32))
+        position += int(gap * RATE) / RATE
+    return np.concatenate(parts), truth
+
+
+def noisy(samples: np.ndarray, snr_db: float = 40.0, seed: int = 0) -> Audio:
+    """`samples` plus white noise `snr_db` below their RMS over the loud parts, as an Audio."""
+    rng = np.random.default_rng(seed)
+    loud = np.sqrt(np.mean(samples[np.abs(samples) > 0.01] ** 2))
+    noise = rng.normal(0, loud * 10 ** (-snr_db / 20), len(samples))
+    return Audio((samples + noise).astype(np.float32), RATE, "synthetic")
+
+
+def assert_matches(found: tuple[Span, ...], truth: list[Span], tolerance: float = 0.12) -> None:
+    """Each found part starts and ends within `tolerance` seconds of the true sentence."""
+    assert len(found) == len(truth), (found, truth)
+    for part, sentence in zip(found, truth, strict=True):
+        assert abs(part.start - sentence.start) < tolerance, (part, sentence)
+        assert abs(part.end - sentence.end) < tolerance, (part, sentence)
+
+
+def test_three_sentences_with_silence_around():
+    samples, truth = recording([8, 12, 6], [0.7, 0.8])
+    assert_matches(find_speech_parts(noisy(samples)), truth)
+
+
+def test_no_leading_silence():
+    samples, truth = recording([10, 7, 9], [0.6, 0.6], lead=0.0)
+    found = find_speech_parts(noisy(samples))
+    assert found[0].start == 0.0
+    assert_matches(found, truth)
+
+
+def test_trailing_noise_is_not_speech():
+    samples, truth = recording([9, 9], [0.7], tail=0.3)
+    hiss = np.random.default_rng(5).normal(0, 0.05, 2 * RATE).astype(np.float32)
+    audio = noisy(np.concatenate((samples, hiss)))
+    found = find_speech_parts(audio)
+    assert_matches(found, truth)
+    assert found[-1].end < len(samples) / RATE
+
+
+def test_one_long_sentence_stays_one_part():
+    samples, truth = recording([60], [])
+    assert samples.size / RATE > 12
+    assert_matches(find_speech_parts(noisy(samples)), truth)
+
+
+def test_two_second_pause_and_short_pauses():
+    samples, truth = recording([7, 9, 8, 6], [0.6, 2.0, 0.6])
+    assert_matches(find_speech_parts(noisy(samples)), truth)
+
+
+def test_long_pauses_only_still_split():
+    samples, truth = recording([5, 5, 5], [1.2, 2.4])
+    assert_matches(find_speech_parts(noisy(samples)), truth)
+
+
+def test_clipping_does_not_change_parts():
+    samples, truth = recording([8, 10, 7], [0.7, 0.9])
+    clipped = np.clip(samples * 30, -1, 1)
+    assert np.mean(np.abs(clipped) >= 1) > 0.05
+    assert_matches(find_speech_parts(noisy(clipped)), truth)
+
+
+def test_mains_hum_is_ignored():
+    samples, truth = recording([8, 10, 7], [0.7, 0.9])
+    t = np.arange(len(samples)) / RATE
+    hum = 0.05 * np.sin(2 * np.pi * 50 * t) + 0.02 * np.sin(2 * np.pi * 150 * t)
+    assert_matches(find_speech_parts(noisy(samples + hum.astype(np.float32))), truth)
+
+
+def test_noisy_recording():
+    samples, truth = recording([8, 10, 7], [0.7, 0.9])
+    assert_matches(find_speech_parts(noisy(samples, snr_db=20)), truth)
+
+
+def test_thesis_mode_with_the_first_pause():
+    samples, truth = recording([8, 10, 7], [0.7, 0.9])
+    audio = noisy(samples)
+    pause = (truth[0].end + 0.05, truth[1].start - 0.05)
+    assert_matches(find_speech_parts(audio, pause=pause), truth, tolerance=0.05)
+
+
+def test_thesis_mode_pause_shorter_than_the_others_is_needed():
+    # c1 = 0.95: a pause clearly shorter than the selected one does not split.
+    samples, truth = recording([8, 10, 7], [1.0, 0.4])
+    audio = noisy(samples)
+    found = find_speech_parts(audio, pause=(truth[0].end + 0.02, truth[1].start - 0.02))
+    assert len(found) == 2
+    assert abs(found[1].end - truth[2].end) < 0.05
+
+
+@pytest.mark.parametrize("pause", [(-1.0, 0.5), (2.0, 1.0), (0.0, 99.0), (1.0, 1.005)])
+def test_thesis_mode_rejects_a_pause_outside_the_recording(pause):
+    samples, _ = recording([5, 5], [0.7])
+    with pytest.raises(OptionError, match="pause"):
+        find_speech_parts(noisy(samples), pause=pause)
+
+
+def test_learned_pause_separates_two_clusters():
+    syllable_gaps = np.full(30, 0.06)
+    sentence_gaps = np.array([0.42, 0.45, 0.5])
+    learned = learn_pause(np.concatenate((syllable_gaps, sentence_gaps)))
+    assert syllable_gaps.max() < learned <= sentence_gaps.min()
+    assert learn_pause(syllable_gaps) > syllable_gaps.max()
+
+
+def test_dips_prefer_a_real_pause():
+    samples, truth = recording([6, 6], [0.22], lead=0.0, tail=0.0)
+    audio = noisy(samples)
+    found = dips(audio, Span(0.0, audio.duration))
+    longest = max(found, key=lambda item: item[1])
+    assert truth[0].end - 0.03 < longest[0] < truth[1].start + 0.03
+    assert all(0.25 <= time <= audio.duration - 0.25 for time, _ in found)
+
+
+def espeak(text: str, path: Path) -> Path:
+    """Synthesise pinyin `text` with espeak-ng's Mandarin voice into WAV `path`."""
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), text], check=True)
+    return path
+
+
+@pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency (scripts/setup.sh)")
+def test_espeak_sentences(tmp_path):
+    texts = ["ni3 hao3 wo3 shi4 lao3 shi1", "jin1 tian1 tian1 qi4 hen3 hao3", "wo3 men5 qu4 gong1 yuan2 ba5"]
+    pieces, truth, position = [], [], 0.0
+    for index, text in enumerate(texts):
+        audio = load_audio(espeak(text, tmp_path / f"{index}.wav"))
+        loud = np.flatnonzero(np.abs(audio.samples) > 0.02)
+        speech = audio.samples[loud[0] : loud[-1] + 1]
+        truth.append(Span(position, position + len(speech) / audio.rate))
+        pause = np.zeros(int(0.8 * audio.rate), np.float32)
+        pieces += [speech, pause]
+        position += (len(speech) + len(pause)) / audio.rate
+    joined = Audio(np.concatenate(pieces), audio.rate, "espeak")
+    assert_matches(find_speech_parts(joined), truth, tolerance=0.1)
