@@ -167,3 +167,9 @@ def test_speech_pauses_from_sentences():
         duration = 6.0
 
     assert speech_pauses(Alignment()) == ((2.0, 2.6), (5.0, 6.0))
+
+
+@pytest.mark.parametrize("kind", ["tilt", "turn"])
+def test_head_moves_alternate_sides(plan, kind):
+    targets = [a.amplitude for a in _of(plan, kind)]
+    assert all(a * b < 0 for a, b in zip(targets, targets[1:]))

@@ -67,8 +67,10 @@ NOD_D2 = (0.34, 0.70)
 
 # Amplitudes: our choice (the thesis gives none); small, like a news announcer.
 BROW_AMOUNT = (0.40, 0.80)  # share of the full eyebrow raise of the face model
-TILT_ANGLE = 3.0  # sideways lean targets uniform in [-3, 3] degrees
-TURN_ANGLE = 6.0  # horizontal turn targets uniform in [-6, 6] degrees
+# Tilt and turn targets alternate sides of the centre (so every move is seen)
+# with a size uniform in [A/3, A]: A = 3 degrees for a lean, 6 for a turn.
+TILT_ANGLE = 3.0
+TURN_ANGLE = 6.0
 NOD_ANGLE = (3.0, 6.0)  # nod depth in degrees, head down
 BROW_RAMP = 0.3  # a brow raise rises over 30 % of its duration and falls over 30 %
 
@@ -156,7 +158,7 @@ def _ms(t: float) -> float:
 
 
 def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
-    length = BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN
+    length = _ms(BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN)
     blinks, end = [], 0.0
     while True:
         start = _ms(end + blink_interval(rng))
@@ -190,13 +192,15 @@ def _moves(
 ) -> list[Action]:
     """Head tilts or turns: each waits its interval after the previous move or nod.
 
-    A move that would overlap a nod (`busy` spans) is put off: its interval is
+    Targets alternate sides of the centre, the first side drawn at random. A move that would overlap a nod (`busy` spans) is put off: its interval is
     counted again from the end of that nod.
     """
     moves, end = [], 0.0
+    side = 1.0 if rng.random() < 0.5 else -1.0
     while True:
         gap, span = _uniform2(rng, interval), _uniform2(rng, length)
-        target = round(float(rng.uniform(-angle, angle)), 1)
+        side = -side
+        target = round(side * float(rng.uniform(angle / 3, angle)), 1)
         start = _ms(end + gap)
         blocking = _overlap(start, start + span, busy)
         while blocking is not None:
