@@ -1,0 +1,152 @@
+"""Decoding recordings: every format to the same mono samples, and a clear AudioError for bad files."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import soundfile
+
+from cartoonface.errors import AudioError
+from cartoonface.speech.audio import MAX_SECONDS, browser_copy, ffmpeg_exe, load_audio
+
+needs_espeak = pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency")
+
+
+def ffmpeg(*args: str) -> None:
+    """Run the bundled ffmpeg quietly; fail the test when it fails."""
+    subprocess.run([ffmpeg_exe(), "-nostdin", "-v", "error", "-y", *args], check=True)
+
+
+@pytest.fixture(scope="module")
+def speech(tmp_path_factory) -> Path:
+    """A mono 22.05 kHz WAV of espeak-ng reading Mandarin pinyin."""
+    if shutil.which("espeak-ng") is None:
+        pytest.skip("espeak-ng is a Debian dependency (scripts/setup.sh)")
+    path = tmp_path_factory.mktemp("speech") / "speech.wav"
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), "ni3 hao3 shi4 jie4"], check=True)
+    return path
+
+
+VARIANTS = {
+    "s16.wav": ["-c:a", "pcm_s16le"],
+    "u8.wav": ["-c:a", "pcm_u8"],
+    "s24_stereo_44k.wav": ["-c:a", "pcm_s24le", "-ac", "2", "-ar", "44100"],
+    "s32.wav": ["-c:a", "pcm_s32le"],
+    "f32.wav": ["-c:a", "pcm_f32le"],
+    "f64_8k.wav": ["-c:a", "pcm_f64le", "-ar", "8000"],
+    "speech.mp3": [],
+    "speech.ogg": [],
+    "speech.opus": [],
+    "speech.m4a": [],
+    "speech.flac": [],
+}
+
+
+@needs_espeak
+@pytest.mark.parametrize("name", sorted(VARIANTS))
+def test_every_format_decodes_to_the_same_length(speech, tmp_path, name):
+    reference = load_audio(speech)
+    target = tmp_path / name
+    ffmpeg("-i", str(speech), *VARIANTS[name], str(target))
+    audio = load_audio(target)
+    assert audio.samples.ndim == 1 and audio.samples.dtype == np.float32
+    assert np.max(np.abs(audio.samples)) <= 1.0
+    assert abs(audio.duration - reference.duration) < 0.03
+    assert audio.source == str(target)
+    if audio.rate == reference.rate and name.endswith(".wav"):
+        # Lossless formats at the same rate hold the same signal.
+        assert np.corrcoef(audio.samples, reference.samples)[0, 1] > 0.99
+
+
+def test_stereo_is_mixed_to_mono(tmp_path):
+    rate = 8000
+    t = np.arange(rate) / rate
+    left = 0.5 * np.sin(2 * np.pi * 220 * t)
+    stereo = np.stack((left, np.zeros_like(left)), axis=1)
+    soundfile.write(tmp_path / "stereo.wav", stereo, rate, subtype="PCM_16")
+    audio = load_audio(tmp_path / "stereo.wav")
+    assert audio.rate == rate
+    assert np.allclose(audio.samples, left / 2, atol=1e-3)
+
+
+def test_not_audio(tmp_path):
+    path = tmp_path / "notes.wav"
+    path.write_text("these are my notes, not a recording\n")
+    with pytest.raises(AudioError, match="notes.wav: not a readable audio file"):
+        load_audio(path)
+
+
+def test_image_has_no_audio_stream(tmp_path):
+    path = tmp_path / "picture.png"
+    ffmpeg("-f", "lavfi", "-i", "color=c=red:s=16x16", "-frames:v", "1", str(path))
+    with pytest.raises(AudioError, match="picture.png: .*no audio stream"):
+        load_audio(path)
+
+
+def test_empty_file(tmp_path):
+    path = tmp_path / "empty.mp3"
+    path.write_bytes(b"")
+    with pytest.raises(AudioError, match="empty.mp3: the file is empty"):
+        load_audio(path)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(AudioError, match="nowhere.wav: no such audio file"):
+        load_audio(tmp_path / "nowhere.wav")
+
+
+def test_truncated_wav(tmp_path):
+    whole = tmp_path / "whole.wav"
+    soundfile.write(whole, np.random.default_rng(0).uniform(-0.5, 0.5, 16000), 16000, subtype="PCM_16")
+    cut = tmp_path / "cut.wav"
+    cut.write_bytes(whole.read_bytes()[:20000])
+    with pytest.raises(AudioError, match="cut.wav: truncated WAV"):
+        load_audio(cut)
+    header_only = tmp_path / "header.wav"
+    header_only.write_bytes(whole.read_bytes()[:30])
+    with pytest.raises(AudioError, match="header.wav: truncated or corrupt"):
+        load_audio(header_only)
+
+
+def test_wav_without_samples(tmp_path):
+    path = tmp_path / "nothing.wav"
+    soundfile.write(path, np.zeros(0), 16000, subtype="PCM_16")
+    with pytest.raises(AudioError, match="nothing.wav: the recording holds no samples"):
+        load_audio(path)
+
+
+@pytest.mark.parametrize("level", [0.0, 1e-5])
+def test_silent_file(tmp_path, level):
+    path = tmp_path / "silent.flac"
+    soundfile.write(path, np.full(16000, level), 16000, subtype="PCM_24")
+    with pytest.raises(AudioError, match="silent.flac: the recording is silent"):
+        load_audio(path)
+
+
+def test_over_thirty_minutes(tmp_path):
+    rate = 1000  # a low rate keeps the file small: 30 minutes are 1.8 MB of 8-bit samples
+    path = tmp_path / "long.wav"
+    noise = np.random.default_rng(1).uniform(-0.5, 0.5, (MAX_SECONDS + 5) * rate)
+    soundfile.write(path, noise, rate, subtype="PCM_U8")
+    with pytest.raises(AudioError, match="long.wav: .*30 minutes"):
+        load_audio(path)
+    # Sun AU goes through ffmpeg (only WAV/FLAC/AIFF go through libsndfile).
+    au = tmp_path / "long.au"
+    soundfile.write(au, noise, rate, subtype="PCM_S8")
+    with pytest.raises(AudioError, match="long.au: .*30 minutes"):
+        load_audio(au)
+
+
+@needs_espeak
+def test_browser_copy(speech, tmp_path):
+    kept = browser_copy(speech, tmp_path / "site")
+    assert kept.name == "audio.wav" and kept.read_bytes() == speech.read_bytes()
+    flac = tmp_path / "speech.flac"
+    ffmpeg("-i", str(speech), str(flac))
+    converted = browser_copy(flac, tmp_path / "site")
+    assert converted.name == "audio.mp3"
+    assert abs(load_audio(converted).duration - load_audio(speech).duration) < 0.06
