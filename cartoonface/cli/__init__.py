@@ -16,7 +16,7 @@ from cartoonface import __version__
 from cartoonface.errors import InputError
 
 # Subcommand modules, in the order they appear in --help.
-SUBCOMMANDS = ("face", "align", "generate")
+SUBCOMMANDS = ("face", "align", "generate", "serve")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,72 @@
+"""The cartoonface web app: upload a face model, a recording and its transcript,
+follow the job's progress, play the talking face and download it as a zip.
+
+`create_app(config=None)` builds the Flask app (docs/web.md lists the settings);
+`cartoonface serve` runs it under waitress.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Mapping
+from pathlib import Path
+
+from flask import Flask, Response
+
+from cartoonface.render.pages import BACKGROUNDS, CLOTHES
+from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
+from cartoonface.web.inputs import MAX_FACE_BYTES, Limits
+from cartoonface.web.runner import Runner
+from cartoonface.web.security import add_headers
+from cartoonface.web.store import apply_retention, fail_interrupted
+from cartoonface.web.views import JobIdConverter, WebState, bp
+
+ENV_PREFIX = "CARTOONFACE"
+
+
+def create_app(config: Mapping[str, object] | None = None) -> Flask:
+    """Build the app. Settings come from DEFAULTS, then `<instance>/config.py`, then
+    CARTOONFACE_* environment variables, then `config`. The instance folder is
+    config["INSTANCE_PATH"], else $CARTOONFACE_INSTANCE_PATH, else Flask's default
+    (`instance/` beside the package). Jobs left unfinished by a previous server are
+    marked failed and the retention limit is applied before the worker pool starts.
+    Raises OptionError for a bad setting."""
+    config = dict(config or {})
+    instance = config.get("INSTANCE_PATH") or os.environ.get(f"{ENV_PREFIX}_INSTANCE_PATH")
+    app = Flask(__name__, instance_path=str(Path(str(instance)).resolve()) if instance else None,
+                instance_relative_config=True, template_folder=str(PACKAGE / "templates"), static_folder=None)
+    app.config.from_mapping(DEFAULTS)
+    app.config.from_pyfile("config.py", silent=True)
+    app.config.from_prefixed_env(ENV_PREFIX)
+    app.config.update(config)
+    app.config["DEBUG"] = False
+    settings = settings_from(app.config, Path(app.instance_path))
+    settings.instance.mkdir(parents=True, exist_ok=True)
+    if not app.config.get("SECRET_KEY"):
+        app.config["SECRET_KEY"] = secret_key(settings.instance)
+    # A request may hold the recording, a face model and a transcript file.
+    app.config["MAX_CONTENT_LENGTH"] = settings.upload_bytes + MAX_FACE_BYTES + 4 * settings.transcript_chars + 65536
+    app.config.update(SESSION_COOKIE_HTTPONLY=True, SESSION_COOKIE_SAMESITE="Lax")
+
+    sweep_lock = threading.Lock()
+
+    def sweep(_folder: Path | None = None) -> None:
+        with sweep_lock:
+            apply_retention(settings.instance, settings.retention_days, settings.retention_mb)
+
+    fail_interrupted(settings.instance)
+    sweep()
+    limits = Limits(upload_bytes=settings.upload_bytes, transcript_chars=settings.transcript_chars,
+                    samples=sample_faces(settings.samples_dir), backgrounds=tuple(BACKGROUNDS),
+                    clothes=tuple(CLOTHES))
+    app.extensions["cartoonface"] = WebState(settings, limits, Runner(settings.workers, sweep))
+    app.url_map.converters["jobid"] = JobIdConverter
+    app.register_blueprint(bp)
+
+    @app.after_request
+    def headers(response: Response) -> Response:
+        response.headers.setdefault("Cache-Control", "no-store")
+        return add_headers(response)
+
+    return app

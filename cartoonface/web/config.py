@@ -1,0 +1,99 @@
+"""Web app settings: defaults, then `<instance>/config.py`, then environment
+variables `CARTOONFACE_<KEY>`, then the mapping given to create_app (docs/web.md).
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from cartoonface.errors import OptionError
+from cartoonface.files import write_bytes_atomic
+
+# The package folder: templates/ and static/ inside it are links to the top-level
+# folders in a source checkout and real folders in the wheel (pyproject package-data).
+PACKAGE = Path(__file__).resolve().parents[1]
+# The source checkout, for the sample faces (not part of the wheel).
+ROOT = PACKAGE.parent
+
+DEFAULTS: dict[str, object] = {
+    "MAX_UPLOAD_MB": 200,          # a 30-minute mono 16-bit 44.1 kHz WAV is 159 MB
+    "MAX_TRANSCRIPT_CHARS": 20000,  # 30 minutes of Mandarin at ~4 syllables/s is ~7200 characters
+    "WORKERS": os.cpu_count() or 1,
+    "RETENTION_DAYS": 7,
+    "RETENTION_MB": 2048,
+    "SAMPLES_DIR": str(ROOT / "samples" / "faces"),
+}
+
+# key -> (type, smallest value)
+NUMBERS = {
+    "MAX_UPLOAD_MB": (float, 0.001),
+    "MAX_TRANSCRIPT_CHARS": (int, 1),
+    "WORKERS": (int, 1),
+    "RETENTION_DAYS": (float, 0.0),
+    "RETENTION_MB": (float, 0.0),
+}
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Checked settings: instance folder, byte/char limits, pool size, retention, sample faces."""
+
+    instance: Path
+    upload_bytes: int
+    transcript_chars: int
+    workers: int
+    retention_days: float
+    retention_mb: float
+    samples_dir: Path
+
+
+def settings_from(config: Mapping[str, object], instance: Path) -> Settings:
+    """Check the app's config values; OptionError naming the CARTOONFACE_ key when one is wrong."""
+    values = {}
+    for key, (kind, smallest) in NUMBERS.items():
+        raw = config.get(key)
+        try:
+            if isinstance(raw, bool) or (kind is int and isinstance(raw, float)):
+                raise ValueError
+            value = kind(raw)
+        except (TypeError, ValueError):
+            raise OptionError(f"CARTOONFACE_{key}={raw!r}: expected a {kind.__name__} "
+                              f"of at least {smallest}") from None
+        if not value >= smallest:
+            raise OptionError(f"CARTOONFACE_{key}={raw!r}: expected at least {smallest}")
+        values[key] = value
+    return Settings(
+        instance=instance,
+        upload_bytes=int(values["MAX_UPLOAD_MB"] * 2**20),
+        transcript_chars=values["MAX_TRANSCRIPT_CHARS"],
+        workers=values["WORKERS"],
+        retention_days=values["RETENTION_DAYS"],
+        retention_mb=values["RETENTION_MB"],
+        samples_dir=Path(str(config.get("SAMPLES_DIR"))),
+    )
+
+
+def secret_key(instance: Path) -> bytes:
+    """The instance's session-signing key: read from `<instance>/secret_key`, made
+    (32 random bytes, file mode 0600) on first start so sessions survive restarts."""
+    path = instance / "secret_key"
+    try:
+        key = path.read_bytes()
+    except FileNotFoundError:
+        key = b""
+    if len(key) < 32:
+        key = secrets.token_bytes(32)
+        write_bytes_atomic(path, key)
+        path.chmod(0o600)
+    return key
+
+
+def sample_faces(folder: Path) -> dict[str, Path]:
+    """The sample face models on offer: file stem -> path, for `folder`/*.json."""
+    if not folder.is_dir():
+        return {}
+    return {path.stem: path for path in sorted(folder.glob("*.json")) if path.is_file()}

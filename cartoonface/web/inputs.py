@@ -1,0 +1,222 @@
+"""Check what the form sent, before a job is stored.
+
+`check_submission(form, files, limits)` returns a `Submission` (the inputs as
+bytes under names chosen here, plus the request as plain values) or a dict of
+field -> message for the form. File types are decided from the bytes (magic
+numbers), never from the file name; the user's file name is only ever shown
+(escaped), never used in a path.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from werkzeug.datastructures import FileStorage, MultiDict
+
+from cartoonface.errors import InputError
+from cartoonface.face.model import face_from_dict
+from cartoonface.speech.audio import load_audio
+from cartoonface.speech.transcript import parse_transcript
+
+PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
+MAX_TITLE_CHARS = 200
+MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
+SHOWN_NAME_CHARS = 80
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What the form accepts: `upload_bytes` per recording, `transcript_chars`,
+    and the sample faces (name -> JSON file), backgrounds and clothes on offer."""
+
+    upload_bytes: int
+    transcript_chars: int
+    samples: Mapping[str, Path]
+    backgrounds: tuple[str, ...]
+    clothes: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Submission:
+    """A checked request: `spec` (JSON-serialisable values for job.json) and `files`
+    (our file name -> bytes: face.json, audio.<ext>, transcript.txt)."""
+
+    spec: Mapping[str, object]
+    files: Mapping[str, bytes]
+
+
+def sniff_audio(head: bytes) -> str | None:
+    """The audio container that the first bytes of a file announce, as a file
+    extension ("wav", "flac", "ogg", "mp3", "m4a"), or None when none matches."""
+    if len(head) >= 12 and head[:4] in (b"RIFF", b"RF64") and head[8:12] == b"WAVE":
+        return "wav"
+    if head[:4] == b"fLaC":
+        return "flac"
+    if head[:4] == b"OggS":
+        return "ogg"
+    if head[:3] == b"ID3" or (len(head) >= 2 and head[0] == 0xFF and head[1] & 0xE0 == 0xE0):
+        return "mp3"
+    if len(head) >= 12 and head[4:8] == b"ftyp":
+        return "m4a"
+    return None
+
+
+def shown_name(upload: FileStorage, fallback: str) -> str:
+    """The user's file name for messages only: last path part, at most SHOWN_NAME_CHARS."""
+    name = (upload.filename or "").replace("\\", "/").rsplit("/", 1)[-1].strip()
+    return (name or fallback)[:SHOWN_NAME_CHARS]
+
+
+def read_upload(upload: FileStorage | None, limit: int) -> tuple[bytes | None, bool]:
+    """Read at most `limit` bytes of an upload; return (data or None when no file
+    was chosen, True when the file is larger than `limit`)."""
+    if upload is None or not upload.filename:
+        return None, False
+    data = upload.stream.read(limit + 1)
+    return data[:limit], len(data) > limit
+
+
+def _text(form: MultiDict[str, str], name: str) -> str:
+    return form.get(name, "", type=str) or ""
+
+
+def form_values(form: MultiDict[str, str]) -> dict[str, str]:
+    """The plain fields as sent, to fill the form again when it comes back with errors."""
+    return {name: _text(form, name) for name in ("face_sample", "page", "title", "background", "clothes",
+                                                 "transcript")}
+
+
+def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
+               errors: dict[str, str]) -> tuple[bytes | None, str]:
+    """The face model JSON (bytes) and its label: an upload wins over the sample chosen."""
+    upload = files.get("face_file")
+    data, too_big = read_upload(upload, MAX_FACE_BYTES)
+    if data is not None:
+        name = shown_name(upload, "face model")
+        if too_big:
+            errors["face_file"] = f"{name}: a face model must be at most {MAX_FACE_BYTES >> 10} kB of JSON."
+            return None, name
+        try:
+            obj = json.loads(data.decode("utf-8-sig"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            errors["face_file"] = f"{name}: not a face model: expected UTF-8 JSON ({exc})."
+            return None, name
+        try:
+            face_from_dict(obj, name)
+        except InputError as exc:
+            errors["face_file"] = str(exc)
+            return None, name
+        return data, name
+    sample = _text(form, "face_sample")
+    if sample not in limits.samples:
+        errors["face_sample"] = "Choose one of the sample faces or upload a face model (JSON)."
+        return None, sample
+    return limits.samples[sample].read_bytes(), sample
+
+
+def check_audio(files: MultiDict[str, FileStorage], limits: Limits,
+                errors: dict[str, str]) -> tuple[bytes | None, str, str, float]:
+    """The recording: (bytes, extension by content, shown name, duration in seconds)."""
+    upload = files.get("audio")
+    data, too_big = read_upload(upload, limits.upload_bytes)
+    if data is None:
+        errors["audio"] = "Choose a recording (WAV, MP3, OGG, M4A or FLAC)."
+        return None, "", "", 0.0
+    name = shown_name(upload, "recording")
+    if too_big:
+        errors["audio"] = f"{name}: the recording is larger than {limits.upload_bytes >> 20} MB."
+        return None, "", name, 0.0
+    ext = sniff_audio(data[:16])
+    if ext is None:
+        errors["audio"] = (f"{name}: not a recording this app reads (by its content); "
+                           "expected WAV, MP3, OGG, M4A or FLAC.")
+        return None, "", name, 0.0
+    with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
+        path = Path(tmp) / f"recording.{ext}"
+        path.write_bytes(data)
+        try:
+            audio = load_audio(path)
+        except InputError as exc:
+            errors["audio"] = str(exc).replace(str(path), name)
+            return None, ext, name, 0.0
+    return data, ext, name, len(audio.samples) / audio.rate
+
+
+def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
+                     errors: dict[str, str]) -> str | None:
+    """The transcript text: an uploaded UTF-8 text file wins over the pasted text."""
+    upload = files.get("transcript_file")
+    data, too_big = read_upload(upload, 4 * limits.transcript_chars + 3)
+    field, name = "transcript", "transcript"
+    if data is not None:
+        field, name = "transcript_file", shown_name(upload, "transcript")
+        if too_big:
+            errors[field] = f"{name}: the transcript is longer than {limits.transcript_chars} characters."
+            return None
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            errors[field] = f"{name}: not a text file: expected UTF-8 text."
+            return None
+        if "\x00" in text:
+            errors[field] = f"{name}: not a text file (it holds NUL bytes): expected UTF-8 text."
+            return None
+    else:
+        text = _text(form, "transcript")
+    text = text.replace("\r\n", "\n").strip()
+    if not text:
+        errors["transcript"] = "Paste the transcript of the recording, or upload it as a UTF-8 text file."
+        return None
+    if len(text) > limits.transcript_chars:
+        errors[field] = (f"{name}: the transcript has {len(text)} characters; "
+                         f"at most {limits.transcript_chars} are accepted.")
+        return None
+    try:
+        parse_transcript(text, name)
+    except InputError as exc:
+        errors[field] = str(exc)
+        return None
+    return text
+
+
+def check_choice(form: MultiDict[str, str], name: str, allowed: tuple[str, ...] | Mapping[str, str],
+                 what: str, errors: dict[str, str]) -> str:
+    """A select field whose value must be one of `allowed`."""
+    value = _text(form, name)
+    if value not in allowed:
+        errors[name] = f"Choose one of the {what} offered."
+    return value
+
+
+def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorage],
+                     limits: Limits) -> Submission | dict[str, str]:
+    """Check every field; return the Submission, or field -> message for each problem."""
+    errors: dict[str, str] = {}
+    title = " ".join(_text(form, "title").split())
+    if len(title) > MAX_TITLE_CHARS:
+        errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE_CHARS} are accepted."
+    page = check_choice(form, "page", PAGES, "page kinds", errors)
+    background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
+    clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
+    face, face_label = check_face(form, files, limits, errors)
+    transcript = check_transcript(form, files, limits, errors)
+    audio, ext, audio_label, duration = check_audio(files, limits, errors)
+    if errors or face is None or audio is None or transcript is None:
+        return errors
+    spec = {
+        "title": title,
+        "page": page,
+        "background": background,
+        "clothes": clothes,
+        "face_label": face_label,
+        "audio_label": audio_label,
+        "audio_file": f"audio.{ext}",
+        "duration": duration,
+        "transcript_chars": len(transcript),
+    }
+    files_out = {"face.json": face, f"audio.{ext}": audio, "transcript.txt": transcript.encode("utf-8")}
+    return Submission(spec, files_out)

@@ -1,0 +1,108 @@
+"""The bounded worker pool: `workers` threads, each running one job at a time in a
+child process (`python -m cartoonface.web.worker`), so jobs use every core and a
+crash in one job cannot take the server down.
+
+Jobs wait in a FIFO queue in memory; their state lives on disk (store.py), so a
+restart loses nothing but the queue, and those jobs are marked failed then.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from cartoonface.web.store import FAILED, FINAL_STATES, Status, read_status, write_status
+
+STOPPED = "Stopped: the server shut down while this job was running. Please submit it again."
+
+
+class Runner:
+    """A pool of `workers` threads running jobs (by folder) in child processes.
+
+    `after_job(folder)` is called in the worker thread after each job ends
+    (used for the retention sweep)."""
+
+    def __init__(self, workers: int, after_job: Callable[[Path], None] = lambda folder: None) -> None:
+        self._queue: queue.Queue[Path | None] = queue.Queue()
+        self._after_job = after_job
+        self._lock = threading.Lock()
+        self._running: dict[Path, subprocess.Popen[bytes]] = {}
+        self._closed = False
+        self._threads = [threading.Thread(target=self._work, name=f"cartoonface-job-{i}", daemon=True)
+                         for i in range(workers)]
+        for thread in self._threads:
+            thread.start()
+
+    def submit(self, folder: Path) -> None:
+        """Queue the stored job in `folder` (its status.json says queued)."""
+        if self._closed:
+            raise RuntimeError("the job runner is closed")
+        self._queue.put(folder)
+
+    def pending(self) -> int:
+        """Jobs waiting or running now."""
+        with self._lock:
+            return self._queue.qsize() + len(self._running)
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Stop: drop waiting jobs (they stay queued on disk until the next start marks them),
+        terminate running ones (marked failed, STOPPED) and join the threads."""
+        with self._lock:
+            self._closed = True
+            running = list(self._running.items())
+        while True:
+            try:
+                self._queue.get_nowait()
+            except queue.Empty:
+                break
+        for _thread in self._threads:
+            self._queue.put(None)
+        for _folder, process in running:
+            process.terminate()
+        deadline = time.monotonic() + timeout
+        for thread in self._threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
+
+    def _work(self) -> None:
+        while True:
+            folder = self._queue.get()
+            if folder is None:
+                return
+            try:
+                self._run(folder)
+            finally:
+                self._after_job(folder)
+
+    def _run(self, folder: Path) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            log = open(folder / "worker.log", "wb")  # noqa: SIM115 - closed below
+            process = subprocess.Popen(
+                [sys.executable, "-m", "cartoonface.web.worker", str(folder), str(os.getpid())],
+                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+            )
+            self._running[folder] = process
+        try:
+            code = process.wait()
+        finally:
+            log.close()
+            with self._lock:
+                self._running.pop(folder, None)
+                closed = self._closed
+        try:
+            status = read_status(folder)
+        except FileNotFoundError:
+            return
+        if status.state not in FINAL_STATES:
+            reason = STOPPED if closed else (
+                f"Internal error: the worker process ended unexpectedly (exit code {code}); "
+                "the server log has the details.")
+            write_status(folder, Status(state=FAILED, stage=status.stage, fraction=status.fraction,
+                                        error=reason, updated=time.time()))

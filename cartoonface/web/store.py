@@ -1,0 +1,235 @@
+"""Jobs on disk: one folder per job under `<instance>/jobs/<id>/`.
+
+A job folder holds `job.json` (what was asked: written once, when the folder
+is created atomically with the inputs), `status.json` (state, stage, progress,
+error, result summary: rewritten atomically as the job moves on), the inputs
+(`face.json`, `audio.<ext>`, `transcript.txt`, names chosen here, never taken
+from the user), the generated `site/` folder and `site.zip`.
+
+The disk is the only record: a restarted server lists the same jobs, and a job
+left `queued` or `running` by a stopped server is marked failed with a reason.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import secrets
+import shutil
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from cartoonface.files import atomic_directory, write_text_atomic
+
+# secrets.token_urlsafe(24) gives 32 characters of this alphabet (24 random bytes, 192 bits).
+ID_BYTES = 24
+ID_PATTERN = re.compile(r"[A-Za-z0-9_-]{32}")
+
+QUEUED, RUNNING, DONE, FAILED = "queued", "running", "done", "failed"
+FINAL_STATES = (DONE, FAILED)
+
+INTERRUPTED = "Interrupted: the server stopped before this job finished. Please submit it again."
+
+
+@dataclass(frozen=True)
+class Status:
+    """Where a job is: `state` (queued/running/done/failed), the pipeline `stage`,
+    `fraction` 0..1 of the whole job, `error` (a user message when failed),
+    `updated` (epoch seconds) and `result` (summary of pipeline.Result when done)."""
+
+    state: str
+    stage: str = ""
+    fraction: float = 0.0
+    error: str = ""
+    updated: float = 0.0
+    result: Mapping[str, object] | None = None
+
+    @property
+    def percent(self) -> int:
+        """Progress in whole percent, 0..100 (100 only when done)."""
+        if self.state == DONE:
+            return 100
+        return max(0, min(99, int(self.fraction * 100)))
+
+    def to_dict(self) -> dict[str, object]:
+        """The JSON form written to status.json."""
+        return {
+            "state": self.state,
+            "stage": self.stage,
+            "fraction": self.fraction,
+            "error": self.error,
+            "updated": self.updated,
+            "result": dict(self.result) if self.result is not None else None,
+        }
+
+
+@dataclass(frozen=True)
+class Job:
+    """One submission as stored: `id`, the request (`spec`, from job.json), its `status`
+    and `folder` on disk."""
+
+    id: str
+    folder: Path
+    spec: Mapping[str, object]
+    status: Status
+
+    @property
+    def title(self) -> str:
+        """The title the user gave (may be empty)."""
+        return str(self.spec.get("title", ""))
+
+    @property
+    def created(self) -> float:
+        """Submission time, epoch seconds."""
+        return float(self.spec.get("created", 0.0))
+
+
+def new_id() -> str:
+    """Return a fresh unguessable job id (32 characters of [A-Za-z0-9_-])."""
+    return secrets.token_urlsafe(ID_BYTES)
+
+
+def valid_id(job_id: str) -> bool:
+    """True when `job_id` has the exact shape new_id() makes (so it is safe in a path)."""
+    return ID_PATTERN.fullmatch(job_id) is not None
+
+
+def jobs_root(instance: Path) -> Path:
+    """The folder holding every job folder."""
+    return instance / "jobs"
+
+
+def job_folder(instance: Path, job_id: str) -> Path:
+    """The folder of job `job_id`; ValueError unless the id has the token shape."""
+    if not valid_id(job_id):
+        raise ValueError(f"job id {job_id!r} is not 32 characters of [A-Za-z0-9_-]")
+    return jobs_root(instance) / job_id
+
+
+def create_job(instance: Path, spec: Mapping[str, object], files: Mapping[str, bytes]) -> Job:
+    """Store a new queued job with its inputs; return it.
+
+    `spec` is the request (JSON-serialisable); `files` maps our own file names
+    (e.g. "audio.wav") to their bytes. The folder appears complete or not at all.
+    """
+    job_id = new_id()
+    created = time.time()
+    full_spec = {**spec, "id": job_id, "created": created}
+    status = Status(state=QUEUED, updated=created)
+    target = job_folder(instance, job_id)
+    with atomic_directory(target) as tmp:
+        for name, data in files.items():
+            (tmp / name).write_bytes(data)
+        (tmp / "job.json").write_text(json.dumps(full_spec, ensure_ascii=False), encoding="utf-8")
+        (tmp / "status.json").write_text(json.dumps(status.to_dict()), encoding="utf-8")
+    return Job(job_id, target, full_spec, status)
+
+
+def write_status(folder: Path, status: Status) -> None:
+    """Replace the job's status.json atomically."""
+    write_text_atomic(folder / "status.json", json.dumps(status.to_dict(), ensure_ascii=False))
+
+
+def read_status(folder: Path) -> Status:
+    """Read the job's status.json (FileNotFoundError when the job is gone)."""
+    data = json.loads((folder / "status.json").read_text(encoding="utf-8"))
+    return Status(
+        state=str(data["state"]),
+        stage=str(data.get("stage", "")),
+        fraction=float(data.get("fraction", 0.0)),
+        error=str(data.get("error", "")),
+        updated=float(data.get("updated", 0.0)),
+        result=data.get("result"),
+    )
+
+
+def read_spec(folder: Path) -> dict[str, object]:
+    """Read the job's job.json."""
+    return json.loads((folder / "job.json").read_text(encoding="utf-8"))
+
+
+def load_job(instance: Path, job_id: str) -> Job | None:
+    """The stored job `job_id`, or None when the id is malformed or no such job exists."""
+    if not valid_id(job_id):
+        return None
+    folder = job_folder(instance, job_id)
+    try:
+        return Job(job_id, folder, read_spec(folder), read_status(folder))
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+
+
+def list_jobs(instance: Path) -> list[Job]:
+    """Every stored job, newest first."""
+    root = jobs_root(instance)
+    if not root.is_dir():
+        return []
+    jobs = [load_job(instance, entry.name) for entry in root.iterdir() if valid_id(entry.name)]
+    return sorted((job for job in jobs if job is not None), key=lambda job: job.created, reverse=True)
+
+
+def fail_interrupted(instance: Path) -> list[str]:
+    """Mark every job left queued or running as failed (INTERRUPTED); return their ids.
+
+    Called when the server starts, before any worker runs.
+    """
+    marked = []
+    for job in list_jobs(instance):
+        if job.status.state not in FINAL_STATES:
+            write_status(job.folder, Status(state=FAILED, stage=job.status.stage,
+                                            fraction=job.status.fraction, error=INTERRUPTED,
+                                            updated=time.time()))
+            marked.append(job.id)
+    return marked
+
+
+def folder_size(folder: Path) -> int:
+    """Total bytes of the regular files under `folder`."""
+    total = 0
+    for base, _dirs, names in os.walk(folder):
+        for name in names:
+            try:
+                total += os.lstat(os.path.join(base, name)).st_size
+            except FileNotFoundError:
+                continue
+    return total
+
+
+def delete_job(folder: Path) -> None:
+    """Remove a job folder: renamed away first, so readers never see half of it."""
+    trash = folder.with_name(f".deleted-{folder.name}")
+    try:
+        os.replace(folder, trash)
+    except FileNotFoundError:
+        return
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def apply_retention(instance: Path, max_age_days: float, max_total_mb: float,
+                    now: float | None = None) -> list[str]:
+    """Delete finished jobs older than `max_age_days`, then the oldest finished jobs
+    while all jobs together take more than `max_total_mb` megabytes (2**20 bytes).
+    Queued and running jobs are never deleted. Return the deleted ids."""
+    now = time.time() if now is None else now
+    jobs = sorted(list_jobs(instance), key=lambda job: job.created)
+    deleted = []
+    kept = []
+    for job in jobs:
+        if job.status.state in FINAL_STATES and now - job.created > max_age_days * 86400:
+            delete_job(job.folder)
+            deleted.append(job.id)
+        else:
+            kept.append((job, folder_size(job.folder)))
+    total = sum(size for _job, size in kept)
+    limit = max_total_mb * 2**20
+    for job, size in kept:
+        if total <= limit:
+            break
+        if job.status.state in FINAL_STATES:
+            delete_job(job.folder)
+            deleted.append(job.id)
+            total -= size
+    return deleted

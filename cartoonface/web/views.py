@@ -1,0 +1,200 @@
+"""The web app's routes (blueprint "web").
+
+GET  /                          the form and this browser's recent jobs
+POST /jobs                      check the form, store and queue a job, 303 to its page
+GET  /jobs/<id>                 progress, error, or the result (player + zip download)
+GET  /jobs/<id>/status          JSON: state, stage, percent, error
+GET  /jobs/<id>/site/<path>     the generated folder's files (shown in an iframe)
+GET  /jobs/<id>/download        the generated folder as a zip
+"""
+
+from __future__ import annotations
+
+import mimetypes
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from flask import (Blueprint, Response, abort, current_app, jsonify, redirect, render_template, request,
+                   send_file, send_from_directory, session, url_for)
+from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
+from werkzeug.routing import BaseConverter
+
+from cartoonface.web.config import PACKAGE, Settings
+from cartoonface.web.inputs import MAX_TITLE_CHARS, PAGES, Limits, check_submission, form_values
+from cartoonface.web.runner import Runner
+from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
+from cartoonface.web.store import DONE, ID_PATTERN, Job, create_job, load_job
+from cartoonface.web.worker import SITE, ZIP_NAME
+
+RECENT = 20  # jobs remembered per browser session
+
+STAGES = {
+    "": "Waiting for a free worker",
+    "decode": "Reading the recording",
+    "segment": "Finding the sentences",
+    "align": "Timing the syllables",
+    "schedule": "Planning blinks and head moves",
+    "frames": "Drawing the frames",
+    "svg": "Writing the animation",
+    "pages": "Writing the pages",
+}
+
+# The generated pages (render/pages.py) load their script and CSS from files and hold
+# the SVG inline. They run sandboxed (an opaque origin: no access to this app's cookies
+# or pages even if a page were ever wrong), so their files must be loadable from there.
+SITE_CSP = ("sandbox allow-scripts; default-src 'none'; script-src 'self'; "
+            "style-src 'self' 'unsafe-inline'; img-src 'self' data:; media-src 'self'; font-src 'self'; "
+            "form-action 'none'; base-uri 'none'; frame-ancestors 'self'")
+
+SITE_TYPES = {
+    ".html": "text/html; charset=utf-8",
+    ".svg": "image/svg+xml",
+    ".js": "text/javascript; charset=utf-8",
+    ".css": "text/css; charset=utf-8",
+    ".json": "application/json",
+    ".txt": "text/plain; charset=utf-8",
+    ".textgrid": "text/plain; charset=utf-8",
+    ".wav": "audio/wav",
+    ".mp3": "audio/mpeg",
+    ".ogg": "audio/ogg",
+    ".m4a": "audio/mp4",
+    ".flac": "audio/flac",
+    ".png": "image/png",
+    ".woff2": "font/woff2",
+}
+
+
+class JobIdConverter(BaseConverter):
+    """URL part that only matches the exact shape of a job id (anything else is a 404)."""
+
+    regex = ID_PATTERN.pattern
+
+
+@dataclass(frozen=True)
+class WebState:
+    """What the routes share: checked settings, form limits and the job runner."""
+
+    settings: Settings
+    limits: Limits
+    runner: Runner
+
+
+bp = Blueprint("web", __name__, static_folder=str(PACKAGE / "static" / "web"), static_url_path="/static/web")
+
+
+def state() -> WebState:
+    """The running app's WebState."""
+    return current_app.extensions["cartoonface"]
+
+
+def stored_job(job_id: str) -> Job:
+    """The job `job_id` or a 404."""
+    job = load_job(state().settings.instance, job_id)
+    if job is None:
+        abort(404, description="No such job. It may have been removed by the retention limit.")
+    return job
+
+
+def recent_jobs() -> list[Job]:
+    """This browser's recent jobs that still exist, newest first."""
+    ids = session.get("jobs", [])
+    jobs = [load_job(state().settings.instance, job_id) for job_id in ids if isinstance(job_id, str)]
+    return [job for job in jobs if job is not None]
+
+
+def render_form(values: dict[str, str], errors: dict[str, str], status: int = 200) -> tuple[str, int]:
+    """The home page: the form filled with `values`, `errors` by field, and recent jobs."""
+    limits = state().limits
+    defaults = {"face_sample": next(iter(limits.samples), ""), "page": "audiobook", "title": "",
+                "background": limits.backgrounds[0] if limits.backgrounds else "",
+                "clothes": limits.clothes[0] if limits.clothes else "", "transcript": ""}
+    shown = {**defaults, **{key: value for key, value in values.items() if value}}
+    return render_template(
+        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES,
+        max_title=MAX_TITLE_CHARS, upload_mb=limits.upload_bytes >> 20, csrf=csrf_token(),
+        csrf_field=CSRF_FIELD, jobs=recent_jobs(), stages=STAGES,
+    ), status
+
+
+@bp.app_template_filter("when")
+def when(epoch: float) -> str:
+    """Epoch seconds as 'YYYY-MM-DD HH:MM UTC'."""
+    return time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(epoch))
+
+
+@bp.get("/")
+def index() -> tuple[str, int]:
+    return render_form({}, {})
+
+
+@bp.post("/jobs")
+def submit() -> Response | tuple[str, int]:
+    values = form_values(request.form)
+    if not csrf_ok(request.form.get(CSRF_FIELD)):
+        return render_form(values, {"form": "This form has expired or did not come from this page. "
+                                            "Please check the fields and press Generate again."}, 400)
+    checked = check_submission(request.form, request.files, state().limits)
+    if isinstance(checked, dict):
+        return render_form(values, checked, 400)
+    job = create_job(state().settings.instance, checked.spec, checked.files)
+    state().runner.submit(job.folder)
+    session["jobs"] = [job.id, *[i for i in session.get("jobs", []) if isinstance(i, str)]][:RECENT]
+    return redirect(url_for(".job_page", job_id=job.id), code=303)
+
+
+@bp.get("/jobs/<jobid:job_id>")
+def job_page(job_id: str) -> str:
+    job = stored_job(job_id)
+    return render_template("web/job.html", job=job, status=job.status, stages=STAGES,
+                           pages=PAGES, done=job.status.state == DONE)
+
+
+@bp.get("/jobs/<jobid:job_id>/status")
+def job_status(job_id: str) -> Response:
+    status = stored_job(job_id).status
+    response = jsonify(state=status.state, stage=status.stage, stage_label=STAGES.get(status.stage, status.stage),
+                       percent=status.percent, error=status.error)
+    response.headers["Cache-Control"] = "no-store"
+    return response
+
+
+@bp.get("/jobs/<jobid:job_id>/site/", defaults={"name": "index.html"})
+@bp.get("/jobs/<jobid:job_id>/site/<path:name>")
+def site_file(job_id: str, name: str) -> Response:
+    job = stored_job(job_id)
+    if job.status.state != DONE:
+        abort(404, description="This job has no result (yet).")
+    kind = SITE_TYPES.get(Path(name).suffix.lower()) or mimetypes.guess_type(name)[0] or "application/octet-stream"
+    response = send_from_directory(job.folder / SITE, name, mimetype=kind)
+    response.headers["Cross-Origin-Resource-Policy"] = "cross-origin"
+    return add_headers(response, SITE_CSP, "SAMEORIGIN")
+
+
+@bp.get("/jobs/<jobid:job_id>/download")
+def download(job_id: str) -> Response:
+    job = stored_job(job_id)
+    if job.status.state != DONE or not (job.folder / ZIP_NAME).is_file():
+        abort(404, description="This job has no result to download (yet).")
+    return send_file(job.folder / ZIP_NAME, mimetype="application/zip", as_attachment=True,
+                     download_name=download_name(job.title, job.id))
+
+
+@bp.app_errorhandler(RequestEntityTooLarge)
+def too_large(error: RequestEntityTooLarge) -> tuple[str, int]:
+    limit = state().limits.upload_bytes >> 20
+    return render_form({}, {"form": f"The upload is too large: the limit is {limit} MB for the recording "
+                                    "and a few MB for the rest. Please choose the files again."}, 413)
+
+
+@bp.app_errorhandler(HTTPException)
+def http_error(error: HTTPException) -> tuple[str, int]:
+    return render_template("web/error.html", code=error.code, name=error.name,
+                           description=error.description), error.code or 500
+
+
+@bp.app_errorhandler(Exception)
+def internal_error(error: Exception) -> tuple[str, int]:
+    current_app.logger.exception("unhandled error on %s %s", request.method, request.path)
+    return render_template("web/error.html", code=500, name="Internal error",
+                           description="Something went wrong on the server; the log has the details."), 500

@@ -1,0 +1,108 @@
+"""Run one stored job in its own process: `python -m cartoonface.web.worker JOB_FOLDER PARENT_PID`.
+
+The job runs the same library call as `cartoonface generate`
+(`cartoonface.pipeline.generate`), writes its progress to status.json as it
+goes, zips the generated folder for download and ends with status done, or
+failed with the user message of an InputError. Any other exception is a bug:
+its traceback goes to stderr (the job's worker.log) and the user sees a short
+internal-error message. When the server that started it is gone, the worker
+stops at the next progress report; the restarted server marks the job failed.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import sys
+import time
+import traceback
+import zipfile
+from pathlib import Path
+
+from cartoonface.errors import InputError
+from cartoonface.files import write_bytes_atomic
+from cartoonface.pipeline import Options, generate
+from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, write_status
+
+# Progress is written at most this often (seconds), plus on every stage change.
+PROGRESS_INTERVAL = 0.25
+
+SITE = "site"
+ZIP_NAME = "site.zip"
+
+
+class Orphaned(Exception):
+    """The server process that started this worker has gone away."""
+
+
+def zip_folder(folder: Path, top: str) -> bytes:
+    """Return a zip (bytes) of every file under `folder`, stored under the folder name `top`/."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for path in sorted(folder.rglob("*")):
+            if path.is_file():
+                archive.write(path, f"{top}/{path.relative_to(folder).as_posix()}")
+    return buffer.getvalue()
+
+
+def zip_top_name(spec: dict[str, object]) -> str:
+    """The folder name inside the download zip: 'cartoonface-' + first 8 characters of the id."""
+    return f"cartoonface-{str(spec['id'])[:8]}"
+
+
+def run_job(folder: Path, parent_pid: int) -> None:
+    """Generate the job stored in `folder`, writing status.json as it goes."""
+    spec = read_spec(folder)
+    last = {"stage": "", "time": 0.0}
+
+    def progress(stage: str, fraction: float) -> None:
+        if os.getppid() != parent_pid:
+            raise Orphaned(stage)
+        now = time.monotonic()
+        if stage == last["stage"] and now - last["time"] < PROGRESS_INTERVAL:
+            return
+        last.update(stage=stage, time=now)
+        write_status(folder, Status(state=RUNNING, stage=stage, fraction=min(max(fraction, 0.0), 1.0),
+                                    updated=time.time()))
+
+    write_status(folder, Status(state=RUNNING, updated=time.time()))
+    options = Options(page=str(spec["page"]), title=str(spec["title"]),
+                      background=str(spec["background"]), clothes=str(spec["clothes"]))
+    try:
+        result = generate(folder / "face.json", folder / str(spec["audio_file"]),
+                          folder / "transcript.txt", folder / SITE, options, progress)
+        write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
+    except InputError as exc:
+        write_status(folder, Status(state=FAILED, stage=last["stage"], error=str(exc), updated=time.time()))
+        return
+    summary = {
+        "duration": result.duration,
+        "frames": result.frames,
+        "size": result.size,
+        "seconds": result.seconds,
+        "notes": list(result.notes),
+    }
+    write_status(folder, Status(state=DONE, stage="pages", fraction=1.0, updated=time.time(), result=summary))
+
+
+def main(argv: list[str]) -> int:
+    """Entry point: argv is [JOB_FOLDER, PARENT_PID]; exit 0 once the status is final."""
+    folder, parent_pid = Path(argv[0]), int(argv[1])
+    try:
+        run_job(folder, parent_pid)
+    except Orphaned:
+        print("worker: the server went away; stopping", file=sys.stderr)
+        return 3
+    except Exception:  # a bug: keep the details for the log, tell the user briefly
+        traceback.print_exc()
+        stage = json.loads((folder / "status.json").read_text(encoding="utf-8")).get("stage", "")
+        write_status(folder, Status(state=FAILED, stage=stage, updated=time.time(),
+                                    error=f"Internal error while generating (stage {stage or 'start'}); "
+                                          "the server log has the details."))
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))

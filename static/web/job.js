@@ -1,0 +1,39 @@
+/* Job page: poll the job's status (JSON) twice a second, move the progress bar,
+ * and reload the page when the job is done or failed (the server then renders
+ * the result or the error). */
+(function () {
+  "use strict";
+  var box = document.getElementById("job");
+  if (!box) return;
+  var url = box.getAttribute("data-status-url");
+  var bar = document.getElementById("progress");
+  var percent = document.getElementById("percent");
+  var stage = document.getElementById("stage");
+
+  function show(status) {
+    bar.value = status.percent;
+    bar.textContent = status.percent + "%";
+    percent.textContent = status.percent + "%";
+    stage.textContent = status.stage_label;
+    box.setAttribute("data-state", status.state);
+  }
+
+  function poll() {
+    fetch(url, { cache: "no-store", credentials: "same-origin" })
+      .then(function (response) {
+        if (!response.ok) throw new Error("status " + response.status);
+        return response.json();
+      })
+      .then(function (status) {
+        show(status);
+        if (status.state === "done" || status.state === "failed") {
+          window.setTimeout(function () { window.location.reload(); }, 400);
+        } else {
+          window.setTimeout(poll, 500);
+        }
+      })
+      .catch(function () { window.setTimeout(poll, 2000); });
+  }
+
+  poll();
+})();
