@@ -97,13 +97,14 @@ def syllable_type(pinyin: str) -> SyllableType:
 
 # Relative duration of a syllable by type, multiplied together; fitted on Biaobei 000001-000035
 # (log-linear least squares of each syllable's share of its part): see docs/BENCHMARKS.md.
-_INITIAL_FACTOR = {"closure": 1.0, "aspirated": 1.0, "frication": 1.0, "sonorant": 1.0,
-                   "glide": 1.0, "none": 1.0}
-_FINAL_LETTER_FACTOR = 1.0      # per letter of the final beyond the first
-_NASAL_FACTOR = 1.0             # final ends in n / ng
-_TONE_FACTOR = {1: 1.0, 2: 1.0, 3: 1.0, 4: 1.0, 5: 1.0}
-_ERHUA_FACTOR = 1.0
-_LAST_FACTOR = 1.0              # last syllable of the part (phrase-final lengthening)
+_INITIAL_FACTOR = {"closure": 1.0, "aspirated": 1.09, "frication": 1.08, "sonorant": 0.98,
+                   "glide": 0.875, "none": 0.84}
+_FINAL_LETTER_FACTOR = 1.057    # per letter of the final beyond the first
+_NASAL_FACTOR = 1.054           # final ends in n / ng
+_TONE_FACTOR = {1: 1.0, 2: 1.01, 3: 1.0, 4: 0.97, 5: 0.91}
+# Only one erhua syllable in the tuning sentences (fit 1.47): 1.15 chosen as a moderate guess.
+_ERHUA_FACTOR = 1.15
+_LAST_FACTOR = 1.40              # last syllable of the part (phrase-final lengthening)
 
 
 def relative_durations(syllables: Sequence[str]) -> np.ndarray:
@@ -123,11 +124,12 @@ def relative_durations(syllables: Sequence[str]) -> np.ndarray:
 
 # Tuned on Biaobei 000001-000035 (bench/align.py).
 DURATION_SPREAD = 0.35     # sd of log(duration / expected duration)
-FALL_WEIGHT = 0.25         # per dB of band-energy fall across an obstruent onset
-DIP_WEIGHT = 0.15          # per dB of dip depth at a sonorant / glide / vowel onset
+FALL_WEIGHT = 0.2          # per dB of band-energy fall across an obstruent onset
+DIP_WEIGHT = 0.1           # per dB of dip depth at a sonorant / glide / vowel onset
+DIP_CAP = 8.0              # dB: deeper dips are closures or pauses, no likelier onsets of these
 SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pause evidence
 PAUSE_PENALTY = 3.0        # per pause, in units of evidence
-MIN_PAUSE = 6              # frames: shorter silences are closures, not pauses
+MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 MIN_FRAMES = 3             # frames: the shortest syllable
 MARGIN = 20                # frames of context read on each side of the span
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
@@ -135,6 +137,16 @@ LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 
 def _smooth(x: np.ndarray, width: int = 3) -> np.ndarray:
     return np.convolve(np.pad(x, width // 2, mode="edge"), np.ones(width) / width, mode="valid")
+
+
+def edge_evidence(low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """(T,) smoothed dB of 100-1000 Hz and 3000-8000 Hz -> (2, T): evidence that a pause
+    starts at each position (the low band falls) and that one ends (either band rises)."""
+    def change(x):
+        pad = np.pad(x, 2, mode="edge")
+        return pad[4:] - pad[:-4]
+    rise = np.maximum(change(low), change(high))
+    return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, 30.0)
 
 
 def onset_evidence(low: np.ndarray, klass: str) -> np.ndarray:
@@ -147,7 +159,10 @@ def onset_evidence(low: np.ndarray, klass: str) -> np.ndarray:
     windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
     left, right = windows[:-13].max(axis=1), windows[13:].max(axis=1)
     dip = np.minimum(left, right) - low
-    return DIP_WEIGHT * np.clip(dip, 0.0, 30.0)
+    # only at (near) local minima: a flat quiet stretch is one dip, not many
+    nearby = np.lib.stride_tricks.sliding_window_view(pad[9:-9], 7).min(axis=1)
+    dip = np.where(low <= nearby + 1.0, dip, 0.0)
+    return DIP_WEIGHT * np.clip(dip, 0.0, DIP_CAP)
 
 
 def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
@@ -155,12 +170,14 @@ def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
     return -0.5 * (ratio / DURATION_SPREAD) ** 2
 
 
-def _segment(evidence: np.ndarray, silence: np.ndarray, means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _segment(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
+             means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Best cut of T frames into N syllables with optional pauses between and around them.
 
-    evidence: (N, T + 1) onset evidence of syllable i starting at boundary k; silence: (T,)
-    per-frame pause evidence; means: (N,) expected durations in frames. Returns (starts,
-    ends) boundary indices (N,) each, starts[i] < ends[i] <= starts[i + 1].
+    evidence: (N, T + 1) onset evidence of syllable i starting at boundary k when no pause
+    precedes it; silence: (T,) per-frame pause evidence; edges: (2, T + 1) evidence that a
+    pause starts (sound falls) / ends (sound rises) at k; means: (N,) expected durations in
+    frames. Returns (starts, ends) boundary indices (N,) each, starts[i] < ends[i] <= starts[i + 1].
     """
     n, positions = evidence.shape
     total = positions - 1
@@ -175,7 +192,7 @@ def _segment(evidence: np.ndarray, silence: np.ndarray, means: np.ndarray) -> tu
     k = np.arange(positions)
     for i in range(n + 1):
         # pause: best start s <= k - MIN_PAUSE of  after_syllable[i, s] - cum[s]
-        base = after_syllable[i] - cum
+        base = after_syllable[i] + edges[0] - cum
         best = np.maximum.accumulate(base)
         arg = np.zeros(positions, dtype=int)
         running, where = neg, 0
@@ -185,12 +202,12 @@ def _segment(evidence: np.ndarray, silence: np.ndarray, means: np.ndarray) -> tu
             arg[s] = where
         shifted = np.full(positions, neg)
         shifted[MIN_PAUSE:] = best[:-MIN_PAUSE]
-        after_pause[i] = shifted + cum - PAUSE_PENALTY
+        after_pause[i] = shifted + cum - PAUSE_PENALTY + edges[1]
         pause_from[i, MIN_PAUSE:] = arg[:-MIN_PAUSE]
         if i == n:
             break
-        start_score = np.maximum(after_syllable[i], after_pause[i]) + evidence[i]
-        start_pause = after_pause[i] > after_syllable[i]
+        start_score = np.maximum(after_syllable[i] + evidence[i], after_pause[i])
+        start_pause = after_pause[i] > after_syllable[i] + evidence[i]
         longest = min(total, int(4 * means[i]) + MIN_FRAMES)
         d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
         starts = k[:, None] - d[None, :]
@@ -252,7 +269,8 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
     evidence = np.stack([onset_evidence(low, _CLASS[syllable_type(p).initial])[index] for p in syllables])
-    starts, ends = _segment(evidence, silence, means)
+    edges = edge_evidence(low, _smooth(feats.high))[:, index]
+    starts, ends = _segment(evidence, silence, edges, means)
     times = span.start + HOP * np.stack([starts, ends], axis=1)
     times = np.clip(times, span.start, span.end)
     return tuple(SyllableTiming(float(a), float(b), 0.8) for a, b in times)
