@@ -1,0 +1,111 @@
+"""Frames: the timeline sampled at a frame rate, one FaceState per frame (thesis 002, 5.4).
+
+Between two key frames a value moves along an easing curve of u, the share of
+the way from one key to the next (0..1):
+
+- ``smoothstep`` 3u^2 - 2u^3 for mouth weights, blink and brow amounts: a shape
+  settles into and out of each key frame, so each basic shape is seen
+  clearly at its key while the lips never jump;
+- ``cosine`` (1 - cos(pi u)) / 2 for head angles: a head accelerates and
+  decelerates like a mass.
+
+Values are quantised so identical consecutive frames compare equal and the SVG
+writer can merge them: angles to 0.1 degree, amounts and mouth weights to 0.01.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cartoonface.animate.timeline import Timeline, Track
+from cartoonface.errors import OptionError
+from cartoonface.face.mouth import MOUTH_SYMBOLS
+from cartoonface.face.state import FaceState, Pose
+
+FPS_RANGE = (12, 60)  # frames per second allowed (issue 4: default 30, 12-60)
+EASINGS = {
+    "smoothstep": lambda u: u * u * (3.0 - 2.0 * u),
+    "cosine": lambda u: 0.5 - 0.5 * np.cos(np.pi * u),
+}
+# A nod bends the head down. Pose.tilt is the rotation about X (ARCHITECTURE.md);
+# with the thesis's rotation (002, 2.4.3.1: y' = y cos a - z sin a, z towards the
+# viewer) a positive angle moves the nose down, so a nod of depth d is tilt +d.
+NOD_SIGN = 1.0
+SMILE = 0.0  # the announcer keeps a neutral mouth corner; speech drives the lips
+
+
+def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
+    """One FaceState per frame: frame i shows time i / fps seconds.
+
+    `fps` an int in 12..60 (OptionError otherwise). Frames cover the whole
+    timeline: ceil(duration * fps) of them. Identical consecutive states are
+    the same object.
+    """
+    if isinstance(fps, bool) or not isinstance(fps, int | np.integer) or not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
+        raise OptionError(f"fps: {fps!r}; expected a whole number of frames per second from {FPS_RANGE[0]} to {FPS_RANGE[1]}")
+    count = -(-timeline.duration * int(fps) // 1000)
+    return states_at(timeline, np.arange(count) / fps)
+
+
+def states_at(timeline: Timeline, times: np.ndarray) -> tuple[FaceState, ...]:
+    """The face state at each of `times` ((n,) seconds), interpolated between key frames."""
+    t = np.asarray(times, dtype=float) * 1000.0
+    mouth = _mouth(timeline.track("mouth"), t)
+    blink, brow = (_amount(timeline.track(name), t) for name in ("blink", "brow"))
+    tilt, turn, nod = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod"))
+    columns = zip(blink.tolist(), brow.tolist(), (NOD_SIGN * nod + 0.0).tolist(), turn.tolist(), tilt.tolist(), mouth, strict=True)
+    states, previous, state = [], None, None
+    for values in columns:
+        if values != previous:
+            b, w, pitch, yaw, lean, mix = values
+            state = FaceState(pose=Pose(tilt=pitch, turn=yaw, roll=lean), blink=b, smile=SMILE, brow=w, mouth=mix)
+            previous = values
+        states.append(state)
+    return tuple(states)
+
+
+def _segments(track: Track, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For times `t` (ms): index of the key before, index of the key after, eased share 0..1.
+
+    Before the first key the first key holds, after the last the last holds;
+    at a time shared by several keys the last of them counts.
+    """
+    times = np.array([key.t for key in track.keys], dtype=float)
+    before = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1)
+    after = np.minimum(before + 1, len(times) - 1)
+    span = times[after] - times[before]
+    share = np.clip(np.divide(t - times[before], span, out=np.zeros_like(t), where=span > 0), 0.0, 1.0)
+    return before, after, EASINGS[track.easing](share)
+
+
+def _values(track: Track, t: np.ndarray) -> np.ndarray:
+    values = np.array([key.value for key in track.keys], dtype=float)
+    before, after, eased = _segments(track, t)
+    return values[before] + (values[after] - values[before]) * eased
+
+
+def _amount(track: Track, t: np.ndarray) -> np.ndarray:
+    """A 0..1 amount track at times `t` (ms), to 0.01."""
+    return np.clip(np.round(_values(track, t), 2), 0.0, 1.0) + 0.0
+
+
+def _angle(track: Track, t: np.ndarray) -> np.ndarray:
+    """An angle track at times `t` (ms), degrees to 0.1 (no negative zero)."""
+    return np.round(_values(track, t), 1) + 0.0
+
+
+def _mouth(track: Track, t: np.ndarray) -> list[tuple[tuple[str, float], ...]]:
+    """Mouth mixes at times `t` (ms): ((symbol, weight), ...) in MOUTH_SYMBOLS order, weights to 0.01."""
+    shapes = np.array([MOUTH_SYMBOLS.index(key.value) for key in track.keys])
+    before, after, eased = _segments(track, t)
+    hundredths = np.round(eased * 100).astype(int)
+    mixes = []
+    for a, b, k in zip(shapes[before].tolist(), shapes[after].tolist(), hundredths.tolist(), strict=True):
+        if a == b or k == 0:
+            mixes.append(((MOUTH_SYMBOLS[a], 1.0),))
+        elif k == 100:
+            mixes.append(((MOUTH_SYMBOLS[b], 1.0),))
+        else:
+            pair = sorted(((a, (100 - k) / 100), (b, k / 100)))
+            mixes.append(tuple((MOUTH_SYMBOLS[i], w) for i, w in pair))
+    return mixes

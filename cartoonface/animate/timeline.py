@@ -1,0 +1,165 @@
+"""The animation timeline: key frames of the mouth and of every behaviour (thesis 002, 5.4).
+
+A Timeline holds one Track per animated quantity, each a tuple of Keyframes at
+integer milliseconds, so boundaries never drift. frames.py interpolates between
+them. Tracks:
+
+- ``mouth``: a basic mouth shape symbol per key frame (MOUTH_SYMBOLS); the
+  syllables' 1-4 shapes at the in-syllable onsets of thesis 5.3, rest shape
+  ``m`` in pauses and before/after speech.
+- ``blink``, ``brow``: amounts 0..1.
+- ``tilt`` (sideways lean, Pose.roll), ``turn`` (Pose.turn), ``nod`` (depth
+  of the nod in degrees, Pose.tilt): see behaviour.py for the kinds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cartoonface.animate.behaviour import Action
+from cartoonface.speech.mouth_shapes import shape_onsets
+
+REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: shape m, lips closed)
+# Lead-in and lead-out, our choice: the lips start to move before the sound is
+# heard and close just after it, as people do (visible articulation precedes
+# the acoustic onset by roughly 100 ms). 80 ms is between two and three frames
+# at 30 fps: the mouth visibly opens ahead of the syllable without looking early.
+LEAD_MS = 80
+LAG_MS = 80
+MOUTH_EASING = "smoothstep"
+AMOUNT_EASING = "smoothstep"
+ANGLE_EASING = "cosine"
+
+
+@dataclass(frozen=True)
+class Keyframe:
+    """A value a track reaches at time `t` (integer ms from the start of the audio).
+
+    `value` is a mouth symbol (str) on the mouth track, a float elsewhere
+    (an amount 0..1 or an angle in degrees).
+    """
+
+    t: int
+    value: float | str
+
+
+@dataclass(frozen=True)
+class Track:
+    """Key frames of one quantity, sorted by time; `easing` names the interpolation (frames.py)."""
+
+    name: str
+    keys: tuple[Keyframe, ...]
+    easing: str
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """All tracks of an animation `duration` ms long."""
+
+    duration: int
+    tracks: tuple[Track, ...]
+
+    def track(self, name: str) -> Track:
+        """The track called `name` (KeyError if there is none)."""
+        for track in self.tracks:
+            if track.name == name:
+                return track
+        raise KeyError(name)
+
+
+def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
+    """Key frames for an Alignment (speech/alignment.py) and behaviour `actions`.
+
+    Returns a Timeline of alignment.duration (rounded to ms) with the tracks
+    mouth, blink, brow, tilt, turn and nod.
+    """
+    duration = round(alignment.duration * 1000)
+    syllables = sorted((syl for sentence in alignment.sentences for syl in sentence.syllables), key=lambda s: s.start)
+    by_kind = {kind: sorted((a for a in actions if a.kind == kind), key=lambda a: a.start) for kind in ("blink", "brow", "tilt", "turn", "nod")}
+    return Timeline(
+        duration,
+        (
+            Track("mouth", mouth_keys(syllables, duration), MOUTH_EASING),
+            Track("blink", envelope_keys(by_kind["blink"]), AMOUNT_EASING),
+            Track("brow", envelope_keys(by_kind["brow"]), AMOUNT_EASING),
+            Track("tilt", move_keys(by_kind["tilt"]), ANGLE_EASING),
+            Track("turn", move_keys(by_kind["turn"]), ANGLE_EASING),
+            Track("nod", envelope_keys(by_kind["nod"]), ANGLE_EASING),
+        ),
+    )
+
+
+def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
+    """Mouth key frames for `syllables` (with start, end in s and shapes) sorted by start.
+
+    Each shape of a syllable is a key frame at start + onset * (end - start),
+    onsets from speech.mouth_shapes.shape_onsets (thesis 002, 5.3). Where the
+    gap to the next syllable leaves room for LAG_MS + LEAD_MS, the mouth
+    holds the last shape to the end of the sound, closes to REST within
+    LAG_MS, and reopens from REST LEAD_MS before the next syllable; shorter
+    gaps blend straight from one syllable into the next. `duration` in ms.
+    """
+    keys = [Keyframe(0, REST)]
+    previous_end = None
+    for syllable in syllables:
+        start, end = _ms(syllable.start), _ms(syllable.end)
+        if previous_end is None or start - previous_end >= LAG_MS + LEAD_MS:
+            if previous_end is not None:
+                keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + LAG_MS, REST)]
+            keys.append(Keyframe(max(start - LEAD_MS, 0), REST))
+        for shape, onset in zip(syllable.shapes, shape_onsets(len(syllable.shapes)), strict=True):
+            keys.append(Keyframe(start + round(onset * (end - start)), shape))
+        previous_end = end
+    if previous_end is not None:
+        keys += [Keyframe(previous_end, keys[-1].value), Keyframe(min(previous_end + LAG_MS, duration), REST)]
+    keys.append(Keyframe(duration, REST))
+    return _monotonic(keys)
+
+
+def envelope_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
+    """Key frames of rise-hold-fall actions (blink, brow, nod) sorted by start.
+
+    Per action: 0 at start, amplitude after `attack`, amplitude until `release`
+    before the end, 0 at the end. Before, between and after: 0.
+    """
+    keys = [Keyframe(0, 0.0)]
+    for action in actions:
+        start, end = _ms(action.start), _ms(action.end)
+        keys += [
+            Keyframe(start, 0.0),
+            Keyframe(start + _ms(action.attack), action.amplitude),
+            Keyframe(end - _ms(action.release), action.amplitude),
+            Keyframe(end, 0.0),
+        ]
+    return _monotonic(keys)
+
+
+def move_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
+    """Key frames of head moves (tilt, turn) sorted by start.
+
+    The angle starts at 0; each move goes from the angle held so far to its
+    amplitude between its start and its end, and that angle holds until the
+    next move.
+    """
+    keys = [Keyframe(0, 0.0)]
+    for action in actions:
+        keys += [Keyframe(_ms(action.start), keys[-1].value), Keyframe(_ms(action.end), action.amplitude)]
+    return _monotonic(keys)
+
+
+def _ms(seconds: float) -> int:
+    """Seconds to whole milliseconds."""
+    return round(seconds * 1000)
+
+
+def _monotonic(keys: list[Keyframe]) -> tuple[Keyframe, ...]:
+    """Keys with times made non-decreasing and at least 0 (later keys never move earlier ones).
+
+    Equal times make a step; frames.py takes the last key at a time.
+    """
+    fixed, latest = [], 0
+    for key in keys:
+        latest = max(latest, key.t)
+        fixed.append(key if key.t == latest else Keyframe(latest, key.value))
+    return tuple(fixed)
