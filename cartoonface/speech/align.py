@@ -132,6 +132,7 @@ PAUSE_PENALTY = 3.0        # per pause, in units of evidence
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 MIN_FRAMES = 3             # frames: the shortest syllable
 MARGIN = 20                # frames of context read on each side of the span
+CLEAR_EVIDENCE = 1.0       # evidence of a boundary that counts as fully clear (5 dB fall)
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 
 
@@ -271,6 +272,26 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     evidence = np.stack([onset_evidence(low, _CLASS[syllable_type(p).initial])[index] for p in syllables])
     edges = edge_evidence(low, _smooth(feats.high))[:, index]
     starts, ends = _segment(evidence, silence, edges, means)
-    times = span.start + HOP * np.stack([starts, ends], axis=1)
-    times = np.clip(times, span.start, span.end)
-    return tuple(SyllableTiming(float(a), float(b), 0.8) for a, b in times)
+    quality = float(np.clip((loud - floor - 10.0) / 20.0, 0.0, 1.0))
+    confidence = _confidence(starts, ends, evidence, edges, means, quality)
+    times = np.clip(span.start + HOP * np.stack([starts, ends], axis=1), span.start, span.end)
+    return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
+
+
+def _confidence(starts: np.ndarray, ends: np.ndarray, evidence: np.ndarray, edges: np.ndarray,
+                means: np.ndarray, quality: float) -> np.ndarray:
+    """(N,) confidence 0..1 of each syllable: signal quality (0..1, from the part's loudness
+    range) x how clear its two boundaries are (their evidence, a span edge counts as clear)
+    x how plausible its duration is against the prior."""
+    n, positions = evidence.shape
+    clear = np.ones((n, 2))
+    for i in range(n):
+        if starts[i] > 0:
+            paused = i == 0 or ends[i - 1] < starts[i]
+            clear[i, 0] = edges[1, starts[i]] if paused else evidence[i, starts[i]]
+        if ends[i] < positions - 1:
+            paused = i == n - 1 or starts[i + 1] > ends[i]
+            clear[i, 1] = edges[0, ends[i]] if paused else evidence[i + 1, ends[i]]
+    clarity = np.clip(clear / CLEAR_EVIDENCE, 0.0, 1.0).mean(axis=1)
+    plausible = np.exp(-0.5 * (np.log((ends - starts) / means) / (2 * DURATION_SPREAD)) ** 2)
+    return np.clip(quality * (0.4 + 0.6 * clarity) * plausible, 0.0, 1.0)
