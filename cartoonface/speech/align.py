@@ -82,12 +82,11 @@ _CLASS = {**dict.fromkeys(("b", "d", "g", "z", "zh", "j"), "closure"),
 
 def syllable_type(pinyin: str) -> SyllableType:
     """Tone-numbered pinyin ("hang2", "wanr1", "lü4", "lv4") -> SyllableType; never raises."""
-    text = pinyin.strip().lower().replace("ü", "v").replace("u:", "v")
+    text = re.sub(r"[^a-z0-9]", "", pinyin.lower().replace("ü", "v").replace("u:", "v"))
     tone = 5
     if text and text[-1].isdigit():
         tone = int(text[-1]) if text[-1] in "12345" else 5
         text = text[:-1]
-    text = re.sub(r"[^a-z]", "", text)
     erhua = len(text) > 2 and text.endswith("r") and text != "er"
     if erhua:
         text = text[:-1]
@@ -274,7 +273,9 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     starts, ends = _segment(evidence, silence, edges, means)
     quality = float(np.clip((loud - floor - 10.0) / 20.0, 0.0, 1.0))
     confidence = _confidence(starts, ends, evidence, edges, means, quality)
-    times = np.clip(span.start + HOP * np.stack([starts, ends], axis=1), span.start, span.end)
+    # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
+    # that k = 0 and k = total are exactly the span's ends
+    times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
     return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
 
 

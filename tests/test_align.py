@@ -1,0 +1,203 @@
+"""Syllable aligner on audio the tests make: voiced bursts with dips, silences, noise, espeak-ng speech."""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from cartoonface.speech.align import LOW_CONFIDENCE, align_syllables, relative_durations, syllable_type
+from cartoonface.speech.audio import Audio
+
+RATE = 16000
+
+
+@dataclass(frozen=True)
+class Span:
+    start: float
+    end: float
+
+
+def burst(seconds: float, rng: np.random.Generator, f0: float = 140.0) -> np.ndarray:
+    """A vowel-like voiced burst: harmonics of f0 under a 700 Hz / 1200 Hz formant envelope."""
+    t = np.arange(int(seconds * RATE)) / RATE
+    wave = sum(np.exp(-((h * f0 - 700) / 400) ** 2 - 0.2 * ((h * f0 - 1200) / 600) ** 2)
+               * np.sin(2 * np.pi * h * f0 * t + rng.uniform(0, 2 * np.pi)) for h in range(1, 30))
+    ramp = np.minimum(1.0, np.minimum(t, t[::-1]) / 0.01)
+    return 0.3 * wave * ramp / np.abs(wave).max()
+
+
+def bursts_with_dips(durations: list[float], dip: float = 0.04, lead: float = 0.3, seed: int = 1):
+    """Audio of voiced bursts, each but the first preceded by a `dip` s near-silent closure.
+
+    Returns (audio, onsets): each syllable = closure + burst (a "ba"-like syllable), so its
+    onset is where the burst before it ends.
+    """
+    rng = np.random.default_rng(seed)
+    pieces, onsets, now = [np.zeros(int(lead * RATE))], [], lead
+    for k, seconds in enumerate(durations):
+        onsets.append(now)
+        if k:
+            pieces.append(np.zeros(int(dip * RATE)))
+        pieces.append(burst(seconds - (dip if k else 0.0), rng))
+        now += seconds
+    pieces.append(np.zeros(int(lead * RATE)))
+    samples = np.concatenate(pieces) + 1e-4 * rng.standard_normal(sum(map(len, pieces)))
+    return Audio(samples.astype(np.float32), RATE, "test"), np.array(onsets)
+
+
+def check_shape(timings, span, count):
+    """Count matches, ordered, no overlap, inside the span, confidences in 0..1."""
+    assert len(timings) == count
+    starts = np.array([t.start for t in timings])
+    ends = np.array([t.end for t in timings])
+    assert np.all(ends > starts)
+    assert np.all(starts[1:] >= ends[:-1] - 1e-9)
+    assert starts[0] >= span.start - 1e-9 and ends[-1] <= span.end + 1e-9
+    assert all(0.0 <= t.confidence <= 1.0 for t in timings)
+
+
+def test_onsets_of_unequal_syllables_land_on_the_dips():
+    durations = [0.18, 0.32, 0.15, 0.27, 0.22, 0.35, 0.2]
+    audio, onsets = bursts_with_dips(durations)
+    span = Span(onsets[0], onsets[0] + sum(durations))
+    syllables = ["ba1", "ba4", "ba2", "ba3", "ba1", "ba4", "ba2"]
+    timings = align_syllables(audio, span, syllables)
+    check_shape(timings, span, len(syllables))
+    found = np.array([t.start for t in timings])
+    assert np.all(np.abs(found - onsets) <= 0.03)
+    equal = span.start + (span.end - span.start) * np.arange(len(durations)) / len(durations)
+    assert np.abs(found - onsets).mean() < np.abs(equal - onsets).mean() / 3
+    # no pause was detected, so the syllables are contiguous and cover the span
+    assert all(a.end == b.start for a, b in zip(timings, timings[1:]))
+    assert timings[0].start == span.start and timings[-1].end == span.end
+    assert min(t.confidence for t in timings) > 0.5
+
+
+def test_a_pause_inside_the_part_becomes_a_gap():
+    rng = np.random.default_rng(3)
+    gap = 0.5
+    parts = [np.zeros(3200), burst(0.25, rng), np.zeros(800), burst(0.3, rng),
+             np.zeros(int(gap * RATE)), burst(0.25, rng), np.zeros(800), burst(0.3, rng), np.zeros(3200)]
+    samples = np.concatenate(parts) + 1e-4 * rng.standard_normal(sum(map(len, parts)))
+    audio = Audio(samples.astype(np.float32), RATE, "test")
+    start = 0.2
+    after_pause = start + 0.25 + 0.05 + 0.3 + gap
+    span = Span(start, after_pause + 0.25 + 0.05 + 0.3)
+    timings = align_syllables(audio, span, ["ma1", "ma1", "ma1", "ma1"])
+    check_shape(timings, span, 4)
+    assert timings[2].start - timings[1].end > gap - 0.1
+    assert abs(timings[2].start - after_pause) <= 0.03
+    assert abs(timings[1].end - (after_pause - gap)) <= 0.03
+
+
+def test_silence_at_the_edges_of_a_loose_span_is_left_out():
+    durations = [0.25, 0.3, 0.2]
+    audio, onsets = bursts_with_dips(durations, lead=0.4)
+    span = Span(onsets[0] - 0.25, onsets[0] + sum(durations) + 0.25)
+    timings = align_syllables(audio, span, ["da4", "da4", "da4"])
+    check_shape(timings, span, 3)
+    assert abs(timings[0].start - onsets[0]) <= 0.03
+    assert abs(timings[-1].end - (onsets[0] + sum(durations))) <= 0.03
+
+
+def test_one_syllable_fills_its_span():
+    audio, onsets = bursts_with_dips([0.3])
+    span = Span(onsets[0], onsets[0] + 0.3)
+    (timing,) = align_syllables(audio, span, ["hao3"])
+    assert (timing.start, timing.end) == (span.start, span.end)
+
+
+@pytest.mark.parametrize("case", ["too short", "pure noise", "digital silence", "outside the audio", "zero length"])
+def test_degenerate_parts_fall_back_to_the_duration_prior_with_low_confidence(case):
+    rng = np.random.default_rng(7)
+    noise = Audio((0.1 * rng.standard_normal(2 * RATE)).astype(np.float32), RATE, "noise")
+    silent = Audio(np.zeros(2 * RATE, dtype=np.float32), RATE, "silence")
+    audio, span = {
+        "too short": (noise, Span(0.5, 0.52)),
+        "pure noise": (noise, Span(0.2, 1.8)),
+        "digital silence": (silent, Span(0.2, 1.8)),
+        "outside the audio": (noise, Span(5.0, 6.0)),
+        "zero length": (noise, Span(1.0, 1.0)),
+    }[case]
+    syllables = ["ni3", "hao3", "shi4", "jie4", "wanr2"]
+    timings = align_syllables(audio, span, syllables)
+    assert len(timings) == len(syllables)
+    assert all(t.confidence <= LOW_CONFIDENCE for t in timings)
+    starts = [t.start for t in timings]
+    assert starts == sorted(starts) and timings[0].start == span.start and timings[-1].end == span.end
+    weights = relative_durations(syllables)
+    lengths = np.array([t.end - t.start for t in timings])
+    if span.end > span.start:
+        assert np.allclose(lengths / lengths.sum(), weights / weights.sum())
+
+
+def test_no_syllables_give_nothing():
+    audio, _ = bursts_with_dips([0.3])
+    assert align_syllables(audio, Span(0.3, 0.6), []) == ()
+
+
+@pytest.mark.parametrize("pinyin, initial, final, tone, erhua", [
+    ("hang2", "h", "ang", 2, False), ("wanr1", "w", "an", 1, True), ("er2", "", "er", 2, False),
+    ("zhuang4", "zh", "uang", 4, False), ("lü4", "l", "v", 4, False), ("a5", "", "a", 5, False),
+    ("xyz", "x", "yz", 5, False), ("", "", "", 5, False), ("Ma3!", "m", "a", 3, False),
+])
+def test_syllable_types_of_odd_and_ordinary_pinyin(pinyin, initial, final, tone, erhua):
+    t = syllable_type(pinyin)
+    assert (t.initial, t.final, t.tone, t.erhua) == (initial, final, tone, erhua)
+
+
+def test_sentence_final_and_longer_syllables_get_more_time():
+    weights = relative_durations(["a5", "chuang3", "ma1"])
+    assert weights[1] > weights[0] and weights[2] > weights[0]
+    assert np.isclose(weights.mean(), 1.0)
+
+
+def espeak_syllables(pinyin: str) -> tuple[np.ndarray, int, list[float]]:
+    """Synthesise tone-numbered pinyin with espeak-ng (cmn-latn-pinyin); samples, rate and the
+    start time of each syllable from the library's WORD events (one per syllable)."""
+    name = ctypes.util.find_library("espeak-ng") or "libespeak-ng.so.1"
+    lib = ctypes.CDLL(name)
+
+    class Event(ctypes.Structure):
+        _fields_ = [("type", ctypes.c_int), ("unique_identifier", ctypes.c_uint), ("text_position", ctypes.c_int),
+                    ("length", ctypes.c_int), ("audio_position", ctypes.c_int), ("sample", ctypes.c_int),
+                    ("user_data", ctypes.c_void_p), ("id", ctypes.c_char * 8)]
+
+    callback_type = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int, ctypes.POINTER(Event))
+    chunks, words = [], []
+
+    def collect(wav, count, events):
+        if wav and count > 0:
+            chunks.append(np.ctypeslib.as_array(wav, (count,)).copy())
+        i = 0
+        while events[i].type != 0:
+            if events[i].type == 1:   # espeakEVENT_WORD
+                words.append(events[i].sample)
+            i += 1
+        return 0
+
+    rate = lib.espeak_Initialize(2, 0, None, 1)   # AUDIO_OUTPUT_SYNCHRONOUS, phoneme events on
+    keep = callback_type(collect)
+    lib.espeak_SetSynthCallback(keep)
+    if lib.espeak_SetVoiceByName(b"cmn-latn-pinyin") != 0:
+        pytest.skip("espeak-ng voice cmn-latn-pinyin is not installed")
+    text = pinyin.encode()
+    lib.espeak_Synth(text, len(text) + 1, 0, 1, 0, 1, None, None)
+    return np.concatenate(chunks).astype(np.float32) / 32768.0, rate, [s / rate for s in words]
+
+
+def test_espeak_speech_onsets_land_near_the_synthetic_ones():
+    pinyin = "bao2 ma3 pei4 gua4 bo3 luo2 an1 diao1 chan2 yuan4 zhen3 dong3 weng1 ta4"
+    samples, rate, onsets = espeak_syllables(pinyin)
+    syllables = pinyin.split()
+    assert len(onsets) == len(syllables)
+    audio = Audio(samples, rate, "espeak")
+    span = Span(onsets[0], len(samples) / rate)
+    timings = align_syllables(audio, span, syllables)
+    check_shape(timings, span, len(syllables))
+    errors = np.abs(np.array([t.start for t in timings]) - onsets)
+    assert np.mean(errors <= 0.05) >= 0.8
