@@ -80,7 +80,9 @@ def actions_from_json(text: str, source: str, duration: float) -> tuple[Action, 
     if data.get("format") != FORMAT:
         raise ActionsError(f"{source}: field 'format' is {data.get('format')!r}; expected {FORMAT!r}")
     if data.get("version") != VERSION:
-        raise ActionsError(f"{source}: field 'version' is {data.get('version')!r}; this program reads version {VERSION}")
+        raise ActionsError(
+            f"{source}: field 'version' is {data.get('version')!r}; this program reads version {VERSION}"
+        )
     unknown = sorted(set(data) - {"format", "version", "actions"})
     if unknown:
         raise ActionsError(f"{source}: unknown field {unknown[0]!r}; expected format, version, actions")
@@ -130,7 +132,9 @@ def _action(row: object, where: str, duration: float) -> Action:
         if value < 0:
             raise ActionsError(f"{where}.{key}: {value} is negative; expected seconds from 0")
     if ramps[0] + ramps[1] > length + TOLERANCE:
-        raise ActionsError(f"{where}.release: attack + release ({ramps[0] + ramps[1]:g} s) exceed the duration ({length:g} s)")
+        raise ActionsError(
+            f"{where}.release: attack + release ({ramps[0] + ramps[1]:g} s) exceed the duration ({length:g} s)"
+        )
     return Action(kind, round(start, 3), round(length, 3), amplitude, round(ramps[0], 3), round(ramps[1], 3))
 
 

@@ -192,7 +192,8 @@ def _moves(
 ) -> list[Action]:
     """Head tilts or turns: each waits its interval after the previous move or nod.
 
-    Targets alternate sides of the centre, the first side drawn at random. A move that would overlap a nod (`busy` spans) is put off: its interval is
+    Targets alternate sides of the centre, the first side drawn at random.
+    A move that would overlap a nod (`busy` spans) is put off: its interval is
     counted again from the end of that nod.
     """
     moves, end = [], 0.0

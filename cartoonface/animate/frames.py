@@ -42,7 +42,8 @@ def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
     the same object.
     """
     if isinstance(fps, bool) or not isinstance(fps, int | np.integer) or not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
-        raise OptionError(f"fps: {fps!r}; expected a whole number of frames per second from {FPS_RANGE[0]} to {FPS_RANGE[1]}")
+        low, high = FPS_RANGE
+        raise OptionError(f"fps: {fps!r}; expected a whole number of frames per second from {low} to {high}")
     count = -(-timeline.duration * int(fps) // 1000)
     return states_at(timeline, np.arange(count) / fps)
 
@@ -53,12 +54,14 @@ def states_at(timeline: Timeline, times: np.ndarray) -> tuple[FaceState, ...]:
     mouth = _mouth(timeline.track("mouth"), t)
     blink, brow = (_amount(timeline.track(name), t) for name in ("blink", "brow"))
     tilt, turn, nod = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod"))
-    columns = zip(blink.tolist(), brow.tolist(), (NOD_SIGN * nod + 0.0).tolist(), turn.tolist(), tilt.tolist(), mouth, strict=True)
+    pitch = NOD_SIGN * nod + 0.0
+    columns = zip(blink.tolist(), brow.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(), mouth, strict=True)
     states, previous, state = [], None, None
     for values in columns:
         if values != previous:
-            b, w, pitch, yaw, lean, mix = values
-            state = FaceState(pose=Pose(tilt=pitch, turn=yaw, roll=lean), blink=b, smile=SMILE, brow=w, mouth=mix)
+            eyes, brows, down, sideways, lean, mix = values
+            pose = Pose(tilt=down, turn=sideways, roll=lean)
+            state = FaceState(pose=pose, blink=eyes, smile=SMILE, brow=brows, mouth=mix)
             previous = values
         states.append(state)
     return tuple(states)

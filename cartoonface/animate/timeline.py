@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from cartoonface.animate.behaviour import Action
+from cartoonface.animate.behaviour import KINDS, Action
 from cartoonface.speech.mouth_shapes import shape_onsets
 
 REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: shape m, lips closed)
@@ -76,7 +76,7 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
     """
     duration = round(alignment.duration * 1000)
     syllables = sorted((syl for sentence in alignment.sentences for syl in sentence.syllables), key=lambda s: s.start)
-    by_kind = {kind: sorted((a for a in actions if a.kind == kind), key=lambda a: a.start) for kind in ("blink", "brow", "tilt", "turn", "nod")}
+    by_kind = {kind: sorted((a for a in actions if a.kind == kind), key=lambda a: a.start) for kind in KINDS}
     return Timeline(
         duration,
         (
