@@ -1,0 +1,199 @@
+"""The one library call behind `cartoonface generate` and the web app.
+
+`generate` runs every stage: decode the audio, find the sentences and align the
+syllables (or read an edited TextGrid), schedule the behaviour (or read an
+edited actions.json), sample the face state of every frame, draw the SVG
+animation and write the page folder (docs/output.md). The folder is built
+under a temporary name and renamed into place (files.atomic_directory): it
+appears complete or not at all.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from cartoonface.animate.actions import actions_to_json, load_actions
+from cartoonface.animate.behaviour import schedule, speech_pauses
+from cartoonface.animate.frames import FPS_RANGE, sample_frames
+from cartoonface.animate.timeline import build_timeline
+from cartoonface.errors import AlignmentError, OptionError, TranscriptError
+from cartoonface.face.model import FaceModel, load_face
+from cartoonface.files import atomic_directory
+from cartoonface.render.animation import animation_svg
+from cartoonface.render.pages import PAGES, check_links, copy_audio, folder_size, page_html, write_site
+from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
+from cartoonface.speech.alignment import Alignment, analyse
+from cartoonface.speech.audio import load_audio
+from cartoonface.speech.textgrid import read_textgrid, write_textgrid
+
+# Share of the whole job done when each stage starts (measured on the sample book:
+# alignment and drawing take most of the time).
+STAGES = (("decode", 0.0), ("segment", 0.05), ("align", 0.15), ("schedule", 0.35),
+          ("frames", 0.4), ("svg", 0.45), ("pages", 0.9))
+# An edited TextGrid may end this much after the audio (Praat rounds its times).
+ALIGNMENT_SLACK = 0.05  # seconds
+MAX_TITLE = 200  # characters
+
+
+@dataclass(frozen=True)
+class Options:
+    """What to make: the page kind, its title and links, frame rate, seed, announcer
+    scenery, and optional edited inputs (actions.json, TextGrid) replacing the automatic ones."""
+
+    page: str = "audiobook"  # or "announcer"
+    title: str = ""
+    fps: int = 30  # 12..60
+    seed: int = 0
+    background: str = "studio"  # announcer backgrounds (scenery.BACKGROUNDS)
+    clothes: str = "suit"  # announcer clothes (scenery.CLOTHES)
+    actions: Path | None = None  # edited actions.json
+    alignment: Path | None = None  # edited TextGrid: skips alignment
+    pause: tuple[float, float] | None = None  # thesis mode of Alg. 3.1
+    links: tuple[tuple[str, str], ...] = ()  # (label, url) for the audio-book page
+
+
+@dataclass(frozen=True)
+class Result:
+    """What `generate` made: the folder, seconds of audio, frames, bytes written, wall seconds, notes."""
+
+    out_dir: Path
+    duration: float
+    frames: int
+    size: int
+    seconds: float
+    notes: tuple[str, ...]
+
+
+def check_options(options: Options) -> None:
+    """Raise OptionError naming the first option out of range (before any work is done)."""
+    if options.page not in PAGES:
+        raise OptionError(f"page {options.page!r}: expected one of {', '.join(PAGES)}")
+    fps = options.fps
+    if isinstance(fps, bool) or not isinstance(fps, int) or not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
+        raise OptionError(f"fps {fps!r}: expected a whole number of frames per second from {FPS_RANGE[0]} to {FPS_RANGE[1]}")
+    if isinstance(options.seed, bool) or not isinstance(options.seed, int) or options.seed < 0:
+        raise OptionError(f"seed {options.seed!r}: expected a whole number 0 or more")
+    if options.background not in BACKGROUNDS:
+        raise OptionError(f"background {options.background!r}: expected one of {', '.join(BACKGROUNDS)}")
+    if options.clothes not in CLOTHES:
+        raise OptionError(f"clothes {options.clothes!r}: expected one of {', '.join(CLOTHES)}")
+    if len(options.title) > MAX_TITLE:
+        raise OptionError(f"title: {len(options.title)} characters; expected at most {MAX_TITLE}")
+    if options.pause is not None:
+        start, end = options.pause
+        if not 0 <= start < end:
+            raise OptionError(f"pause {start},{end}: expected START,END seconds with 0 <= START < END")
+    check_links(options.links)
+
+
+def read_transcript(path: str | os.PathLike[str]) -> str:
+    """The text of the transcript file at `path` (UTF-8, a BOM allowed); TranscriptError if unreadable."""
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise TranscriptError(f"{path}: no such transcript file") from None
+    except IsADirectoryError:
+        raise TranscriptError(f"{path}: is a folder; expected a UTF-8 text file") from None
+    except UnicodeDecodeError:
+        raise TranscriptError(f"{path}: not UTF-8 text; save the transcript as UTF-8") from None
+    except OSError as exc:
+        raise TranscriptError(f"{path}: cannot read the transcript ({exc.strerror})") from None
+
+
+def edited_alignment(path: str | os.PathLike[str], duration: float) -> Alignment:
+    """Read an edited TextGrid at `path` for audio of `duration` seconds.
+
+    Raises AlignmentError when it cannot be read or when speech in it ends after
+    the audio does; its duration becomes the audio's.
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise AlignmentError(f"{path}: no such TextGrid file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise AlignmentError(f"{path}: cannot read the TextGrid as UTF-8 text ({exc})") from None
+    alignment = read_textgrid(text, str(path))
+    last = max((s.end for s in alignment.sentences), default=0.0)
+    if last > duration + ALIGNMENT_SLACK:
+        raise AlignmentError(
+            f"{path}: a sentence ends at {last:.3f} s but the audio lasts {duration:.3f} s; "
+            "expected the TextGrid made for this recording"
+        )
+    return dataclasses.replace(alignment, duration=duration)
+
+
+def check_out_dir(out_dir: Path) -> None:
+    """Refuse an output path that is a file, or a folder with other content than a previous output."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise OptionError(f"{out_dir}: exists and is not a folder; expected a folder for the pages")
+    if out_dir.is_dir() and any(out_dir.iterdir()) and not (out_dir / "animation.svg").is_file():
+        raise OptionError(
+            f"{out_dir}: the folder holds other files; choose a new or empty folder "
+            "(a previous cartoonface output is replaced)"
+        )
+
+
+def generate(
+    face: Path | FaceModel,
+    audio: Path,
+    transcript: Path | str,
+    out_dir: Path,
+    options: Options = Options(),
+    progress: Callable[[str, float], None] | None = None,
+) -> Result:
+    """Make the page folder `out_dir` from a face model, a recording and its transcript.
+
+    `face`: a FaceModel or the path of its JSON. `audio`: the recording's path.
+    `transcript`: a path (Path or os.PathLike) to a UTF-8 text file, or the text
+    itself as a str. `progress(stage, fraction)` is told when each stage of
+    STAGES starts and once more at ("pages", 1.0). Raises InputError (a
+    subclass) for any bad input; then nothing is left at `out_dir`.
+    """
+    started = time.perf_counter()
+    fractions = dict(STAGES)
+
+    def report(stage: str) -> None:
+        if progress is not None:
+            progress(stage, fractions[stage])
+
+    check_options(options)
+    target = Path(out_dir)
+    check_out_dir(target)
+    model = face if isinstance(face, FaceModel) else load_face(face)
+    text = transcript if isinstance(transcript, str) else read_transcript(transcript)
+    report("decode")
+    recording = load_audio(audio)
+    duration = recording.duration
+    # analyse() segments and aligns in one call: both stages are reported as it starts.
+    report("segment")
+    report("align")
+    if options.alignment is not None:
+        alignment = edited_alignment(options.alignment, duration)
+    else:
+        alignment = analyse(recording, text, pause=options.pause)
+    report("schedule")
+    if options.actions is not None:
+        actions = load_actions(options.actions, duration)
+    else:
+        actions = schedule(duration, speech_pauses(alignment), options.seed)
+    report("frames")
+    states = sample_frames(build_timeline(alignment, actions), options.fps)
+    report("svg")
+    svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
+                        wide=options.page == "announcer")
+    report("pages")
+    with atomic_directory(target) as folder:
+        sources = copy_audio(audio, folder)
+        html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
+                         fps=options.fps, links=options.links)
+        write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment), actions=actions_to_json(actions))
+        size = folder_size(folder)
+    if progress is not None:
+        progress("pages", 1.0)
+    return Result(out_dir=target, duration=duration, frames=len(states), size=size,
+                  seconds=time.perf_counter() - started, notes=tuple(alignment.notes))

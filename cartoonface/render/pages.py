@@ -1,0 +1,177 @@
+"""The published output folder: the audio-book and virtual-announcer pages (thesis 002, ch. 7).
+
+`page_html` fills a Jinja template from `templates/` (autoescape on: every
+user text is escaped) with the animation SVG inline, so the page script can
+drive its SMIL clock from the `<audio>` element even when the page is opened
+from `file://` (an `<object>`/`<embed>` document is another origin there and
+cannot be reached by the script). `write_site` writes the folder: index.html,
+animation.svg, static/ (CSS and the sync script), the audio, alignment.TextGrid
+and actions.json. docs/output.md describes the folder and the page behaviour.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from urllib.parse import urlsplit
+
+import jinja2
+from markupsafe import Markup
+
+from cartoonface import __version__
+from cartoonface.errors import OptionError
+from cartoonface.files import write_bytes_atomic
+from cartoonface.speech.alignment import Alignment
+from cartoonface.speech.audio import browser_copy
+
+PAGES = ("audiobook", "announcer")
+# Inside the package (a symlink to the top-level folders in a source checkout,
+# real folders in the wheel): see pyproject.toml package-data.
+PACKAGE = Path(__file__).resolve().parent.parent
+TEMPLATES = PACKAGE / "templates"
+STATIC = PACKAGE / "static"
+AUDIO_STEM = "audio"
+MEDIA_TYPES = {
+    ".wav": "audio/wav",
+    ".mp3": "audio/mpeg",
+    ".m4a": "audio/mp4",
+    ".aac": "audio/aac",
+    ".ogg": "audio/ogg",
+    ".oga": "audio/ogg",
+    ".opus": "audio/ogg",
+    ".flac": "audio/flac",
+    ".webm": "audio/webm",
+}
+LINK_SCHEMES = ("", "http", "https", "mailto")
+
+
+@dataclass(frozen=True)
+class AudioSource:
+    """One `<source>` of the page's audio element: file `name` in the folder, media `type`."""
+
+    name: str
+    type: str
+
+
+@dataclass(frozen=True)
+class Link:
+    """A link shown under the audio-book text."""
+
+    label: str
+    url: str
+
+
+def check_links(links: Sequence[tuple[str, str]]) -> tuple[Link, ...]:
+    """Validate (label, url) pairs; return them as Links.
+
+    Raises OptionError for an empty label or url, or a url whose scheme is not
+    http, https or mailto (a relative url is fine): `javascript:` links never
+    reach a page.
+    """
+    checked = []
+    for index, (label, url) in enumerate(links):
+        if not label.strip() or not url.strip():
+            raise OptionError(f"link {index + 1}: expected a label and a url, got {label!r} {url!r}")
+        if urlsplit(url.strip()).scheme.lower() not in LINK_SCHEMES:
+            raise OptionError(f"link {index + 1}: url {url!r} must be http, https, mailto or relative")
+        checked.append(Link(label.strip(), url.strip()))
+    return tuple(checked)
+
+
+def _environment() -> jinja2.Environment:
+    """The Jinja environment over `templates/`, autoescaping everything."""
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(TEMPLATES),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+    )
+
+
+def inline_svg(svg: bytes) -> Markup:
+    """The SVG document `svg` (UTF-8 bytes from lxml, so already escaped) as markup for an HTML page.
+
+    The XML declaration is dropped; the rest is the `<svg>` element as written.
+    """
+    text = svg.decode("utf-8")
+    if text.startswith("<?xml"):
+        text = text[text.index("?>") + 2 :].lstrip()
+    return Markup(text)
+
+
+def page_html(
+    page: str,
+    *,
+    title: str,
+    alignment: Alignment,
+    svg: bytes,
+    audio: Sequence[AudioSource],
+    fps: int,
+    links: Sequence[tuple[str, str]] = (),
+    lang: str = "zh",
+) -> str:
+    """The HTML of the `page` ("audiobook" or "announcer") as a string.
+
+    `alignment` gives the sentences (text, start and end in seconds) that the
+    page highlights as they are spoken; `svg` is the animation document, put
+    inline; `audio` the sources of the `<audio>` clock, best first.
+    """
+    if page not in PAGES:
+        raise OptionError(f"page {page!r}: expected one of {', '.join(PAGES)}")
+    template = _environment().get_template(f"{page}.html")
+    return template.render(
+        title=title or "cartoonface",
+        sentences=alignment.sentences,
+        svg=inline_svg(svg),
+        audio=tuple(audio),
+        fps=fps,
+        links=check_links(links) if page == "audiobook" else (),
+        lang=lang,
+        version=__version__,
+    )
+
+
+def copy_audio(source: str | os.PathLike[str], folder: str | os.PathLike[str]) -> tuple[AudioSource, ...]:
+    """Put the recording `source` into `folder` as audio.<suffix>, plus a browser copy if needed.
+
+    Returns the page's audio sources, the browser-friendly one first.
+    """
+    original = Path(source)
+    target = Path(folder)
+    playable = browser_copy(original, target, stem=AUDIO_STEM)
+    sources = [AudioSource(playable.name, MEDIA_TYPES.get(playable.suffix, "audio/mpeg"))]
+    suffix = original.suffix.lower()
+    if suffix != playable.suffix:
+        kept = write_bytes_atomic(target / f"{AUDIO_STEM}{suffix or '.original'}", original.read_bytes())
+        if suffix in MEDIA_TYPES:
+            sources.append(AudioSource(kept.name, MEDIA_TYPES[suffix]))
+    return tuple(sources)
+
+
+def write_site(
+    folder: str | os.PathLike[str],
+    *,
+    html: str,
+    svg: bytes,
+    textgrid: str,
+    actions: str,
+) -> None:
+    """Write index.html, animation.svg, static/, alignment.TextGrid and actions.json into `folder`.
+
+    The audio goes in separately (`copy_audio`), before the page is written.
+    """
+    target = Path(folder)
+    write_bytes_atomic(target / "index.html", html.encode("utf-8"))
+    write_bytes_atomic(target / "animation.svg", svg)
+    write_bytes_atomic(target / "alignment.TextGrid", textgrid.encode("utf-8"))
+    write_bytes_atomic(target / "actions.json", actions.encode("utf-8"))
+    for asset in sorted(STATIC.iterdir()):
+        if asset.is_file():
+            write_bytes_atomic(target / "static" / asset.name, asset.read_bytes())
+
+
+def folder_size(folder: str | os.PathLike[str]) -> int:
+    """Total bytes of the files under `folder`."""
+    return sum(path.stat().st_size for path in Path(folder).rglob("*") if path.is_file())
