@@ -1,0 +1,84 @@
+"""What a face shows at one moment: head pose, expression amounts, mouth mix."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from cartoonface.errors import OptionError
+from cartoonface.face.mouth import MOUTH_SYMBOLS
+
+# Thesis 002, 2.3.1 / 2.4.3: the generic depth model holds for slight head
+# rotations; the system draws poses within +-15 degrees about each axis.
+MAX_ANGLE = 15.0
+# Mouth weights must sum to 1 within this tolerance.
+WEIGHT_TOLERANCE = 1e-6
+
+
+def _finite(value: object, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise OptionError(f"{name} is {value!r}; expected a number")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Head rotation in degrees (thesis 002, 2.4.3.1; positive = counter-clockwise).
+
+    tilt: about X (positive: the face looks down); turn: about Y (positive: the
+    nose moves to the image right); roll: about Z (positive: the top of the head
+    moves to the image left). Each within +-MAX_ANGLE, else OptionError.
+    """
+
+    tilt: float = 0.0
+    turn: float = 0.0
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("tilt", "turn", "roll"):
+            value = _finite(getattr(self, name), name)
+            if abs(value) > MAX_ANGLE:
+                raise OptionError(f"{name} {value:g} degrees is out of range; expected -15 to 15")
+
+
+@dataclass(frozen=True)
+class FaceState:
+    """Pose, expression amounts blink / smile / brow in 0..1, and the mouth.
+
+    mouth: (symbol, weight) pairs, symbols from MOUTH_SYMBOLS, weights >= 0
+    summing to 1, so key frames interpolate by blending weights. OptionError
+    for anything out of range.
+    """
+
+    pose: Pose = Pose()
+    blink: float = 0.0
+    smile: float = 0.0
+    brow: float = 0.0
+    mouth: tuple[tuple[str, float], ...] = (("m", 1.0),)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.pose, Pose):
+            raise OptionError(f"pose is {self.pose!r}; expected a Pose")
+        for name in ("blink", "smile", "brow"):
+            value = _finite(getattr(self, name), name)
+            if not 0.0 <= value <= 1.0:
+                raise OptionError(f"{name} {value:g} is out of range; expected 0 to 1")
+        if not self.mouth:
+            raise OptionError("mouth is empty; expected (symbol, weight) pairs")
+        total = 0.0
+        for pair in self.mouth:
+            if not isinstance(pair, tuple) or len(pair) != 2:
+                raise OptionError(f"mouth entry {pair!r}; expected a (symbol, weight) pair")
+            symbol, weight = pair
+            if symbol not in MOUTH_SYMBOLS:
+                raise OptionError(f"mouth symbol {symbol!r} is unknown; expected one of {' '.join(MOUTH_SYMBOLS)}")
+            weight = _finite(weight, f"mouth weight of {symbol!r}")
+            if weight < 0:
+                raise OptionError(f"mouth weight of {symbol!r} is {weight:g}; expected >= 0")
+            total += weight
+        if abs(total - 1.0) > WEIGHT_TOLERANCE:
+            raise OptionError(f"mouth weights sum to {total:g}; expected 1")
+
+    def with_mouth(self, symbol: str) -> FaceState:
+        """This state with the mouth set to one basic shape (OptionError if unknown)."""
+        return replace(self, mouth=((symbol, 1.0),))
