@@ -8,8 +8,10 @@ Speaking parts come from the reference itself: each run of syllables between two
 intervals is one part, from the first syllable's start to the last one's end (short `sp`
 pauses and Chao's unlabelled gaps stay inside the part). Because the first onset of a part
 is then given, the table also reports the share within 50 ms over the inner onsets only.
-A second Chao run widens every part by up to 0.25 s of the surrounding silence, as a loose
-segmenter would, so that the first onset has to be found too.
+Biaobei is also run on the speaking parts that the project's segmenter
+(sentences.find_speech_parts, automatic mode) finds, whose edges are looser, and a second
+Chao run widens every part by up to 0.25 s of the surrounding silence, so that the first
+onset has to be found too.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import soundfile
 
 from cartoonface.speech.align import align_syllables
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.sentences import find_speech_parts
 
 ZH = Path(__file__).resolve().parents[1].parent / "shared" / "bench" / "zh"
 TUNING = range(1, 36)     # Biaobei 000001-000035: the only sentences the aligner was tuned on
@@ -138,6 +141,23 @@ def chao(loose: bool) -> list[Recording]:
     return [Recording("chao1922", load_audio(folder / "chao1922_tone_paradigm.wav"), parts)]
 
 
+def segmenter_parts(recording: Recording) -> Recording:
+    """The same recording and reference syllables, cut into the speaking parts that
+    cartoonface.speech.sentences.find_speech_parts finds (automatic mode); each syllable goes
+    to the part nearest its reference middle."""
+    spans = find_speech_parts(recording.audio)
+    syllables = [(o, s) for part in recording.parts for o, s in zip(part.onsets, part.syllables)]
+    ends = [o for part in recording.parts for o in (*part.onsets[1:], part.end)]
+    groups: list[list[tuple[float, str]]] = [[] for _ in spans]
+    for (onset, pinyin), end in zip(syllables, ends):
+        middle = (onset + end) / 2
+        nearest = min(range(len(spans)), key=lambda k: max(spans[k].start - middle, middle - spans[k].end, 0.0))
+        groups[nearest].append((onset, pinyin))
+    parts = tuple(Part(span.start, span.end, tuple(p for _, p in g), tuple(o for o, _ in g))
+                  for span, g in zip(spans, groups) if g)
+    return Recording(recording.name, recording.audio, parts)
+
+
 def equal_split(part: Part) -> np.ndarray:
     """Baseline onsets: the part cut into syllables of equal length."""
     n = len(part.syllables)
@@ -188,6 +208,8 @@ def main() -> None:
     held_out = [r for r in records if int(r.name) not in TUNING]
     report("Biaobei tuning 000001-000035", tuning)
     report("Biaobei held-out 000036-000070", held_out)
+    report("Biaobei tuning, segmenter parts", [segmenter_parts(r) for r in tuning])
+    report("Biaobei held-out, segmenter parts", [segmenter_parts(r) for r in held_out])
     report("AISHELL-3 (2 speakers)", aishell3())
     report("Chao 1922, reference parts", chao(loose=False))
     report(f"Chao 1922, parts widened by <= {LOOSE} s", chao(loose=True))
