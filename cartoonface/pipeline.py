@@ -151,15 +151,19 @@ def generate(
     `face`: a FaceModel or the path of its JSON. `audio`: the recording's path.
     `transcript`: a path (Path or os.PathLike) to a UTF-8 text file, or the text
     itself as a str. `progress(stage, fraction)` is told when each stage of
-    STAGES starts and once more at ("pages", 1.0). Raises InputError (a
+    STAGES starts (and as segmentation and alignment go on) with the fraction
+    0..1 of the whole job, and once more at ("pages", 1.0). Raises InputError (a
     subclass) for any bad input; then nothing is left at `out_dir`.
     """
     started = time.perf_counter()
-    fractions = dict(STAGES)
+    names = [name for name, _ in STAGES]
+    bounds = [share for _, share in STAGES] + [1.0]
 
-    def report(stage: str) -> None:
+    def report(stage: str, within: float = 0.0) -> None:
+        """Tell `progress` that `stage` is `within` (0..1) done."""
         if progress is not None:
-            progress(stage, fractions[stage])
+            index = names.index(stage)
+            progress(stage, bounds[index] + within * (bounds[index + 1] - bounds[index]))
 
     check_options(options)
     target = Path(out_dir)
@@ -169,13 +173,13 @@ def generate(
     report("decode")
     recording = load_audio(audio)
     duration = recording.duration
-    # analyse() segments and aligns in one call: both stages are reported as it starts.
-    report("segment")
-    report("align")
     if options.alignment is not None:
+        report("segment")
+        report("align")
         alignment = edited_alignment(options.alignment, duration)
     else:
-        alignment = analyse(recording, text, pause=options.pause)
+        source = "transcript" if isinstance(transcript, str) else str(transcript)
+        alignment = analyse(recording, text, pause=options.pause, progress=report, source=source)
     report("schedule")
     if options.actions is not None:
         actions = load_actions(options.actions, duration)

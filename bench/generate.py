@@ -1,0 +1,134 @@
+"""End-to-end `generate` on a 3-minute Mandarin recording built from real THCHS-30 speech.
+
+The input is made at bench time in a temporary folder (never committed): the THCHS-30
+recordings of ../shared/bench/zh/thchs30_mfa_example that have a Hanzi transcript, one after
+another with 0.4 s of silence between them, repeated until 3 minutes are reached; the
+transcript is their Hanzi, one utterance a line ending in "。".
+
+Figures (issue 4, "Done means"):
+- wall time of `pipeline.generate` (median of RUNS, in-process; target < 6 s, >= 30x real time)
+  and the share of each stage;
+- peak memory (max RSS of a child process doing one run);
+- SVG bytes per minute of audio, raw and gzipped (targets < 1.5 MB and < 200 KB at 30 fps);
+- page-ready time in headless Chromium (navigation start to the load event of index.html
+  from file://, median of RUNS; target < 2 s), and the SVG-vs-audio gap after 2 s of play.
+"""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import soundfile
+
+from cartoonface.pipeline import Options, generate
+
+ROOT = Path(__file__).resolve().parents[1]
+THCHS = ROOT.parent / "shared" / "bench" / "zh" / "thchs30_mfa_example"
+FACES = ROOT / "samples" / "faces"
+TARGET_SECONDS = 180.0
+GAP = 0.4  # seconds of silence between utterances
+RUNS = 3
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
+
+
+def build_input(folder: Path) -> tuple[Path, Path, float]:
+    """Write speech.wav and transcript.txt (>= TARGET_SECONDS) into `folder`; return paths and seconds."""
+    with (THCHS / "transcripts.tsv").open(encoding="utf-8") as handle:
+        rows = [row for row in csv.DictReader(handle, delimiter="\t") if row["hanzi"].strip()]
+    pieces, lines, total, rate = [], [], 0.0, None
+    while total < TARGET_SECONDS:
+        for row in rows:
+            samples, rate = soundfile.read(THCHS / row["wav"], dtype="float32")
+            pieces += [samples, np.zeros(round(GAP * rate), dtype=np.float32)]
+            lines.append(row["hanzi"].strip() + "。")
+            total += len(samples) / rate + GAP
+            if total >= TARGET_SECONDS:
+                break
+    audio, transcript = folder / "speech.wav", folder / "transcript.txt"
+    soundfile.write(audio, np.concatenate(pieces), rate, subtype="PCM_16")
+    transcript.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return audio, transcript, total
+
+
+def timed_run(face: Path, audio: Path, transcript: Path, out: Path) -> tuple[float, dict[str, float], object]:
+    """One generate(); return wall seconds, seconds per stage, the Result."""
+    marks: list[tuple[str, float]] = []
+    started = time.perf_counter()
+    result = generate(face, audio, transcript, out, Options(), lambda stage, _: marks.append((stage, time.perf_counter())))
+    end = time.perf_counter()
+    stages: dict[str, float] = {}
+    for (stage, at), (_, after) in zip(marks, [*marks[1:], ("end", end)], strict=True):
+        stages[stage] = stages.get(stage, 0.0) + after - at
+    return end - started, stages, result
+
+
+def peak_memory(face: Path, audio: Path, transcript: Path, out: Path) -> float:
+    """Max RSS in MB of a fresh process running one generate()."""
+    code = ("import sys; from pathlib import Path; from cartoonface.pipeline import generate; "
+            "generate(Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3]), Path(sys.argv[4]))")
+    subprocess.run([sys.executable, "-c", code, str(face), str(audio), str(transcript), str(out)], check=True)
+    return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+
+
+def page_ready(index: Path) -> tuple[list[float], float]:
+    """Load times (s) of `index` in headless Chromium, and |SVG - audio| time after 2 s of play."""
+    from playwright.sync_api import sync_playwright
+
+    loads = []
+    with sync_playwright() as play:
+        browser = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
+        for _ in range(RUNS):
+            page = browser.new_page()
+            page.goto(index.as_uri(), wait_until="load")
+            loads.append(page.evaluate("performance.getEntriesByType('navigation')[0].loadEventEnd") / 1000)
+            page.close()
+        page = browser.new_page()
+        page.goto(index.as_uri(), wait_until="load")
+        page.evaluate("document.getElementById('cf-audio').play()")
+        page.wait_for_timeout(2000)
+        gap = page.evaluate("Math.abs(document.getElementById('cf-face').getCurrentTime()"
+                            " - document.getElementById('cf-audio').currentTime)")
+        browser.close()
+    return loads, gap
+
+
+def main() -> None:
+    """Build the input, run generate RUNS times, print the figures."""
+    face = sorted(FACES.glob("*.json"))[0]
+    with tempfile.TemporaryDirectory(prefix="cartoonface-bench-") as tmp:
+        folder = Path(tmp)
+        audio, transcript, seconds = build_input(folder)
+        print(f"input: {seconds:.1f} s of THCHS-30 speech ({seconds / 60:.2f} min), face {face.name}")
+        walls, stage_runs = [], []
+        for run in range(RUNS):
+            wall, stages, result = timed_run(face, audio, transcript, folder / f"out{run}")
+            walls.append(wall)
+            stage_runs.append(stages)
+        wall = statistics.median(walls)
+        print(f"generate wall time: median {wall:.2f} s of {RUNS} (runs {', '.join(f'{w:.2f}' for w in walls)}); "
+              f"{result.duration / wall:.0f}x real time; {result.frames} frames at 30 fps")
+        shares = {stage: statistics.median(s.get(stage, 0.0) for s in stage_runs) for stage in stage_runs[0]}
+        print("stages (median s): " + ", ".join(f"{stage} {value:.2f}" for stage, value in shares.items()))
+        print(f"peak memory (max RSS, one run in a fresh process): {peak_memory(face, audio, transcript, folder / 'mem'):.0f} MB")
+        svg = (result.out_dir / "animation.svg").read_bytes()
+        minutes = result.duration / 60
+        raw, packed = len(svg) / minutes, len(gzip.compress(svg, 6)) / minutes
+        print(f"SVG per minute: {raw / 1e6:.2f} MB raw, {packed / 1e3:.0f} KB gzipped "
+              f"(targets < 1.5 MB, < 200 KB); whole folder {result.size / 1e6:.1f} MB")
+        loads, gap = page_ready(result.out_dir / "index.html")
+        print(f"page ready in headless Chromium: median {statistics.median(loads):.2f} s of {RUNS} "
+              f"({', '.join(f'{x:.2f}' for x in loads)}); SVG-audio gap after 2 s of play {gap * 1000:.0f} ms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,118 @@
+"""Pages: templates filled, user text escaped, links checked, the folder written."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import soundfile
+from lxml import etree, html
+
+from cartoonface.errors import OptionError
+from cartoonface.render.pages import AudioSource, copy_audio, page_html, write_site
+from cartoonface.speech.alignment import Alignment, Sentence
+
+HOSTILE = '<script>alert("x")</script> & <b>bold</b>'
+SVG = "http://www.w3.org/2000/svg"
+
+
+def small_svg() -> bytes:
+    """A tiny SVG document as animation.py writes one (XML declaration, id cf-face)."""
+    root = etree.Element(f"{{{SVG}}}svg", nsmap={None: SVG}, id="cf-face", viewBox="0 0 10 10")
+    etree.SubElement(root, f"{{{SVG}}}rect", width="10", height="10")
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+
+
+def alignment(*texts: str) -> Alignment:
+    """Sentences of `texts`, two seconds each with a half-second pause between."""
+    sentences = tuple(Sentence(text, 2.5 * i, 2.5 * i + 2.0, ()) for i, text in enumerate(texts))
+    return Alignment(sentences, 2.5 * len(texts), ())
+
+
+def render(page: str = "audiobook", **changes) -> html.HtmlElement:
+    """Render `page` with hostile user text everywhere unless `changes` say otherwise; parse it."""
+    args = dict(title=HOSTILE, alignment=alignment("你好。", HOSTILE), svg=small_svg(),
+                audio=(AudioSource("audio.wav", "audio/wav"),), fps=25, links=((HOSTILE, "https://example.org/?a=1&b=2"),))
+    args.update(changes)
+    return html.document_fromstring(page_html(page, **args))
+
+
+@pytest.mark.parametrize("page", ["audiobook", "announcer"])
+def test_user_text_is_escaped_everywhere(page):
+    doc = render(page)
+    assert doc.findtext(".//title") == HOSTILE
+    assert not doc.xpath("//script[not(@src)]"), "user text became a script element"
+    assert not doc.xpath("//b"), "user text became markup"
+    assert HOSTILE in [span.text_content() for span in doc.xpath("//span[@class='cf-sentence']")]
+
+
+def test_audiobook_has_title_text_links_player_and_phone_viewport():
+    doc = render()
+    assert doc.findtext(".//h1") == HOSTILE
+    link = doc.xpath("//nav[@class='cf-links']//a")[0]
+    assert link.text_content() == HOSTILE and link.get("href") == "https://example.org/?a=1&b=2"
+    audio = doc.get_element_by_id("cf-audio")
+    assert audio.get("data-fps") == "25"
+    assert [s.get("src") for s in audio.xpath("source")] == ["audio.wav"]
+    assert "width=device-width" in doc.xpath("//meta[@name='viewport']/@content")[0]
+    assert doc.xpath("//script/@src") == ["static/cartoonface.js"]
+
+
+def test_sentences_carry_their_times():
+    spans = render().xpath("//span[@class='cf-sentence']")
+    times = [float(s.get(name)) for s in spans for name in ("data-start", "data-end")]
+    expected = [t for s in alignment("a", "b").sentences for t in (s.start, s.end)]
+    assert times == pytest.approx(expected)
+
+
+def test_svg_is_inline_without_xml_declaration():
+    text = page_html("audiobook", title="t", alignment=alignment("一。"), svg=small_svg(),
+                     audio=(AudioSource("audio.wav", "audio/wav"),), fps=30)
+    assert "<?xml" not in text
+    doc = html.document_fromstring(text)
+    assert len(doc.xpath("//svg[@id='cf-face']")) == 1
+    assert doc.xpath("//figure[@class='cf-stage']/svg")
+
+
+def test_announcer_has_caption_slot_and_no_links():
+    doc = render("announcer")
+    assert doc.xpath("//*[@data-caption]")
+    assert not doc.xpath("//nav[@class='cf-links']")
+
+
+@pytest.mark.parametrize("url", ["javascript:alert(1)", " JavaScript:alert(1)", "data:text/html,x", "vbscript:x"])
+def test_dangerous_links_are_refused(url):
+    with pytest.raises(OptionError, match="link 1"):
+        render(links=(("label", url),))
+
+
+def test_unknown_page_is_refused():
+    with pytest.raises(OptionError, match="page 'poster'"):
+        render("poster")
+
+
+def tone(path, seconds: float = 0.5, rate: int = 16000) -> None:
+    """Write a 220 Hz tone to `path` (format from its suffix)."""
+    t = np.arange(int(seconds * rate)) / rate
+    soundfile.write(path, (0.3 * np.sin(2 * np.pi * 220 * t)).astype(np.float32), rate)
+
+
+def test_browser_friendly_audio_is_kept_as_is(tmp_path):
+    tone(tmp_path / "speech.wav")
+    sources = copy_audio(tmp_path / "speech.wav", tmp_path / "out")
+    assert sources == (AudioSource("audio.wav", "audio/wav"),)
+    assert (tmp_path / "out" / "audio.wav").read_bytes() == (tmp_path / "speech.wav").read_bytes()
+
+
+def test_other_audio_is_kept_and_copied_for_browsers(tmp_path):
+    tone(tmp_path / "speech.flac")
+    sources = copy_audio(tmp_path / "speech.flac", tmp_path / "out")
+    assert sources[0].type == "audio/mpeg" and sources[0].name == "audio.mp3"
+    assert (tmp_path / "out" / "audio.flac").read_bytes() == (tmp_path / "speech.flac").read_bytes()
+    assert (tmp_path / "out" / "audio.mp3").stat().st_size > 0
+
+
+def test_site_files_are_written(tmp_path):
+    write_site(tmp_path, html="<!doctype html>", svg=small_svg(), textgrid="tg", actions="{}")
+    names = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file()}
+    assert {"index.html", "animation.svg", "alignment.TextGrid", "actions.json",
+            "static/cartoonface.js", "static/cartoonface.css"} <= names
