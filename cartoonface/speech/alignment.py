@@ -1,0 +1,302 @@
+"""When each sentence and syllable of a transcript is spoken: the speech analyser (thesis 002, ch. 3).
+
+`analyse` runs the whole of figure 3.1: split the recording into speaking
+parts by silence (Alg. 3.1, `sentences.py`), parse the transcript into
+sentences and syllables (`transcript.py`), reconcile the two when the number
+of speaking parts differs from the number of sentences, then time the
+syllables inside each sentence's stretch of audio (`align.py`, section 3.3)
+and put them on one timeline.
+
+Reconciling (ours; the thesis assumes one speaking part per sentence): the
+sentences are laid over the speaking parts by a small dynamic programme that
+chooses where each sentence ends among the pauses between parts, the energy
+dips inside parts and, as a last resort, evenly spaced cut points. A sentence
+costs the squared log ratio of its speech time to the time its syllable count
+predicts at the recording's mean rate; spanning a pause between parts
+(merging) and cutting inside a part (splitting) cost extra. What was merged
+or split is said in `Alignment.notes`. docs/alignment.md has the details.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from cartoonface.errors import TranscriptError
+from cartoonface.speech.align import align_syllables
+from cartoonface.speech.audio import Audio
+from cartoonface.speech.sentences import Span, dips, find_speech_parts
+from cartoonface.speech.transcript import SentenceText, parse_transcript
+
+# Reconciling costs (ours, tuned on synthetic recordings in tests/test_alignment.py):
+SIGMA = 0.35  # spread of a sentence's speaking rate around the recording's mean, as a log ratio
+MERGE_COST = 1.5  # one sentence spanning a pause between speaking parts
+DIP_COST = 2.0  # cutting inside a speaking part at an energy dip (less for a longer dip)
+DIP_PLATEAU = 0.15  # seconds: a dip this long costs half of DIP_COST
+FORCED_COST = 8.0  # cutting at an evenly spaced point with no dip (only when nothing else fits)
+DIPS_PER_SECOND = 1.0  # longest dips kept per second of a part (at least MIN_DIPS)
+MIN_DIPS = 3
+# Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
+# is far longer than the recording (an error); fewer than MIN_RATE is aligned but flagged.
+MAX_RATE = 12.0
+MIN_RATE = 1.0
+LOW_CONFIDENCE = 0.5
+
+
+@dataclass(frozen=True)
+class Syllable:
+    """One spoken syllable: `text` (its character), tone-numbered `pinyin`, `shapes` (1-4 mouth-shape
+    symbols), `start`/`end` seconds, `confidence` 0..1 of its timing."""
+
+    text: str
+    pinyin: str
+    shapes: tuple[str, ...]
+    start: float
+    end: float
+    confidence: float
+
+
+@dataclass(frozen=True)
+class Sentence:
+    """One transcript sentence: its `text`, `start`/`end` seconds, its syllables in order."""
+
+    text: str
+    start: float
+    end: float
+    syllables: tuple[Syllable, ...]
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """Sentences in time order over a recording of `duration` seconds; `notes` tell the user what was
+    merged, split or flagged while aligning."""
+
+    sentences: tuple[Sentence, ...]
+    duration: float
+    notes: tuple[str, ...]
+
+
+def analyse(
+    audio: Audio,
+    transcript_text: str,
+    pause: tuple[float, float] | None = None,
+    progress: Callable[[str, float], None] | None = None,
+    source: str = "transcript",
+) -> Alignment:
+    """Time every sentence and syllable of `transcript_text` in `audio`.
+
+    `pause` = (start, end) seconds of the first pause selects the thesis's
+    segmentation mode (Alg. 3.1); None the automatic one. `progress(stage,
+    fraction)` is called with stage "segment" then "align" and the fraction
+    0..1 done of that stage. `source` names the transcript in messages.
+    Raises TranscriptError for an empty transcript, one with no syllables, or
+    one far longer than the speech (over MAX_RATE syllables per second);
+    OptionError for a pause outside the recording.
+    """
+    report = progress or (lambda stage, fraction: None)
+    if not transcript_text.strip():
+        raise TranscriptError(f"{source}: the transcript is empty; expected the text spoken in the recording")
+    notes: list[str] = []
+    report("segment", 0.0)
+    parsed = parse_transcript(transcript_text, source)
+    spoken = [sentence for sentence in parsed if sentence.syllables]
+    for sentence in parsed:
+        if not sentence.syllables:
+            notes.append(f"sentence {_quote(sentence.text)} has no syllables to speak: left out")
+    if not spoken:
+        raise TranscriptError(
+            f"{source}: no Mandarin syllables found in the transcript; expected Chinese text (or tone-numbered pinyin)"
+        )
+    parts = find_speech_parts(audio, pause)
+    if not parts:
+        parts = (Span(0.0, round(audio.duration, 3)),)
+        notes.append("no speaking part told apart from noise: the whole recording is taken as speech")
+    report("segment", 1.0)
+    counts = [len(sentence.syllables) for sentence in spoken]
+    _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
+    spans, reconciled = reconcile(audio, parts, counts, [sentence.text for sentence in spoken])
+    notes += reconciled
+    sentences = []
+    for index, (sentence, span) in enumerate(zip(spoken, spans, strict=True)):
+        report("align", index / len(spoken))
+        sentences.append(_aligned(audio, sentence, span))
+    report("align", 1.0)
+    low = [s for sentence in sentences for s in sentence.syllables if s.confidence < LOW_CONFIDENCE]
+    if low:
+        notes.append(
+            f"{len(low)} of {sum(counts)} syllables timed with low confidence (below {LOW_CONFIDENCE}), "
+            f"first at {low[0].start:.2f} s: check them in the TextGrid"
+        )
+    return Alignment(tuple(sentences), audio.duration, tuple(notes))
+
+
+def _check_rate(syllables: int, speech: float, source: str, notes: list[str]) -> None:
+    """Refuse a transcript far too long for the speech; flag one far too short."""
+    rate = syllables / max(speech, 1e-3)
+    if rate > MAX_RATE:
+        raise TranscriptError(
+            f"{source}: {syllables} syllables to fit in {speech:.1f} s of speech ({rate:.0f} per second; "
+            f"Mandarin is read at 3-7, at most {MAX_RATE:g} accepted): is this the transcript of this recording?"
+        )
+    if rate < MIN_RATE:
+        notes.append(
+            f"only {rate:.1f} syllables per second of speech ({syllables} in {speech:.1f} s): the transcript "
+            "may miss part of the recording, or the recording holds other sounds; timing is a best effort"
+        )
+
+
+def _aligned(audio: Audio, sentence: SentenceText, span: Span) -> Sentence:
+    """Time the syllables of `sentence` inside `span` of `audio`."""
+    timings = align_syllables(audio, span, [syllable.pinyin for syllable in sentence.syllables])
+    syllables = tuple(
+        Syllable(text.text, text.pinyin, tuple(text.shapes), timing.start, timing.end, timing.confidence)
+        for text, timing in zip(sentence.syllables, timings, strict=True)
+    )
+    return Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables)
+
+
+@dataclass(frozen=True)
+class _Cut:
+    """A place where one sentence may end and the next begin: `left` end, `right` start (seconds)."""
+
+    left: float
+    right: float
+    cost: float
+    kind: str  # "start", "pause", "dip", "forced", "end"
+    part: int  # index of the speaking part it is in (pause: the part before it)
+
+
+def reconcile(
+    audio: Audio, parts: tuple[Span, ...], counts: list[int], texts: list[str]
+) -> tuple[tuple[Span, ...], list[str]]:
+    """Lay sentences of `counts` syllables (texts `texts`) over the speaking `parts` of `audio`.
+
+    Returns one Span per sentence, in order, and the notes saying which
+    parts were merged or split. The spans cover the parts' speech, do not
+    overlap, and the first starts where the first part does.
+    """
+    cuts = _cuts(audio, parts, len(counts))
+    speech_before = _speech_clock(parts)
+    left = np.array([cut.left for cut in cuts])
+    right = np.array([cut.right for cut in cuts])
+    cost = np.array([cut.cost for cut in cuts])
+    pauses_before = np.cumsum([cut.kind == "pause" for cut in cuts])
+    at_left, at_right = speech_before(left), speech_before(right)
+    rate = at_left[-1] / sum(counts)
+    boundaries = _best_cuts(at_left, at_right, cost, pauses_before, np.array(counts) * rate)
+    spans = tuple(
+        Span(round(float(right[a]), 3), round(float(left[b]), 3)) for a, b in zip(boundaries, boundaries[1:])
+    )
+    return spans, _notes(cuts, boundaries, parts, texts)
+
+
+def _cuts(audio: Audio, parts: tuple[Span, ...], sentences: int) -> list[_Cut]:
+    """Every candidate cut in time order, between a "start" and an "end" cut."""
+    cuts = [_Cut(parts[0].start, parts[0].start, 0.0, "start", 0)]
+    for index, part in enumerate(parts):
+        found = sorted(dips(audio, part), key=lambda dip: -dip[1])
+        keep = max(MIN_DIPS, math.ceil(part.duration * DIPS_PER_SECOND))
+        for time, plateau in sorted(found[:keep]):
+            cuts.append(_Cut(time, time, DIP_COST * DIP_PLATEAU / (DIP_PLATEAU + plateau), "dip", index))
+        if index + 1 < len(parts):
+            cuts.append(_Cut(part.end, parts[index + 1].start, 0.0, "pause", index))
+    # Evenly spaced cuts where a part has too few dips for the sentences its length could hold.
+    speech = sum(part.duration for part in parts)
+    spacing = min(0.25, speech / (2 * sentences))
+    taken = {round(cut.left, 2) for cut in cuts}
+    for index, part in enumerate(parts):
+        room = sum(1 for cut in cuts if cut.kind == "dip" and cut.part == index)
+        if room >= 2 * part.duration / speech * sentences:
+            continue
+        for time in np.arange(part.start + spacing, part.end - spacing / 2, spacing):
+            if round(float(time), 2) not in taken:
+                cuts.append(_Cut(round(float(time), 3), round(float(time), 3), FORCED_COST, "forced", index))
+    cuts.append(_Cut(parts[-1].end, parts[-1].end, 0.0, "end", len(parts) - 1))
+    return sorted(cuts, key=lambda cut: (cut.left, cut.kind != "start"))
+
+
+def _speech_clock(parts: tuple[Span, ...]) -> Callable[[np.ndarray], np.ndarray]:
+    """A function: times (k,) seconds -> seconds of speech (inside `parts`) before each time."""
+    starts = np.array([part.start for part in parts])
+    ends = np.array([part.end for part in parts])
+
+    def before(times: np.ndarray) -> np.ndarray:
+        return np.clip(times[:, None] - starts[None, :], 0, (ends - starts)[None, :]).sum(axis=1)
+
+    return before
+
+
+def _best_cuts(
+    at_left: np.ndarray, at_right: np.ndarray, cost: np.ndarray, pauses_before: np.ndarray, expected: np.ndarray
+) -> list[int]:
+    """Indices of the chosen cuts: 0, one per sentence boundary, the last cut; minimum total cost.
+
+    `at_left`/`at_right` (B,) speech seconds before each cut's left/right
+    edge, `cost` (B,) of cutting there, `pauses_before` (B,) pauses up to
+    and including each cut, `expected` (S,) speech seconds per sentence.
+    """
+    count = len(at_left)
+    sentences = len(expected)
+    window = min(count - 1, max(64, 4 * count // sentences))
+    while True:
+        table = np.full((sentences + 1, count), np.inf)
+        choice = np.zeros((sentences + 1, count), dtype=np.int64)
+        table[0, 0] = 0.0
+        for k in range(1, sentences + 1):
+            best = np.full(count, np.inf)
+            arg = np.zeros(count, dtype=np.int64)
+            ends = np.arange(1, count)
+            for step in range(1, window + 1):
+                b = ends[ends >= step]
+                a = b - step
+                speech = np.maximum(at_left[b] - at_right[a], 1e-3)
+                total = (
+                    table[k - 1, a]
+                    + (np.log(speech / expected[k - 1]) / SIGMA) ** 2
+                    + MERGE_COST * (pauses_before[b - 1] - pauses_before[a])
+                    + np.where(b < count - 1, cost[b], 0.0)
+                )
+                better = total < best[b]
+                best[b[better]] = total[better]
+                arg[b[better]] = a[better]
+            if k < sentences:
+                best[count - 1] = np.inf
+            table[k], choice[k] = best, arg
+        if np.isfinite(table[sentences, count - 1]) or window >= count - 1:
+            break
+        window = min(count - 1, window * 2)
+    path = [count - 1]
+    for k in range(sentences, 0, -1):
+        path.append(int(choice[k, path[-1]]))
+    return path[::-1]
+
+
+def _notes(cuts: list[_Cut], boundaries: list[int], parts: tuple[Span, ...], texts: list[str]) -> list[str]:
+    """Say which sentences span several speaking parts and which parts were cut, for the user."""
+    notes = []
+    for number, (a, b) in enumerate(zip(boundaries, boundaries[1:]), start=1):
+        merged = [cut for cut in cuts[a + 1 : b] if cut.kind == "pause"]
+        if merged:
+            first, last = cuts[a].part + (cuts[a].kind == "pause"), cuts[b].part
+            notes.append(
+                f"sentence {number} {_quote(texts[number - 1])}: speaking parts {first + 1}-{last + 1} merged "
+                f"(the speaker paused {len(merged)} time(s) inside it)"
+            )
+    for number, index in enumerate(boundaries[1:-1], start=1):
+        cut = cuts[index]
+        if cut.kind in ("dip", "forced"):
+            part = parts[cut.part]
+            how = "at a dip in loudness" if cut.kind == "dip" else "at the expected time (no pause found there)"
+            notes.append(
+                f"speaking part {cut.part + 1} ({part.start:.2f}-{part.end:.2f} s) split at {cut.left:.2f} s "
+                f"{how}, between sentences {number} and {number + 1}"
+            )
+    return notes
+
+
+def _quote(text: str, limit: int = 16) -> str:
+    """A short quotation of a sentence for notes."""
+    return f"«{text[:limit]}…»" if len(text) > limit else f"«{text}»"

@@ -1,0 +1,294 @@
+"""Praat TextGrid output and input of an alignment, so it can be checked and corrected in Praat.
+
+Three interval tiers: `sentences` (the sentence text), `syllables` (the
+character and its tone-numbered pinyin, `你 ni3`; only the pinyin when the
+text is the pinyin itself) and `mouth shapes` (one interval per basic mouth
+shape, starting at the in-syllable onsets of thesis 002, section 5.3). Empty
+intervals fill the time between labelled ones, as Praat requires.
+
+Reading accepts Praat's long and short text formats (UTF-8). Sentences and
+syllables come from their tiers; a syllable's shapes from the labels of the
+`mouth shapes` intervals inside it (their boundaries are not kept: the onsets
+are always those of 5.3), or from its pinyin when that tier is absent.
+Confidence is not stored: syllables read back have confidence 1 (checked by
+a person). See docs/alignment.md.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from cartoonface.errors import AlignmentError, TranscriptError
+from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shape_onsets, shapes_for
+
+TIERS = ("sentences", "syllables", "mouth shapes")
+# Times are written with 6 decimals (1 microsecond): a round trip keeps every time to the ms.
+_DECIMALS = 6
+# Boundary slack when placing syllables in sentences and shapes in syllables (seconds).
+_SLACK = 1e-4
+
+
+@dataclass(frozen=True)
+class Interval:
+    """One labelled interval of a tier: `start`, `end` seconds, `text`."""
+
+    start: float
+    end: float
+    text: str
+
+
+def write_textgrid(alignment: Alignment) -> str:
+    """The alignment as a Praat TextGrid in the long text format; returns its text (UTF-8 to write)."""
+    sentences = [Interval(s.start, s.end, s.text) for s in alignment.sentences]
+    syllables = []
+    shapes = []
+    for sentence in alignment.sentences:
+        for syllable in sentence.syllables:
+            syllables.append(Interval(syllable.start, syllable.end, _syllable_label(syllable)))
+            shapes += _shape_intervals(syllable)
+    duration = max([alignment.duration] + [s.end for s in sentences])
+    tiers = [(name, _fill(items, duration)) for name, items in zip(TIERS, (sentences, syllables, shapes), strict=True)]
+    lines = [
+        'File type = "ooTextFile"',
+        'Object class = "TextGrid"',
+        "",
+        "xmin = 0 ",
+        f"xmax = {_number(duration)} ",
+        "tiers? <exists> ",
+        f"size = {len(tiers)} ",
+        "item []: ",
+    ]
+    for number, (name, intervals) in enumerate(tiers, start=1):
+        lines += [
+            f"    item [{number}]:",
+            '        class = "IntervalTier" ',
+            f"        name = {_quote(name)} ",
+            "        xmin = 0 ",
+            f"        xmax = {_number(duration)} ",
+            f"        intervals: size = {len(intervals)} ",
+        ]
+        for index, interval in enumerate(intervals, start=1):
+            lines += [
+                f"        intervals [{index}]:",
+                f"            xmin = {_number(interval.start)} ",
+                f"            xmax = {_number(interval.end)} ",
+                f"            text = {_quote(interval.text)} ",
+            ]
+    return "\n".join(lines) + "\n"
+
+
+def _syllable_label(syllable: Syllable) -> str:
+    """`text pinyin`, or only the pinyin when the text is empty, the pinyin itself or holds a space."""
+    if not syllable.text or syllable.text == syllable.pinyin or " " in syllable.text:
+        return syllable.pinyin
+    return f"{syllable.text} {syllable.pinyin}"
+
+
+def _shape_intervals(syllable: Syllable) -> list[Interval]:
+    """The syllable's mouth shapes as intervals starting at the onsets of thesis 002, 5.3."""
+    if not syllable.shapes:
+        return []
+    length = syllable.end - syllable.start
+    starts = [syllable.start + fraction * length for fraction in shape_onsets(len(syllable.shapes))]
+    ends = starts[1:] + [syllable.end]
+    return [Interval(a, b, shape) for a, b, shape in zip(starts, ends, syllable.shapes, strict=True)]
+
+
+def _fill(items: list[Interval], duration: float) -> list[Interval]:
+    """Labelled intervals with empty ones between them, covering 0..duration without gaps."""
+    filled = []
+    position = 0.0
+    for item in items:
+        start = max(item.start, position)
+        if _rounded(start) > _rounded(position):
+            filled.append(Interval(position, start, ""))
+        if _rounded(item.end) > _rounded(start):
+            filled.append(Interval(start, item.end, item.text))
+            position = item.end
+    if _rounded(duration) > _rounded(position):
+        filled.append(Interval(position, duration, ""))
+    return filled
+
+
+def _rounded(value: float) -> float:
+    return round(value, _DECIMALS)
+
+
+def _number(value: float) -> str:
+    """A time with at most 6 decimals, without trailing zeros (`0`, `1.25`)."""
+    text = f"{value:.{_DECIMALS}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("", "-0") else text
+
+
+def _quote(text: str) -> str:
+    """A Praat string literal: double quotes, inner quotes doubled, one line."""
+    return '"' + " ".join(text.splitlines()).replace('"', '""') + '"'
+
+
+# Praat's text formats: strings, numbers and <flags>; every other word (xmin =, item [1]:) is a comment.
+_TOKEN = re.compile(
+    r'"(?P<string>(?:[^"]|"")*)"'
+    r"|(?P<skip>\[\s*\d*\s*\]|![^\n]*)"
+    r"|(?P<flag><[A-Za-z]+>)"
+    r"|(?P<number>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?![\w.])"
+    r"|(?P<word>[^\s\"]+)"
+)
+
+
+@dataclass(frozen=True)
+class _Token:
+    kind: str
+    value: str
+    line: int
+
+
+class _Reader:
+    """Reads the values of a TextGrid in order, with the line of each for error messages."""
+
+    def __init__(self, text: str, source: str) -> None:
+        self.source = source
+        self.tokens = []
+        for match in _TOKEN.finditer(text):
+            kind = match.lastgroup
+            if kind in ("skip", "word"):
+                continue
+            line = text.count("\n", 0, match.start()) + 1
+            value = match.group(kind)
+            self.tokens.append(_Token(kind, value.replace('""', '"') if kind == "string" else value, line))
+        self.position = 0
+
+    def fail(self, what: str) -> AlignmentError:
+        if self.position < len(self.tokens):
+            token = self.tokens[self.position]
+            found = f'"{token.value}"' if token.kind == "string" else token.value
+            return AlignmentError(f"{self.source}, line {token.line}: expected {what}, found {found}")
+        return AlignmentError(f"{self.source}: the TextGrid ends early; expected {what}")
+
+    def next(self, kind: str, what: str) -> _Token:
+        if self.position >= len(self.tokens) or self.tokens[self.position].kind != kind:
+            raise self.fail(what)
+        token = self.tokens[self.position]
+        self.position += 1
+        return token
+
+    def string(self, what: str) -> str:
+        return self.next("string", what).value
+
+    def number(self, what: str) -> float:
+        return float(self.next("number", what).value)
+
+    def count(self, what: str) -> int:
+        token = self.next("number", what)
+        if not token.value.isdigit():
+            self.position -= 1
+            raise self.fail(what)
+        return int(token.value)
+
+
+def read_textgrid(text: str, source: str) -> Alignment:
+    """Parse a TextGrid `text` (long or short format) read from `source` into an Alignment.
+
+    Raises AlignmentError naming `source`, the line or tier and what was
+    expected, when the file is not an interval TextGrid with the tiers
+    `sentences` and `syllables`, when intervals are out of order, or when a
+    syllable lies outside every sentence.
+    """
+    reader = _Reader(text, source)
+    if reader.string('"ooTextFile" (a Praat text file)') != "ooTextFile":
+        reader.position -= 1
+        raise reader.fail('"ooTextFile" (a Praat text file)')
+    if reader.string('"TextGrid"') != "TextGrid":
+        reader.position -= 1
+        raise reader.fail('"TextGrid"')
+    reader.number("xmin of the TextGrid")
+    duration = reader.number("xmax of the TextGrid")
+    if reader.next("flag", "<exists>").value != "<exists>":
+        raise AlignmentError(f"{source}: the TextGrid has no tiers; expected {', '.join(TIERS)}")
+    tiers: dict[str, list[Interval]] = {}
+    for _ in range(reader.count("the number of tiers")):
+        kind = reader.string('the tier class "IntervalTier"')
+        name = reader.string("the tier name")
+        reader.number(f"xmin of tier {name}")
+        reader.number(f"xmax of tier {name}")
+        size = reader.count(f"the number of intervals in tier {name}")
+        if kind == "TextTier":  # point tiers are allowed and ignored
+            for _ in range(size):
+                reader.number(f"a point time in tier {name}")
+                reader.string(f"a point label in tier {name}")
+            continue
+        if kind != "IntervalTier":
+            reader.position -= 5
+            raise reader.fail('"IntervalTier" or "TextTier"')
+        tiers[name] = _read_intervals(reader, name, size)
+    for name in TIERS[:2]:
+        if name not in tiers:
+            raise AlignmentError(f"{source}: no interval tier named {name!r}; expected tiers {', '.join(TIERS)}")
+    return _alignment(tiers, duration, source)
+
+
+def _read_intervals(reader: _Reader, name: str, size: int) -> list[Interval]:
+    """Read `size` intervals of tier `name`; only the labelled ones are returned, in time order."""
+    labelled = []
+    previous = None
+    for index in range(1, size + 1):
+        line = reader.tokens[reader.position].line if reader.position < len(reader.tokens) else 0
+        start = reader.number(f"xmin of interval {index} of tier {name}")
+        end = reader.number(f"xmax of interval {index} of tier {name}")
+        label = reader.string(f"the text of interval {index} of tier {name}")
+        if end <= start or (previous is not None and start < previous - _SLACK):
+            raise AlignmentError(
+                f"{reader.source}, line {line}: tier {name}, interval {index} ({start:g}-{end:g} s) "
+                "is empty or overlaps the one before; expected increasing times"
+            )
+        previous = end
+        if label.strip():
+            labelled.append(Interval(start, end, label.strip()))
+    return labelled
+
+
+def _alignment(tiers: dict[str, list[Interval]], duration: float, source: str) -> Alignment:
+    """Build the Alignment from the labelled intervals of each tier."""
+    shapes = tiers.get(TIERS[2], [])
+    sentences = []
+    pending = list(tiers["syllables"])
+    for sentence in tiers["sentences"]:
+        inside = [s for s in pending if s.start >= sentence.start - _SLACK and s.end <= sentence.end + _SLACK]
+        pending = [s for s in pending if s not in inside]
+        syllables = tuple(_syllable(item, shapes, source) for item in inside)
+        sentences.append(Sentence(sentence.text, sentence.start, sentence.end, syllables))
+    if pending:
+        item = pending[0]
+        raise AlignmentError(
+            f"{source}: tier syllables, interval {item.text!r} ({item.start:g}-{item.end:g} s) lies outside "
+            "every interval of tier sentences; expected each syllable inside a sentence"
+        )
+    return Alignment(tuple(sentences), duration, (f"timing read from {source}",))
+
+
+def _syllable(item: Interval, shapes: list[Interval], source: str) -> Syllable:
+    """A syllable from its `text pinyin` label, with the shape labels inside it (or from its pinyin)."""
+    text, _, pinyin = item.text.rpartition(" ")
+    text = text.strip() or pinyin
+    inside = tuple(s.text for s in shapes if s.start >= item.start - _SLACK and s.end <= item.end + _SLACK)
+    for symbol in inside:
+        if symbol not in MOUTH_SYMBOLS:
+            raise AlignmentError(
+                f"{source}: tier mouth shapes, label {symbol!r} at {item.start:g} s; "
+                f"expected one of {' '.join(MOUTH_SYMBOLS)}"
+            )
+    if len(inside) > 4:
+        raise AlignmentError(
+            f"{source}: tier mouth shapes, {len(inside)} shapes in syllable {item.text!r} at {item.start:g} s; "
+            "expected 1 to 4"
+        )
+    if not inside:
+        try:
+            inside = shapes_for(pinyin)
+        except TranscriptError as exc:
+            raise AlignmentError(
+                f"{source}: tier syllables, label {item.text!r} at {item.start:g} s: {exc}; "
+                "expected `text pinyin` such as `你 ni3`, or a mouth shapes tier"
+            ) from None
+    return Syllable(text, pinyin, inside, item.start, item.end, 1.0)
