@@ -1,0 +1,100 @@
+"""Reconciling transcript sentences with speaking parts, and analyse() from recording to timed syllables."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cartoonface.speech.transcript", reason="speech/transcript.py (issue 3, transcript) not landed yet")
+
+from cartoonface.errors import TranscriptError  # noqa: E402
+from cartoonface.speech.alignment import analyse, reconcile  # noqa: E402
+from cartoonface.speech.audio import Audio, load_audio  # noqa: E402
+from cartoonface.speech.sentences import find_speech_parts  # noqa: E402
+from cartoonface.speech.transcript import parse_transcript  # noqa: E402
+from tests.test_sentences import noisy, recording  # noqa: E402
+
+
+def test_one_part_per_sentence_is_kept():
+    samples, truth = recording([8, 12, 6], [0.7, 0.8])
+    audio = noisy(samples)
+    parts = find_speech_parts(audio)
+    spans, notes = reconcile(audio, parts, [8, 12, 6], ["a", "b", "c"])
+    assert spans == parts
+    assert notes == []
+
+
+def test_two_sentences_without_a_pause_are_split_at_the_short_pause():
+    samples, truth = recording([9, 7, 10], [0.16, 0.9])
+    audio = noisy(samples)
+    parts = find_speech_parts(audio)
+    assert len(parts) == 2  # the 0.16 s pause is too short to end a speaking part
+    spans, notes = reconcile(audio, parts, [9, 7, 10], ["a", "b", "c"])
+    assert len(spans) == 3
+    assert truth[0].end - 0.05 <= spans[0].end <= spans[1].start <= truth[1].start + 0.05
+    assert [note for note in notes if "split" in note and "part 1" in note]
+
+
+def test_a_sentence_with_a_long_inner_pause_merges_two_parts():
+    samples, truth = recording([6, 6, 10], [0.8, 0.9])
+    audio = noisy(samples)
+    parts = find_speech_parts(audio)
+    assert len(parts) == 3
+    spans, notes = reconcile(audio, parts, [12, 10], ["first sentence", "second"])
+    assert len(spans) == 2
+    assert spans[0].start == parts[0].start and spans[0].end == parts[1].end
+    assert spans[1] == parts[2]
+    assert any("parts 1-2 merged" in note and "first sentence" in note for note in notes)
+
+
+def test_more_sentences_than_dips_still_gives_every_sentence_time():
+    samples, _ = recording([12], [])
+    audio = noisy(samples)
+    parts = find_speech_parts(audio)
+    counts = [1, 2, 1, 3, 1, 2, 2]
+    spans, _ = reconcile(audio, parts, counts, ["x"] * len(counts))
+    assert len(spans) == len(counts)
+    assert all(span.end > span.start for span in spans)
+    assert all(a.end <= b.start for a, b in zip(spans, spans[1:]))
+
+
+def test_empty_transcript_is_refused():
+    samples, _ = recording([5], [])
+    with pytest.raises(TranscriptError, match="story.txt: the transcript is empty"):
+        analyse(noisy(samples), " \n\t", source="story.txt")
+
+
+def test_transcript_far_longer_than_the_speech_is_refused():
+    samples, _ = recording([6], [])  # about 1.5 s of speech
+    text = "今天天气很好我们一起去公园散步吧。" * 3
+    with pytest.raises(TranscriptError, match="story.txt: .* syllables to fit in .* is this the transcript"):
+        analyse(noisy(samples), text, source="story.txt")
+
+
+@pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency (scripts/setup.sh)")
+def test_analyse_espeak_speech(tmp_path):
+    texts = ["你好，我是老师。", "今天天气很好。", "我们去公园吧！"]
+    pieces = []
+    for index, text in enumerate(texts):
+        path = tmp_path / f"{index}.wav"
+        subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), text], check=True)
+        audio = load_audio(path)
+        pieces += [audio.samples, np.zeros(int(0.8 * audio.rate), np.float32)]
+    audio = Audio(np.concatenate(pieces), audio.rate, "espeak")
+    stages = []
+    alignment = analyse(audio, "".join(texts), progress=lambda stage, fraction: stages.append((stage, fraction)))
+    expected = parse_transcript("".join(texts), "transcript")
+    assert [s.text for s in alignment.sentences] == [s.text for s in expected]
+    assert alignment.duration == audio.duration
+    syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
+    assert [s.pinyin for s in syllables] == [s.pinyin for sentence in expected for s in sentence.syllables]
+    assert all(a.end <= b.start + 1e-6 for a, b in zip(syllables, syllables[1:]))
+    assert all(s.shapes and 0 <= s.confidence <= 1 for s in syllables)
+    parts = find_speech_parts(audio)
+    assert len(parts) == len(texts)
+    for sentence in alignment.sentences:  # no sentence crosses a pause between speaking parts
+        assert any(p.start - 1e-6 <= sentence.start < sentence.end <= p.end + 1e-6 for p in parts)
+    assert stages[0] == ("segment", 0.0) and stages[-1] == ("align", 1.0)
