@@ -129,6 +129,7 @@ DIP_CAP = 8.0              # dB: deeper dips are closures or pauses, no likelier
 SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pause evidence
 PAUSE_PENALTY = 3.0        # per pause, in units of evidence
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
+EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
 MIN_FRAMES = 3             # frames: the shortest syllable
 MARGIN = 20                # frames of context read on each side of the span
 CLEAR_EVIDENCE = 1.0       # evidence of a boundary that counts as fully clear (5 dB fall)
@@ -149,20 +150,19 @@ def edge_evidence(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, 30.0)
 
 
-def onset_evidence(low: np.ndarray, klass: str) -> np.ndarray:
-    """(T,) smoothed 100-1000 Hz dB per boundary position -> (T,) evidence that a syllable
-    of initial class `klass` starts there (higher is likelier)."""
+def onset_evidence(low: np.ndarray) -> dict[str, np.ndarray]:
+    """(T,) smoothed 100-1000 Hz dB per boundary position -> for each initial class, (T,)
+    evidence that a syllable of that class starts there (higher is likelier)."""
     pad = np.pad(low, 12, mode="edge")
-    if klass in ("closure", "aspirated", "frication"):
-        fall = pad[10:-14] - pad[14:-10]          # dB fall from 2 frames before to 2 after
-        return FALL_WEIGHT * np.clip(fall, 0.0, 30.0)
+    fall = FALL_WEIGHT * np.clip(pad[10:-14] - pad[14:-10], 0.0, 30.0)   # dB fall, 2 frames before to 2 after
     windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
     left, right = windows[:-13].max(axis=1), windows[13:].max(axis=1)
     dip = np.minimum(left, right) - low
     # only at (near) local minima: a flat quiet stretch is one dip, not many
     nearby = np.lib.stride_tricks.sliding_window_view(pad[9:-9], 7).min(axis=1)
-    dip = np.where(low <= nearby + 1.0, dip, 0.0)
-    return DIP_WEIGHT * np.clip(dip, 0.0, DIP_CAP)
+    dip = DIP_WEIGHT * np.clip(np.where(low <= nearby + 1.0, dip, 0.0), 0.0, DIP_CAP)
+    return {"closure": fall, "aspirated": fall, "frication": fall,
+            "sonorant": dip, "glide": dip, "none": dip}
 
 
 def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
@@ -191,7 +191,7 @@ def _segment(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
     after_syllable[0, 0] = 0.0
     k = np.arange(positions)
     for i in range(n + 1):
-        # pause: best start s <= k - MIN_PAUSE of  after_syllable[i, s] - cum[s]
+        # pause: best start s <= k - gap of  after_syllable[i, s] - cum[s]
         base = after_syllable[i] + edges[0] - cum
         best = np.maximum.accumulate(base)
         arg = np.zeros(positions, dtype=int)
@@ -200,10 +200,11 @@ def _segment(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
             if base[s] > running:
                 running, where = base[s], s
             arg[s] = where
+        gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
         shifted = np.full(positions, neg)
-        shifted[MIN_PAUSE:] = best[:-MIN_PAUSE]
+        shifted[gap:] = best[:-gap]
         after_pause[i] = shifted + cum - PAUSE_PENALTY + edges[1]
-        pause_from[i, MIN_PAUSE:] = arg[:-MIN_PAUSE]
+        pause_from[i, gap:] = arg[:-gap]
         if i == n:
             break
         start_score = np.maximum(after_syllable[i] + evidence[i], after_pause[i])
@@ -268,7 +269,8 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     silence = np.clip((threshold - inner) / SILENCE_SCALE, -3.0, 1.0)
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
-    evidence = np.stack([onset_evidence(low, _CLASS[syllable_type(p).initial])[index] for p in syllables])
+    by_class = onset_evidence(low)
+    evidence = np.stack([by_class[_CLASS[syllable_type(p).initial]][index] for p in syllables])
     edges = edge_evidence(low, _smooth(feats.high))[:, index]
     starts, ends = _segment(evidence, silence, edges, means)
     quality = float(np.clip((loud - floor - 10.0) / 20.0, 0.0, 1.0))
