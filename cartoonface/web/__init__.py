@@ -14,7 +14,7 @@ from pathlib import Path
 
 from flask import Flask, Response
 
-from cartoonface.render.pages import BACKGROUNDS, CLOTHES
+from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
 from cartoonface.web.inputs import MAX_FACE_BYTES, Limits
 from cartoonface.web.runner import Runner

@@ -19,11 +19,11 @@ from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import face_from_dict
+from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.transcript import parse_transcript
 
 PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
-MAX_TITLE_CHARS = 200
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 SHOWN_NAME_CHARS = 80
 
@@ -197,8 +197,8 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     """Check every field; return the Submission, or field -> message for each problem."""
     errors: dict[str, str] = {}
     title = " ".join(_text(form, "title").split())
-    if len(title) > MAX_TITLE_CHARS:
-        errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE_CHARS} are accepted."
+    if len(title) > MAX_TITLE:
+        errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE} are accepted."
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)

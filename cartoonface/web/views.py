@@ -21,7 +21,7 @@ from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
 
 from cartoonface.web.config import PACKAGE, Settings
-from cartoonface.web.inputs import MAX_TITLE_CHARS, PAGES, Limits, check_submission, form_values
+from cartoonface.web.inputs import MAX_TITLE, PAGES, Limits, check_submission, form_values
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, Job, create_job, load_job
@@ -48,13 +48,13 @@ SITE_CSP = ("sandbox allow-scripts; default-src 'none'; script-src 'self'; "
             "form-action 'none'; base-uri 'none'; frame-ancestors 'self'")
 
 SITE_TYPES = {
-    ".html": "text/html; charset=utf-8",
+    ".html": "text/html",
     ".svg": "image/svg+xml",
-    ".js": "text/javascript; charset=utf-8",
-    ".css": "text/css; charset=utf-8",
+    ".js": "text/javascript",
+    ".css": "text/css",
     ".json": "application/json",
-    ".txt": "text/plain; charset=utf-8",
-    ".textgrid": "text/plain; charset=utf-8",
+    ".txt": "text/plain",
+    ".textgrid": "text/plain",
     ".wav": "audio/wav",
     ".mp3": "audio/mpeg",
     ".ogg": "audio/ogg",
@@ -112,7 +112,7 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     shown = {**defaults, **{key: value for key, value in values.items() if value}}
     return render_template(
         "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES,
-        max_title=MAX_TITLE_CHARS, upload_mb=limits.upload_bytes >> 20, csrf=csrf_token(),
+        max_title=MAX_TITLE, upload_mb=limits.upload_bytes >> 20, csrf=csrf_token(),
         csrf_field=CSRF_FIELD, jobs=recent_jobs(), stages=STAGES,
     ), status
 
@@ -159,7 +159,6 @@ def job_status(job_id: str) -> Response:
     return response
 
 
-@bp.get("/jobs/<jobid:job_id>/site/", defaults={"name": "index.html"})
 @bp.get("/jobs/<jobid:job_id>/site/<path:name>")
 def site_file(job_id: str, name: str) -> Response:
     job = stored_job(job_id)

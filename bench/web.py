@@ -1,0 +1,456 @@
+"""Web app under load, restart and fuzzing: a real `cartoonface serve` on 127.0.0.1.
+
+1. Load: 20 jobs of a 30-second recording (real Mandarin speech from
+   ../shared/bench/zh/biaobei, a different run of sentences and title per job)
+   submitted at once; every job must finish, and each result page and zip must
+   hold its own title and text. Prints p50 / p95 seconds from submission to done.
+2. Restart: jobs running, the server stopped (SIGTERM, then SIGKILL in a second
+   round) and started again on the same instance: no finished job lost, every
+   interrupted job failed with a reason.
+3. Fuzz: 600 malformed or random requests (bad ids, traversal, wrong types,
+   truncated files, huge fields, broken multipart, wrong methods); counts the
+   answers by status class; 5xx must be 0.
+
+All traffic goes to 127.0.0.1 only.
+"""
+
+from __future__ import annotations
+
+import http.client
+import http.cookiejar
+import io
+import json
+import os
+import random
+import re
+import secrets
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import urllib.error
+import urllib.request
+import wave
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import soundfile
+
+ROOT = Path(__file__).resolve().parent.parent
+BIAOBEI = ROOT.parent / "shared" / "bench" / "zh" / "biaobei"
+SAMPLE_FACE = "female"
+HOST = "127.0.0.1"
+LOAD_JOBS = 20
+LOAD_SECONDS = 30.0
+RESTART_JOBS = 8
+RESTART_SECONDS = 10.0
+FUZZ_REQUESTS = 600
+GAP = 0.4  # seconds of silence between joined sentences
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind((HOST, 0))
+        return probe.getsockname()[1]
+
+
+class Server:
+    """`cartoonface serve` on a free loopback port with its own instance folder."""
+
+    def __init__(self, instance: Path, env: dict[str, str] | None = None) -> None:
+        self.instance = instance
+        self.env = {**os.environ, **(env or {})}
+        self.port = free_port()
+        self.base = f"http://{HOST}:{self.port}"
+        self.process: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> None:
+        log = open(self.instance.parent / f"server-{self.port}.log", "ab")
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "cartoonface", "serve", "--port", str(self.port), "--instance", str(self.instance)],
+            stdout=log, stderr=subprocess.STDOUT, cwd=ROOT, env=self.env)
+        log.close()
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            try:
+                with urllib.request.urlopen(self.base + "/", timeout=5) as answer:
+                    if answer.status == 200:
+                        return
+            except OSError:
+                if self.process.poll() is not None:
+                    break
+                time.sleep(0.2)
+        raise RuntimeError(f"server on port {self.port} did not start")
+
+    def stop(self, sig: int = signal.SIGTERM) -> None:
+        assert self.process is not None
+        self.process.send_signal(sig)
+        self.process.wait(timeout=60)
+
+
+class Client:
+    """A browser-like client: keeps the session cookie, reads the CSRF token, sends the form."""
+
+    def __init__(self, base: str) -> None:
+        self.base = base
+        self.opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(http.cookiejar.CookieJar()))
+
+    def get(self, path: str, timeout: float = 30) -> tuple[int, bytes]:
+        try:
+            with self.opener.open(self.base + path, timeout=timeout) as answer:
+                return answer.status, answer.read()
+        except urllib.error.HTTPError as error:
+            return error.code, error.read()
+
+    def token(self) -> str:
+        _status, page = self.get("/")
+        return re.search(rb'name="csrf_token" value="([^"]+)"', page).group(1).decode()
+
+    def submit(self, title: str, transcript: str, wav: bytes) -> str:
+        """Send a complete form; return the job id (the form must be accepted)."""
+        fields = {"csrf_token": self.token(), "face_sample": SAMPLE_FACE, "page": "audiobook", "title": title,
+                  "background": "studio", "clothes": "suit", "transcript": transcript,
+                  "audio": ("speech.wav", wav, "audio/wav")}
+        body, kind = multipart(fields)
+        request = urllib.request.Request(self.base + "/jobs", data=body, headers={"Content-Type": kind})
+        try:
+            with self.opener.open(request, timeout=120) as answer:
+                url = answer.geturl()
+        except urllib.error.HTTPError as error:
+            raise RuntimeError(f"form refused ({error.code}): {error.read()[:2000]!r}") from None
+        return url.rstrip("/").rsplit("/", 1)[-1]
+
+    def status(self, job_id: str) -> dict:
+        code, body = self.get(f"/jobs/{job_id}/status")
+        if code != 200:
+            raise RuntimeError(f"status of {job_id}: HTTP {code}")
+        return json.loads(body)
+
+
+def multipart(fields: dict[str, object], boundary: str | None = None) -> tuple[bytes, str]:
+    """Encode `fields` (name -> str, or (filename, bytes, type)) as multipart/form-data."""
+    boundary = boundary or secrets.token_hex(16)
+    parts = []
+    for name, value in fields.items():
+        if isinstance(value, tuple):
+            filename, data, kind = value
+            head = (f'Content-Disposition: form-data; name="{name}"; filename="{filename}"\r\n'
+                    f"Content-Type: {kind}\r\n\r\n").encode()
+        else:
+            head = f'Content-Disposition: form-data; name="{name}"\r\n\r\n'.encode()
+            data = str(value).encode()
+        parts.append(b"--" + boundary.encode() + b"\r\n" + head + data + b"\r\n")
+    return b"".join(parts) + b"--" + boundary.encode() + b"--\r\n", f"multipart/form-data; boundary={boundary}"
+
+
+def biaobei_sentences() -> list[tuple[np.ndarray, int, str]]:
+    """Every Biaobei sentence: (samples float32, rate, Hanzi text)."""
+    texts = {}
+    for line in (BIAOBEI / "transcripts.tsv").read_text(encoding="utf-8").splitlines()[1:]:
+        cells = line.split("\t")
+        texts[cells[0]] = cells[1]
+    out = []
+    for key in sorted(texts):
+        samples, rate = soundfile.read(BIAOBEI / "wav" / f"{key}.wav", dtype="float32", always_2d=True)
+        out.append((samples.mean(axis=1), rate, texts[key]))
+    return out
+
+
+def recording(sentences: list[tuple[np.ndarray, int, str]], start: int, seconds: float) -> tuple[bytes, str]:
+    """Whole sentences from index `start` on (wrapping), with short pauses, as many as fit
+    in `seconds`, padded with silence to exactly `seconds`; return (16-bit WAV bytes, transcript)."""
+    rate = sentences[0][1]
+    pieces, texts, used, index = [], [], 0, start
+    while True:
+        samples, _rate, text = sentences[index % len(sentences)]
+        if used + len(samples) > seconds * rate:
+            break
+        pieces += [samples, np.zeros(int(GAP * rate), dtype=np.float32)]
+        texts.append(text)
+        used += len(samples) + int(GAP * rate)
+        index += 1
+    joined = np.zeros(int(seconds * rate), dtype=np.float32)
+    speech = np.concatenate(pieces)[: len(joined)]
+    joined[: len(speech)] = speech
+    buffer = io.BytesIO()
+    with wave.open(buffer, "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(rate)
+        out.writeframes((np.clip(joined, -1, 1) * 32767).astype("<i2").tobytes())
+    return buffer.getvalue(), "".join(texts)
+
+
+def wait_all(client: Client, ids: list[str], timeout: float) -> dict[str, tuple[dict, float]]:
+    """Poll until every job ends; return id -> (final status, monotonic time it was seen done)."""
+    finished: dict[str, tuple[dict, float]] = {}
+    deadline = time.monotonic() + timeout
+    while len(finished) < len(ids) and time.monotonic() < deadline:
+        for job_id in ids:
+            if job_id not in finished:
+                status = client.status(job_id)
+                if status["state"] in ("done", "failed"):
+                    finished[job_id] = (status, time.monotonic())
+        time.sleep(0.5)
+    return finished
+
+
+def result_matches(client: Client, job_id: str, title: str, transcript: str) -> bool:
+    """True when the job's page and zip hold its own title and the start of its own text."""
+    code, html = client.get(f"/jobs/{job_id}/site/index.html")
+    code_zip, data = client.get(f"/jobs/{job_id}/download")
+    if code != 200 or code_zip != 200:
+        return False
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        index = next(name for name in archive.namelist() if name.endswith("/index.html"))
+        zipped = archive.read(index).decode("utf-8")
+    text = html.decode("utf-8")
+    head = transcript[:6]
+    return all(title in page and head in page for page in (text, zipped))
+
+
+def load_run(work: Path, sentences: list) -> None:
+    server = Server(work / "load")
+    server.start()
+    try:
+        client = Client(server.base)
+        jobs = []
+        for i in range(LOAD_JOBS):
+            wav, transcript = recording(sentences, (i * 7) % len(sentences), LOAD_SECONDS)
+            jobs.append((f"load job {i:02d}", transcript, wav))
+        ids: list[str | None] = [None] * LOAD_JOBS
+        started = [0.0] * LOAD_JOBS
+
+        def send(i: int) -> None:
+            title, transcript, wav = jobs[i]
+            started[i] = time.monotonic()
+            ids[i] = Client(server.base).submit(title, transcript, wav)
+
+        threads = [threading.Thread(target=send, args=(i,)) for i in range(LOAD_JOBS)]
+        begun = time.monotonic()
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        accepted = time.monotonic() - begun
+        finished = wait_all(client, [i for i in ids if i], timeout=3600)
+        wall = time.monotonic() - begun
+        done = [i for i, job_id in enumerate(ids) if job_id and finished.get(job_id, ({},))[0].get("state") == "done"]
+        failed = {job_id: finished[job_id][0]["error"] for job_id in ids if job_id in finished
+                  and finished[job_id][0]["state"] == "failed"}
+        lost = sum(1 for job_id in ids if job_id not in finished)
+        matched = sum(result_matches(client, ids[i], jobs[i][0], jobs[i][1]) for i in done)
+        times = np.array([finished[ids[i]][1] - started[i] for i in done])
+        print(f"load: {LOAD_JOBS} jobs x {LOAD_SECONDS:.0f} s recording, workers = cores ({os.cpu_count()})")
+        print(f"load: all {LOAD_JOBS} accepted in {accepted:.1f} s; done {len(done)}, failed {len(failed)}, "
+              f"lost {lost}, results matching their own input {matched}/{len(done)}")
+        for job_id, error in failed.items():
+            print(f"load: failed {job_id}: {error}")
+        if len(times):
+            print(f"load: time to done p50 {np.percentile(times, 50):.1f} s, p95 {np.percentile(times, 95):.1f} s, "
+                  f"all done after {wall:.1f} s ({wall / len(times):.1f} s per job)")
+    finally:
+        server.stop()
+
+
+def restart_round(server: Server, sentences: list, sig: int, round_no: int) -> None:
+    client = Client(server.base)
+    titles = {}
+    ids = []
+    for i in range(RESTART_JOBS):
+        wav, transcript = recording(sentences, 3 * i + 40 * round_no, RESTART_SECONDS)
+        title = f"restart {round_no} job {i}"
+        job_id = client.submit(title, transcript, wav)
+        ids.append(job_id)
+        titles[job_id] = (title, transcript)
+    deadline = time.monotonic() + 1800
+    while time.monotonic() < deadline:
+        states = {job_id: client.status(job_id)["state"] for job_id in ids}
+        done_before = [job_id for job_id, state in states.items() if state == "done"]
+        if len(done_before) >= 2:
+            break
+        time.sleep(0.3)
+    server.stop(sig)
+    unfinished = [job_id for job_id in ids if job_id not in done_before]
+    server.start()
+    time.sleep(3)  # let any orphaned worker notice its server is gone
+    client = Client(server.base)
+    after = {job_id: client.status(job_id) for job_id in ids}
+    kept = sum(after[job_id]["state"] == "done" and result_matches(client, job_id, *titles[job_id])
+               for job_id in done_before)
+    failed_with_reason = sum(after[job_id]["state"] == "failed" and bool(after[job_id]["error"])
+                             for job_id in unfinished)
+    reasons = sorted({after[job_id]["error"] for job_id in unfinished if after[job_id]["state"] == "failed"})
+    name = signal.Signals(sig).name
+    print(f"restart ({name}): {len(done_before)} done before the stop, {kept} still done and intact after "
+          f"the restart (lost {len(done_before) - kept}); {len(unfinished)} interrupted, "
+          f"{failed_with_reason} marked failed with a reason: {reasons}")
+
+
+def restart_run(work: Path, sentences: list) -> None:
+    server = Server(work / "restart")
+    server.start()
+    try:
+        restart_round(server, sentences, signal.SIGTERM, 0)
+        restart_round(server, sentences, signal.SIGKILL, 1)
+    finally:
+        server.stop()
+
+
+def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face: bytes) -> list:
+    """FUZZ_REQUESTS (method, path, body, headers) built from `rng`."""
+
+    def junk(n: int) -> bytes:
+        return bytes(rng.getrandbits(8) for _ in range(n))
+
+    def junk_text(n: int) -> str:
+        return "".join(chr(rng.choice([rng.randrange(32, 127), rng.randrange(0x4E00, 0x9FFF), rng.randrange(1, 32)]))
+                       for _ in range(n))
+
+    ids = ["", "x", "A" * 31, "A" * 33, "../" * 11, "%2e%2e%2f" * 4, "%00" * 11, secrets.token_urlsafe(24),
+           "A" * 5000, "<script>", "🙂" * 8]
+    subpaths = ["", "/status", "/download", "/site/index.html", "/site/../job.json", "/site/%2e%2e/status.json",
+                "/site/" + "a/" * 200, "/site/..%5cjob.json", "/nope"]
+    good = {"csrf_token": token, "face_sample": SAMPLE_FACE, "page": "audiobook", "title": "t", "background": "studio",
+            "clothes": "suit", "transcript": "你好。", "audio": ("a.wav", wav, "audio/wav")}
+    broken_values = {
+        "csrf_token": lambda: rng.choice(["", "x", token[:-1], junk_text(50)]),
+        "face_sample": lambda: rng.choice(["", "../../etc/passwd", junk_text(30), "female.json"]),
+        "page": lambda: rng.choice(["", "video", junk_text(10)]),
+        "title": lambda: rng.choice([junk_text(300), "x" * 5000, "<script>alert(1)</script>" * 10]),
+        "background": lambda: junk_text(rng.randrange(0, 40)),
+        "clothes": lambda: junk_text(rng.randrange(0, 40)),
+        "transcript": lambda: rng.choice(["", junk_text(30000), "\x00" * 10, junk_text(100)]),
+        "audio": lambda: rng.choice([("a.wav", wav[: rng.randrange(0, len(wav))], "audio/wav"),
+                                     ("a.wav", junk(rng.randrange(0, 5000)), "audio/wav"),
+                                     ("a.mp3", b"ID3" + junk(2000), "audio/mpeg"),
+                                     ("a.wav", b"RIFF" + junk(4) + b"WAVE" + junk(500), "audio/wav"),
+                                     ("a.ogg", b"OggS" + junk(3000), "audio/ogg"),
+                                     ("a.flac", b"fLaC" + junk(3000), "audio/flac"),
+                                     ("../../a.wav", wav[:1000], "text/plain")]),
+        "face_file": lambda: rng.choice([("f.json", face[: rng.randrange(0, len(face))], "application/json"),
+                                         ("f.json", junk(500), "application/json"),
+                                         ("f.json", json.dumps({"format": "cartoonface-face", "points": junk_text(5)}).encode(),
+                                          "application/json"),
+                                         ("f.json", b"[" * 5000, "application/json"),
+                                         ("f.json", b"1e999999", "application/json")]),
+        "transcript_file": lambda: ("t.txt", rng.choice([junk(300), "好".encode() * 30000, b"\xff\xfe" + junk(40)]),
+                                    "text/plain"),
+    }
+    requests = []
+    while len(requests) < FUZZ_REQUESTS:
+        kind = rng.randrange(6)
+        headers = {"Cookie": cookie}
+        if kind == 0:
+            requests.append(("GET", f"/jobs/{rng.choice(ids)}{rng.choice(subpaths)}", None, headers))
+        elif kind == 1:
+            method = rng.choice(["PUT", "DELETE", "PATCH", "POST", "OPTIONS", "GET"])
+            path = rng.choice(["/", "/jobs", f"/jobs/{secrets.token_urlsafe(24)}", "/static/web/../../pyproject.toml",
+                               "/static/web/web.css?" + junk_text(20).replace(" ", "")])
+            requests.append((method, path, junk(rng.randrange(0, 200)) if method != "GET" else None, headers))
+        elif kind in (2, 3):
+            fields = dict(good)
+            broken = rng.sample(sorted(broken_values), rng.randrange(1, 4))
+            if kind == 3 or "face_file" not in broken:
+                broken.append("face_file")  # never a fully valid form: no real jobs from the fuzzer
+            for name in broken:
+                fields[name] = broken_values[name]()
+            if rng.random() < 0.2:
+                fields.pop(rng.choice(sorted(fields)))
+            body, content_type = multipart(fields)
+            if rng.random() < 0.15:
+                body = body[: rng.randrange(0, len(body))]  # truncated upload
+            requests.append(("POST", "/jobs", body, {**headers, "Content-Type": content_type}))
+        elif kind == 4:
+            content_type = rng.choice(["application/json", "text/plain", "multipart/form-data",
+                                       "multipart/form-data; boundary=", "application/x-www-form-urlencoded",
+                                       "multipart/form-data; boundary=" + "x" * 300])
+            requests.append(("POST", "/jobs", junk(rng.randrange(0, 4000)), {**headers, "Content-Type": content_type}))
+        else:
+            big = rng.choice([2 << 20, 12 << 20])  # a field over the form memory limit, a body over the 5 MB cap
+            body, content_type = multipart({"csrf_token": token, "title": "x"})
+            requests.append(("POST", "/jobs", ("huge", big), {**headers, "Content-Type": content_type}))
+    return requests
+
+
+def send_raw(port: int, method: str, path: str, body, headers: dict) -> int:
+    """Send one request; return the status (0 when the server closed the connection early)."""
+    connection = http.client.HTTPConnection(HOST, port, timeout=120)
+    try:
+        if isinstance(body, tuple):  # ("huge", n): a text field of n bytes, sent in pieces
+            size = body[1]
+            boundary = headers["Content-Type"].split("boundary=")[1]
+            head = (f'--{boundary}\r\nContent-Disposition: form-data; name="transcript"\r\n\r\n').encode()
+            tail = f"\r\n--{boundary}--\r\n".encode()
+            connection.putrequest(method, path)
+            for name, value in {**headers, "Content-Length": str(len(head) + size + len(tail))}.items():
+                connection.putheader(name, value)
+            connection.endheaders()
+            try:
+                connection.send(head)
+                chunk = b"a" * (1 << 20)
+                for start in range(0, size, len(chunk)):
+                    connection.send(chunk[: min(len(chunk), size - start)])
+                connection.send(tail)
+            except (BrokenPipeError, ConnectionResetError):
+                pass
+        else:
+            connection.request(method, path, body=body, headers=headers)
+        answer = connection.getresponse()
+        answer.read()
+        return answer.status
+    except (ConnectionResetError, BrokenPipeError, http.client.RemoteDisconnected):
+        return 0
+    finally:
+        connection.close()
+
+
+def fuzz_run(work: Path, sentences: list) -> None:
+    server = Server(work / "fuzz", {"CARTOONFACE_MAX_UPLOAD_MB": "5"})
+    server.start()
+    try:
+        connection = http.client.HTTPConnection(HOST, server.port, timeout=30)
+        connection.request("GET", "/")
+        answer = connection.getresponse()
+        page = answer.read()
+        cookie = answer.getheader("Set-Cookie").split(";", 1)[0]
+        connection.close()
+        token = re.search(rb'name="csrf_token" value="([^"]+)"', page).group(1).decode()
+        wav, _text = recording(sentences, 0, 3.0)
+        face = (ROOT / "samples" / "faces" / f"{SAMPLE_FACE}.json").read_bytes()
+        requests = fuzz_requests(random.Random(20261121), token, cookie, wav, face)
+        counts: dict[str, int] = {}
+        fives = []
+        began = time.monotonic()
+        for method, path, body, headers in requests:
+            status = send_raw(server.port, method, path, body, headers)
+            key = f"{status // 100}xx" if status else "closed"
+            counts[key] = counts.get(key, 0) + 1
+            if status >= 500:
+                fives.append((method, path[:80], status))
+        took = time.monotonic() - began
+        alive = Client(server.base).get("/")[0]
+        print(f"fuzz: {len(requests)} requests in {took:.1f} s: " +
+              ", ".join(f"{key} {value}" for key, value in sorted(counts.items())) +
+              f"; 5xx answers: {len(fives)}; home page afterwards: {alive}")
+        for item in fives[:10]:
+            print(f"fuzz: 5xx {item}")
+    finally:
+        server.stop()
+
+
+def main() -> None:
+    sentences = biaobei_sentences()
+    with tempfile.TemporaryDirectory(prefix="cartoonface-bench-web-") as tmp:
+        work = Path(tmp)
+        fuzz_run(work, sentences)
+        restart_run(work, sentences)
+        load_run(work, sentences)
+
+
+if __name__ == "__main__":
+    main()

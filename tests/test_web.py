@@ -1,0 +1,577 @@
+"""The web app through Flask's test client: every route, limit and error, with the real pipeline."""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+import os
+import subprocess
+import sys
+import time
+import wave
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cartoonface.errors import OptionError
+from cartoonface.pipeline import Options, generate
+from cartoonface.web import create_app
+from cartoonface.web.runner import STOPPED, Runner
+from cartoonface.web.security import download_name
+from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
+                                   create_job, list_jobs, load_job, new_id, valid_id, write_status)
+from tests.conftest import ROOT, run_cli
+
+SAMPLES = ROOT / "samples" / "faces"
+TRANSCRIPT = "你好，世界。"
+SPOKEN = "ni3 hao3, shi4 jie4."
+XSS = "<script>alert('x')</script>"
+
+
+def wav_bytes(samples: np.ndarray, rate: int) -> bytes:
+    """16-bit mono WAV bytes of float samples in [-1, 1]."""
+    buffer = io.BytesIO()
+    with wave.open(buffer, "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(rate)
+        out.writeframes((np.clip(samples, -1, 1) * 32767).astype("<i2").tobytes())
+    return buffer.getvalue()
+
+
+@pytest.fixture(scope="module")
+def speech(tmp_path_factory: pytest.TempPathFactory) -> bytes:
+    """A short Mandarin recording made with espeak-ng (WAV bytes)."""
+    path = tmp_path_factory.mktemp("speech") / "speech.wav"
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), SPOKEN], check=True)
+    return path.read_bytes()
+
+
+@pytest.fixture(scope="module")
+def sample_name() -> str:
+    """The first sample face shipped in samples/faces."""
+    return sorted(SAMPLES.glob("*.json"))[0].stem
+
+
+@pytest.fixture(scope="module")
+def app(tmp_path_factory: pytest.TempPathFactory):
+    """One app (one worker) on a fresh instance folder for the module."""
+    app = create_app({"INSTANCE_PATH": str(tmp_path_factory.mktemp("instance")), "WORKERS": 1,
+                      "MAX_UPLOAD_MB": 1, "MAX_TRANSCRIPT_CHARS": 200})
+    yield app
+    app.extensions["cartoonface"].runner.close()
+
+
+@pytest.fixture()
+def client(app):
+    return app.test_client()
+
+
+def csrf(client) -> str:
+    """The CSRF token of the client's session, read from the form."""
+    page = client.get("/").get_data(as_text=True)
+    return re.search(r'name="csrf_token" value="([^"]+)"', page).group(1)
+
+
+def form(client, speech: bytes, sample: str, **fields) -> dict:
+    """A complete, valid form submission; `fields` replace or (None) remove entries."""
+    data = {"csrf_token": csrf(client), "face_sample": sample, "page": "audiobook", "title": "Hello",
+            "background": client.application.extensions["cartoonface"].limits.backgrounds[0],
+            "clothes": client.application.extensions["cartoonface"].limits.clothes[0],
+            "transcript": TRANSCRIPT, "audio": (io.BytesIO(speech), "speech.wav")}
+    for key, value in fields.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = value
+    return data
+
+
+def post(client, data: dict):
+    return client.post("/jobs", data=data, content_type="multipart/form-data")
+
+
+def wait_done(client, url: str, timeout: float = 240) -> list[dict]:
+    """Poll the status endpoint until the job ends; return every status seen."""
+    seen = []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        status = client.get(f"{url}/status").get_json()
+        seen.append(status)
+        if status["state"] in (DONE, FAILED):
+            return seen
+        time.sleep(0.2)
+    raise AssertionError(f"job {url} did not finish: {seen[-1]}")
+
+
+@pytest.fixture(scope="module")
+def done_job(app, speech, sample_name) -> tuple[str, list[dict]]:
+    """One job with a <script> title and transcript, run to the end: (url, statuses seen)."""
+    client = app.test_client()
+    response = post(client, form(client, speech, sample_name, title=XSS, transcript=TRANSCRIPT + XSS))
+    assert response.status_code == 303, response.get_data(as_text=True)
+    url = response.headers["Location"]
+    return url, wait_done(client, url)
+
+
+def job_id_of(url: str) -> str:
+    return url.rstrip("/").rsplit("/", 1)[-1]
+
+
+# --- the happy path --------------------------------------------------------------------------
+
+def test_home_page_offers_the_form_with_samples_and_a_csrf_token(client, sample_name):
+    page = client.get("/").get_data(as_text=True)
+    assert f'<option value="{sample_name}"' in page
+    for name in ("face_file", "audio", "transcript", "transcript_file", "title", "background", "clothes"):
+        assert f'name="{name}"' in page
+    assert 'value="audiobook"' in page and 'value="announcer"' in page
+    assert len(csrf(client)) >= 32
+
+
+def test_a_job_reaches_done_with_rising_progress(done_job):
+    url, seen = done_job
+    assert seen[-1]["state"] == DONE, seen[-1]
+    assert seen[-1]["percent"] == 100
+    percents = [status["percent"] for status in seen]
+    assert percents == sorted(percents)
+    assert all(0 <= p <= 100 for p in percents)
+
+
+def test_result_page_escapes_the_title_and_frames_the_generated_page(client, done_job):
+    url, _ = done_job
+    page = client.get(url).get_data(as_text=True)
+    assert XSS not in page
+    assert "&lt;script&gt;" in page
+    assert f'src="{url}/site/index.html"' in page
+    assert f'href="{url}/download"' in page
+
+
+def test_generated_page_is_served_with_its_types_and_escaped(client, done_job):
+    url, _ = done_job
+    response = client.get(f"{url}/site/index.html")
+    assert response.status_code == 200
+    assert response.mimetype == "text/html"
+    html = response.get_data(as_text=True)
+    assert XSS not in html
+    assert "sandbox allow-scripts" in response.headers["Content-Security-Policy"]
+    assert response.headers["X-Frame-Options"] == "SAMEORIGIN"
+    linked = re.findall(r'(?:src|href)="(static/[^"]+|[^":/]+\.(?:wav|mp3|ogg|m4a|svg))"', html)
+    assert linked
+    types = {".css": "text/css", ".js": "text/javascript", ".wav": "audio/wav", ".svg": "image/svg+xml"}
+    for name in linked:
+        served = client.get(f"{url}/site/{name}")
+        assert served.status_code == 200, name
+        expected = types.get(Path(name).suffix)
+        if expected:
+            assert served.mimetype == expected
+
+
+def test_zip_download_is_the_folder_generate_writes(app, client, done_job, tmp_path, sample_name):
+    url, _ = done_job
+    response = client.get(f"{url}/download")
+    assert response.status_code == 200
+    assert response.mimetype == "application/zip"
+    disposition = response.headers["Content-Disposition"]
+    assert disposition.startswith("attachment;")
+    assert re.fullmatch(r'attachment; filename=[A-Za-z0-9_.-]+\.zip', disposition)
+    archive = zipfile.ZipFile(io.BytesIO(response.data))
+    names = archive.namelist()
+    tops = {name.split("/", 1)[0] for name in names}
+    assert len(tops) == 1
+    top = tops.pop()
+    # The same call the CLI makes, on the job's own inputs, writes the same files byte for byte.
+    job = load_job(Path(app.instance_path), job_id_of(url))
+    spec = job.spec
+    out = tmp_path / "cli"
+    generate(job.folder / "face.json", job.folder / str(spec["audio_file"]), job.folder / "transcript.txt", out,
+             Options(page=str(spec["page"]), title=str(spec["title"]), background=str(spec["background"]),
+                     clothes=str(spec["clothes"])))
+    expected = {path.relative_to(out).as_posix(): path.read_bytes() for path in out.rglob("*") if path.is_file()}
+    got = {name[len(top) + 1:]: archive.read(name) for name in names if not name.endswith("/")}
+    assert set(got) == set(expected)
+    assert "index.html" in got
+    assert all(got[name] == expected[name] for name in expected)
+
+
+def test_recent_jobs_are_listed_for_the_browser_that_made_them(app, speech, sample_name):
+    client = app.test_client()
+    response = post(client, form(client, speech, sample_name, title="mine <b>bold</b>"))
+    job_id = job_id_of(response.headers["Location"])
+    page = client.get("/").get_data(as_text=True)
+    assert f'href="/jobs/{job_id}"' in page
+    assert "mine &lt;b&gt;bold&lt;/b&gt;" in page
+    other = app.test_client().get("/").get_data(as_text=True)
+    assert job_id not in other
+
+
+# --- headers -------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("path", ["/", "/static/web/web.css", "/jobs/" + "A" * 32, "/nope"])
+def test_security_headers_on_every_answer(client, path):
+    response = client.get(path)
+    headers = response.headers
+    assert headers["X-Content-Type-Options"] == "nosniff"
+    assert headers["Referrer-Policy"] == "no-referrer"
+    assert headers["X-Frame-Options"] == "DENY"
+    csp = headers["Content-Security-Policy"]
+    assert "frame-ancestors 'none'" in csp
+    assert "script-src 'self'" in csp and "unsafe-inline" not in csp
+
+
+def test_app_never_runs_in_debug_mode(tmp_path):
+    app = create_app({"INSTANCE_PATH": str(tmp_path), "DEBUG": True, "WORKERS": 1})
+    try:
+        assert app.debug is False
+    finally:
+        app.extensions["cartoonface"].runner.close()
+
+
+def test_status_endpoint_answers_json_that_is_not_cached(client, done_job):
+    url, _ = done_job
+    response = client.get(f"{url}/status")
+    assert response.mimetype == "application/json"
+    assert response.headers["Cache-Control"] == "no-store"
+    assert set(response.get_json()) == {"state", "stage", "stage_label", "percent", "error"}
+
+
+# --- CSRF ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("token", [None, "", "forged-token"])
+def test_submission_without_the_session_csrf_token_is_refused(app, client, speech, sample_name, token):
+    before = len(list_jobs(Path(app.instance_path)))
+    data = form(client, speech, sample_name, title="kept title", csrf_token=token)
+    response = post(client, data)
+    assert response.status_code == 400
+    page = response.get_data(as_text=True)
+    assert "expired or did not come from this page" in page
+    assert 'value="kept title"' in page
+    assert len(list_jobs(Path(app.instance_path))) == before
+
+
+def test_token_from_another_session_is_refused(app, speech, sample_name):
+    first, second = app.test_client(), app.test_client()
+    data = form(second, speech, sample_name, csrf_token=csrf(first))
+    assert post(second, data).status_code == 400
+
+
+# --- ids and paths -----------------------------------------------------------------------------------
+
+BAD_IDS = ["abc", "A" * 31, "A" * 33, "A" * 31 + ".", "A" * 31 + "%2e", "..%2f..%2fetc%2fpasswd", "%00" + "A" * 29]
+
+
+@pytest.mark.parametrize("bad", BAD_IDS)
+@pytest.mark.parametrize("suffix", ["", "/status", "/download", "/site/index.html"])
+def test_malformed_ids_are_not_found(client, bad, suffix):
+    response = client.get(f"/jobs/{bad}{suffix}")
+    assert response.status_code == 404
+    assert "<script" not in response.get_data(as_text=True).split("</head>")[1]
+
+
+@pytest.mark.parametrize("suffix", ["", "/status", "/download", "/site/index.html"])
+def test_unknown_well_formed_id_is_not_found(client, suffix):
+    missing = new_id()
+    assert valid_id(missing)
+    response = client.get(f"/jobs/{missing}{suffix}")
+    assert response.status_code == 404
+    assert "No such job" in response.get_data(as_text=True)
+
+
+@pytest.mark.parametrize("name", ["../job.json", "..%2fjob.json", "%2e%2e/status.json", "static/../../job.json",
+                                  "/etc/passwd", "..\\job.json", "../transcript.txt"])
+def test_site_files_cannot_escape_the_generated_folder(client, done_job, name):
+    url, _ = done_job
+    response = client.get(f"{url}/site/{name}")
+    assert response.status_code == 404
+    assert b'"face_label"' not in response.data
+
+
+def test_id_shape_check_is_strict():
+    assert valid_id(new_id())
+    assert len({new_id() for _ in range(100)}) == 100
+    for bad in ["", "../" + "A" * 29, "A" * 31 + "/", "A" * 31 + "\n", "Ä" * 32]:
+        assert not valid_id(bad)
+
+
+def test_download_names_keep_only_safe_characters():
+    job_id = new_id()
+    for title in [XSS, "../../etc/passwd", '"; filename=evil.exe', "你好", "", "a" * 300, "report 2026"]:
+        name = download_name(title, job_id)
+        assert re.fullmatch(r"cartoonface-[A-Za-z0-9_-]{1,40}\.zip", name), name
+    assert download_name("你好", job_id) == f"cartoonface-{job_id[:8]}.zip"
+
+
+# --- form checks ------------------------------------------------------------------------------------
+
+def errors_of(response) -> str:
+    assert response.status_code == 400, response.status_code
+    return response.get_data(as_text=True)
+
+
+def test_audio_type_is_decided_by_content_not_name(client, speech, sample_name):
+    page = errors_of(post(client, form(client, speech, sample_name, audio=(io.BytesIO(b"hello " * 50), "talk.wav"))))
+    assert "talk.wav: not a recording" in page
+    accepted = post(client, form(client, speech, sample_name, audio=(io.BytesIO(speech), "notes.txt")))
+    assert accepted.status_code == 303
+
+
+def test_corrupt_wav_is_reported_with_the_users_file_name(client, speech, sample_name):
+    corrupt = speech[:44] + bytes(np.random.default_rng(1).integers(0, 256, 40, dtype=np.uint8))
+    corrupt = corrupt[:4] + (len(corrupt) * 50).to_bytes(4, "little") + corrupt[8:]
+    page = errors_of(post(client, form(client, corrupt, sample_name, audio=(io.BytesIO(corrupt), "broken.wav"))))
+    assert re.search(r'id="audio-error"[^>]*>broken\.wav: ', page)
+    assert "/tmp" not in page and "recording.wav" not in page
+
+
+def test_missing_recording_is_asked_for(client, speech, sample_name):
+    page = errors_of(post(client, form(client, speech, sample_name, audio=None)))
+    assert 'id="audio-error"' in page and "Choose a recording" in page
+
+
+def test_recording_over_the_size_limit_is_refused_in_the_form(client, speech, sample_name):
+    big = wav_bytes(np.zeros(600_000), 16000)  # 1.2 MB > MAX_UPLOAD_MB = 1
+    page = errors_of(post(client, form(client, speech, sample_name, audio=(io.BytesIO(big), "long.wav"),
+                                       title="still here")))
+    assert "long.wav: the recording is larger than 1 MB" in page
+    assert 'value="still here"' in page
+
+
+def test_request_far_over_the_limit_gets_413_with_a_message(client, speech, sample_name):
+    huge = b"RIFF" + bytes(3 << 20)
+    response = post(client, form(client, speech, sample_name, audio=(io.BytesIO(huge), "huge.wav")))
+    assert response.status_code == 413
+    assert "The upload is too large" in response.get_data(as_text=True)
+
+
+def test_recording_over_30_minutes_is_refused(tmp_path, speech, sample_name):
+    app = create_app({"INSTANCE_PATH": str(tmp_path), "WORKERS": 1, "MAX_UPLOAD_MB": 40})
+    try:
+        client = app.test_client()
+        rate = 8000
+        t = np.arange(int(rate * (30 * 60 + 2))) / rate
+        long = wav_bytes(0.3 * np.sin(2 * np.pi * 220 * t) * (np.sin(2 * np.pi * 0.5 * t) > 0), rate)
+        page = errors_of(post(client, form(client, speech, sample_name, audio=(io.BytesIO(long), "lecture.wav"))))
+        assert "lecture.wav" in page and "30 minutes" in page
+    finally:
+        app.extensions["cartoonface"].runner.close()
+
+
+def test_transcript_limits_and_encoding(client, speech, sample_name):
+    page = errors_of(post(client, form(client, speech, sample_name, transcript="好" * 201)))
+    assert "201 characters; at most 200" in page
+    page = errors_of(post(client, form(client, speech, sample_name, transcript="   ")))
+    assert 'id="transcript-error"' in page
+    latin1 = "你好".encode("big5")
+    page = errors_of(post(client, form(client, speech, sample_name, transcript_file=(io.BytesIO(latin1), "t.txt"))))
+    assert "t.txt: not a text file: expected UTF-8 text" in page
+    page = errors_of(post(client, form(client, speech, sample_name,
+                                       transcript_file=(io.BytesIO("好".encode() * 300), "long.txt"))))
+    assert 'id="transcript_file-error"' in page and "long.txt" in page
+
+
+def test_transcript_file_is_used_instead_of_pasted_text(app, client, speech, sample_name):
+    response = post(client, form(client, speech, sample_name, transcript="",
+                                 transcript_file=(io.BytesIO("\ufeff你好，世界。\r\n".encode()), "t.txt")))
+    assert response.status_code == 303
+    job = load_job(Path(app.instance_path), job_id_of(response.headers["Location"]))
+    assert (job.folder / "transcript.txt").read_text(encoding="utf-8") == "你好，世界。"
+
+
+@pytest.mark.parametrize("content, expected", [
+    (b"\x89PNG\r\n\x1a\n", "not a face model: expected UTF-8 JSON"),
+    (b"{\"format\": ", "not a face model: expected UTF-8 JSON"),
+    (b"[1, 2, 3]", "face.json"),
+    (b"{\"format\": \"cartoonface-face\", \"version\": 1}", "face.json"),
+])
+def test_uploaded_face_model_is_validated(client, speech, sample_name, content, expected):
+    page = errors_of(post(client, form(client, speech, sample_name, face_file=(io.BytesIO(content), "face.json"))))
+    assert 'id="face_file-error"' in page
+    assert expected in page
+
+
+def test_uploaded_face_model_is_used_instead_of_the_sample(app, client, speech, sample_name):
+    faces = sorted(SAMPLES.glob("*.json"))
+    upload = faces[-1].read_bytes()
+    response = post(client, form(client, speech, sample_name, face_sample="no-such-sample",
+                                 face_file=(io.BytesIO(upload), "mine.json")))
+    assert response.status_code == 303
+    job = load_job(Path(app.instance_path), job_id_of(response.headers["Location"]))
+    assert (job.folder / "face.json").read_bytes() == upload
+    assert job.spec["face_label"] == "mine.json"
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("face_sample", "../../etc/passwd", "Choose one of the sample faces"),
+    ("page", "video", "Choose one of the page kinds"),
+    ("background", "<img src=x>", "Choose one of the backgrounds"),
+    ("clothes", "", "Choose one of the clothes"),
+    ("title", "x" * 201, "at most 200 are accepted"),
+])
+def test_choices_and_title_are_checked(client, speech, sample_name, field, value, message):
+    page = errors_of(post(client, form(client, speech, sample_name, **{field: value})))
+    assert f'id="{field}-error"' in page
+    assert message in page
+    assert "<img src=x>" not in page
+
+
+def test_form_comes_back_with_what_the_user_entered_escaped(client, speech, sample_name):
+    page = errors_of(post(client, form(client, speech, sample_name, audio=None, title=XSS,
+                                       transcript=TRANSCRIPT + XSS, page="announcer")))
+    assert XSS not in page
+    assert 'value="&lt;script&gt;alert(&#39;x&#39;)&lt;/script&gt;"' in page
+    assert f"{TRANSCRIPT}&lt;script&gt;" in page
+    assert re.search(r'value="announcer" checked', page)
+
+
+def test_wrong_methods_and_unknown_paths_answer_4xx(client):
+    assert client.get("/jobs").status_code == 405
+    assert client.put("/").status_code == 405
+    assert client.post("/jobs/" + new_id()).status_code == 405
+    assert client.get("/static/web/../../pyproject.toml").status_code == 404
+
+
+def test_non_multipart_and_garbage_bodies_are_4xx(client):
+    token = csrf(client)
+    assert client.post("/jobs", data=b"\x00\xff" * 100, content_type="application/octet-stream").status_code == 400
+    assert client.post("/jobs", data="csrf_token=" + token, content_type="application/x-www-form-urlencoded").status_code == 400
+    broken = b"--xx\r\nContent-Disposition: form-data; name=\"audio\"; filename=\"a.wav\"\r\n\r\nRIFF"
+    assert client.post("/jobs", data=broken, content_type="multipart/form-data; boundary=xx").status_code == 400
+
+
+# --- jobs on disk, failures, restart, retention ----------------------------------------------------
+
+def stored_inputs(speech: bytes) -> dict[str, bytes]:
+    face = sorted(SAMPLES.glob("*.json"))[0].read_bytes()
+    return {"face.json": face, "audio.wav": speech, "transcript.txt": TRANSCRIPT.encode()}
+
+
+def spec(title: str = "t") -> dict[str, object]:
+    return {"title": title, "page": "audiobook", "background": "", "clothes": "", "face_label": "f",
+            "audio_label": "a.wav", "audio_file": "audio.wav", "duration": 1.0, "transcript_chars": 5}
+
+
+def test_a_job_the_pipeline_refuses_shows_its_error(app, client, speech):
+    instance = Path(app.instance_path)
+    files = stored_inputs(speech)
+    files["audio.wav"] = b"RIFF\x10\x00\x00\x00WAVEfmt "  # truncated: the pipeline's own check refuses it
+    job = create_job(instance, {**spec(XSS), "background": app.extensions["cartoonface"].limits.backgrounds[0],
+                                "clothes": app.extensions["cartoonface"].limits.clothes[0]}, files)
+    app.extensions["cartoonface"].runner.submit(job.folder)
+    seen = wait_done(client, f"/jobs/{job.id}")
+    assert seen[-1]["state"] == FAILED
+    assert seen[-1]["error"]
+    page = client.get(f"/jobs/{job.id}").get_data(as_text=True)
+    assert 'id="job-error"' in page
+    assert seen[-1]["error"].split(":")[-1].strip()[:20] in page
+    assert client.get(f"/jobs/{job.id}/download").status_code == 404
+    assert client.get(f"/jobs/{job.id}/site/index.html").status_code == 404
+
+
+def test_restart_keeps_finished_jobs_and_fails_interrupted_ones(tmp_path, speech, sample_name):
+    first = create_app({"INSTANCE_PATH": str(tmp_path), "WORKERS": 1})
+    client = first.test_client()
+    response = post(client, form(client, speech, sample_name, title="survivor"))
+    url = response.headers["Location"]
+    assert wait_done(client, url)[-1]["state"] == DONE
+    first.extensions["cartoonface"].runner.close()
+    # What a server killed mid-way leaves behind: one job still queued, one running.
+    queued = create_job(tmp_path, spec("never started"), stored_inputs(speech))
+    running = create_job(tmp_path, spec("half done"), stored_inputs(speech))
+    write_status(running.folder, Status(state=RUNNING, stage="frames", fraction=0.5))
+
+    second = create_app({"INSTANCE_PATH": str(tmp_path), "WORKERS": 1})
+    try:
+        again = second.test_client()
+        again.set_cookie("session", client.get_cookie("session").value)
+        assert again.get(f"{url}/status").get_json()["state"] == DONE
+        assert again.get(f"{url}/download").status_code == 200
+        assert "survivor" in again.get("/").get_data(as_text=True)
+        for job in (queued, running):
+            status = again.get(f"/jobs/{job.id}/status").get_json()
+            assert status["state"] == FAILED
+            assert status["error"] == INTERRUPTED
+            assert "Interrupted: the server stopped" in again.get(f"/jobs/{job.id}").get_data(as_text=True)
+    finally:
+        second.extensions["cartoonface"].runner.close()
+
+
+def test_closing_the_runner_fails_the_job_it_was_running(tmp_path, speech):
+    job = create_job(tmp_path, spec(), stored_inputs(speech))
+    runner = Runner(1)
+    runner.submit(job.folder)
+    deadline = time.monotonic() + 60
+    while load_job(tmp_path, job.id).status.state == QUEUED and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert load_job(tmp_path, job.id).status.state == RUNNING
+    runner.close()
+    status = load_job(tmp_path, job.id).status
+    assert (status.state, status.error) == (FAILED, STOPPED)
+
+
+def test_retention_by_age_and_by_total_size(tmp_path, speech):
+    now = time.time()
+    jobs = [create_job(tmp_path, spec(f"job {i}"), {"audio.wav": bytes(300_000)}) for i in range(4)]
+    for age_days, job in zip([30, 3, 2, 1], jobs):
+        data = json.loads((job.folder / "job.json").read_text())
+        data["created"] = now - age_days * 86400
+        (job.folder / "job.json").write_text(json.dumps(data))
+        write_status(job.folder, Status(state=DONE))
+    write_status(jobs[1].folder, Status(state=RUNNING))  # never deleted while it runs
+    deleted = apply_retention(tmp_path, max_age_days=7, max_total_mb=0.6, now=now)
+    assert deleted[0] == jobs[0].id  # too old
+    assert jobs[2].id in deleted  # oldest finished one over the size limit
+    assert {job.id for job in list_jobs(tmp_path)} == {jobs[1].id, jobs[3].id}
+    assert not any(path.name.startswith(".deleted") for path in (tmp_path / "jobs").iterdir())
+
+
+# --- configuration and the serve command ---------------------------------------------------------------
+
+def test_settings_from_environment_and_instance_file(tmp_path, monkeypatch, speech, sample_name):
+    (tmp_path / "config.py").write_text("MAX_TRANSCRIPT_CHARS = 3\nRETENTION_DAYS = 1\n")
+    monkeypatch.setenv("CARTOONFACE_INSTANCE_PATH", str(tmp_path))
+    monkeypatch.setenv("CARTOONFACE_WORKERS", "1")
+    monkeypatch.setenv("CARTOONFACE_MAX_UPLOAD_MB", "2")
+    app = create_app()
+    try:
+        settings = app.extensions["cartoonface"].settings
+        assert settings.instance == tmp_path.resolve()
+        assert (settings.transcript_chars, settings.workers, settings.upload_bytes) == (3, 1, 2 << 20)
+        assert settings.retention_days == 1
+        client = app.test_client()
+        assert "at most 3 are accepted" in errors_of(post(client, form(client, speech, sample_name)))
+    finally:
+        app.extensions["cartoonface"].runner.close()
+
+
+@pytest.mark.parametrize("key, value", [("WORKERS", 0), ("WORKERS", "many"), ("MAX_UPLOAD_MB", -1),
+                                        ("MAX_TRANSCRIPT_CHARS", 2.5), ("RETENTION_DAYS", True)])
+def test_bad_settings_name_the_variable(tmp_path, key, value):
+    with pytest.raises(OptionError, match=f"CARTOONFACE_{key}"):
+        create_app({"INSTANCE_PATH": str(tmp_path), key: value})
+
+
+def test_secret_key_is_kept_in_the_instance_folder(tmp_path):
+    apps = [create_app({"INSTANCE_PATH": str(tmp_path), "WORKERS": 1}) for _ in range(2)]
+    for app in apps:
+        app.extensions["cartoonface"].runner.close()
+    assert apps[0].secret_key == apps[1].secret_key
+    assert (tmp_path / "secret_key").stat().st_mode & 0o077 == 0
+
+
+def test_serve_command_is_registered_with_its_options():
+    done = run_cli("serve", "--help")
+    assert done.returncode == 0
+    for option in ("--host", "--port", "--instance"):
+        assert option in done.stdout
+    assert "127.0.0.1" in done.stdout and "5000" in done.stdout
+
+
+def test_serve_refuses_bad_settings_with_exit_2(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "cartoonface", "serve", "--instance", str(tmp_path), "--port", "1"],
+                          capture_output=True, text=True, timeout=60, env={**os.environ, "CARTOONFACE_WORKERS": "0"})
+    assert done.returncode == 2
+    assert "CARTOONFACE_WORKERS" in done.stderr
+    assert "Traceback" not in done.stderr

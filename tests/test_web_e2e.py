@@ -1,0 +1,151 @@
+"""End to end in real Chromium against a real `cartoonface serve` on a free loopback port."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import ROOT
+
+pytestmark = pytest.mark.browser
+
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--no-first-run"]
+SPOKEN = "ni3 hao3, shi4 jie4. jin1 tian1 tian1 qi4 hen3 hao3."
+TRANSCRIPT = "你好，世界。今天天气很好。"
+TITLE = "<script>window.pwned=1</script>早安"
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listens on now."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory):
+    """`cartoonface serve` in a subprocess; yields its base URL."""
+    instance = tmp_path_factory.mktemp("instance")
+    port = free_port()
+    log = open(instance / "server.log", "wb")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "cartoonface", "serve", "--port", str(port), "--instance", str(instance)],
+        stdout=log, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, "CARTOONFACE_WORKERS": "1"})
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            with urllib.request.urlopen(base + "/", timeout=2) as answer:
+                if answer.status == 200:
+                    break
+        except OSError:
+            if process.poll() is not None or time.monotonic() > deadline:
+                log.close()
+                raise AssertionError((instance / "server.log").read_text()) from None
+            time.sleep(0.2)
+    yield base
+    process.terminate()
+    process.wait(timeout=30)
+    log.close()
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """A face model JSON, a short espeak-ng recording, a corrupt WAV and the transcript file."""
+    folder = tmp_path_factory.mktemp("inputs")
+    wav = folder / "speech.wav"
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(wav), SPOKEN], check=True)
+    corrupt = folder / "corrupt.wav"
+    corrupt.write_bytes(wav.read_bytes()[:44] + b"\x07garbage" * 3)
+    transcript = folder / "transcript.txt"
+    transcript.write_text(TRANSCRIPT, encoding="utf-8")
+    return {"face": sorted((ROOT / "samples" / "faces").glob("*.json"))[0], "wav": wav, "corrupt": corrupt,
+            "transcript": transcript}
+
+
+@pytest.fixture(scope="module")
+def browser():
+    playwright_api = pytest.importorskip("playwright.sync_api")
+    with playwright_api.sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()
+
+
+def fill_form(page, base: str, inputs: dict[str, Path], wav: Path) -> None:
+    page.goto(base + "/")
+    page.set_input_files("#face_file", str(inputs["face"]))
+    page.set_input_files("#audio", str(wav))
+    page.set_input_files("#transcript_file", str(inputs["transcript"]))
+    page.check("input[name=page][value=announcer]")
+    page.fill("#title", TITLE)
+
+
+def moving(page, element, wait: float = 1.0) -> bool:
+    """True when two screenshots of `element` taken `wait` seconds apart differ."""
+    first = element.screenshot()
+    page.wait_for_timeout(wait * 1000)
+    return element.screenshot() != first
+
+
+def test_generate_watch_play_download_and_open_from_file(server, inputs, browser, tmp_path):
+    context = browser.new_context(accept_downloads=True, viewport={"width": 1100, "height": 1400})
+    page = context.new_page()
+    fill_form(page, server, inputs, inputs["wav"])
+    page.click("#generate")
+    page.wait_for_url(f"{server}/jobs/*")
+    page.wait_for_function("() => { const p = document.getElementById('percent');"
+                           " return p && p.textContent === '100%'; }", polling="raf", timeout=240_000)
+    page.wait_for_selector("#result", timeout=30_000)
+    assert page.evaluate("() => window.pwned") is None
+    assert TITLE in page.inner_text("h1")
+
+    frame = page.frame_locator("#result")
+    frame.locator("#cf-face").wait_for()
+    player = page.locator("#result").element_handle().content_frame()
+    assert player.evaluate("() => window.pwned") is None
+    player.evaluate("() => document.getElementById('cf-audio').play()")
+    assert moving(page, page.locator("#result"))
+
+    with page.expect_download() as caught:
+        page.click("#download")
+    download = caught.value
+    assert download.suggested_filename.endswith(".zip")
+    archive = tmp_path / download.suggested_filename
+    download.save_as(archive)
+    unpacked = tmp_path / "unpacked"
+    with zipfile.ZipFile(archive) as zipped:
+        zipped.extractall(unpacked)
+    index = next(unpacked.glob("*/index.html"))
+
+    offline = context.new_page()
+    offline.goto(index.as_uri())
+    offline.locator("#cf-face").wait_for()
+    assert offline.evaluate("() => window.pwned") is None
+    offline.evaluate("() => document.getElementById('cf-audio').play()")
+    offline.wait_for_function("() => document.getElementById('cf-audio').currentTime > 0.2", timeout=10_000)
+    assert moving(offline, offline.locator("#cf-face"))
+    context.close()
+
+
+def test_corrupt_recording_is_reported_in_the_form(server, inputs, browser):
+    context = browser.new_context()
+    page = context.new_page()
+    fill_form(page, server, inputs, inputs["corrupt"])
+    page.click("#generate")
+    error = page.locator("#audio-error")
+    error.wait_for()
+    assert "corrupt.wav" in error.inner_text()
+    assert page.input_value("#title") == TITLE
+    assert page.is_checked("input[name=page][value=announcer]")
+    context.close()
