@@ -20,7 +20,7 @@ PACKAGE = Path(__file__).resolve().parents[1]
 ROOT = PACKAGE.parent
 
 DEFAULTS: dict[str, object] = {
-    "MAX_UPLOAD_MB": 200,          # a 30-minute mono 16-bit 44.1 kHz WAV is 159 MB
+    "MAX_UPLOAD_MB": 200,  # MiB; a 30-minute mono 16-bit 44.1 kHz WAV is 151 MiB
     "MAX_TRANSCRIPT_CHARS": 20000,  # 30 minutes of Mandarin at ~4 syllables/s is ~7200 characters
     "WORKERS": os.cpu_count() or 1,
     "RETENTION_DAYS": 7,
