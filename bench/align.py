@@ -27,6 +27,8 @@ import soundfile
 
 from cartoonface.speech.align import align_syllables
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.espeak import synthesize
+from cartoonface.speech.features import HOP, frames
 from cartoonface.speech.sentences import find_speech_parts
 
 ZH = Path(__file__).resolve().parents[1].parent / "shared" / "bench" / "zh"
@@ -158,15 +160,53 @@ def segmenter_parts(recording: Recording) -> Recording:
     return Recording(recording.name, recording.audio, parts)
 
 
+def _warp(cost: np.ndarray) -> np.ndarray:
+    """(T, S) frame distances -> (T,) template frame matched to each real frame: DTW with
+    steps (1, 0), (1, 1), (1, 2) from (0, 0) to (T - 1, S - 1)."""
+    rows, cols = cost.shape
+    total = np.full((rows, cols), np.inf)
+    total[0, 0] = cost[0, 0]
+    step = np.zeros((rows, cols), dtype=np.int8)
+    columns = np.arange(cols)
+    for i in range(1, rows):
+        prev = total[i - 1]
+        options = np.stack([prev, np.r_[np.inf, prev[:-1]], np.r_[np.inf, np.inf, prev[:-2]]])
+        step[i] = options.argmin(axis=0)
+        total[i] = cost[i] + options[step[i], columns]
+    path, j = np.zeros(rows, dtype=int), cols - 1
+    for i in range(rows - 1, -1, -1):
+        path[i] = j
+        j = max(j - int(step[i, j]), 0)
+    return path
+
+
+def espeak_dtw(audio: Audio, part: Part) -> np.ndarray:
+    """Approach (b) of the issue, for comparison: espeak-ng speaks the part's syllables, its
+    cepstra (c1-c12, mean/variance normalised, linearly stretched to the part's length) are
+    warped onto the part's by DTW and the synthetic syllable onsets mapped through the path.
+    Falls back to the equal split when espeak-ng does not read the syllables one by one."""
+    synth = synthesize(part.syllables)
+    if synth is None:
+        return equal_split(part)
+    loud = np.flatnonzero(np.abs(synth.samples) > 0.02 * np.abs(synth.samples).max())
+    template = frames(synth.samples[:loud[-1] + 1], synth.rate).mfcc[:, 1:]
+    real = frames(audio.samples[int(part.start * audio.rate):int(part.end * audio.rate)], audio.rate).mfcc[:, 1:]
+    stretch = (len(template) - 1) / max(len(real) - 1, 1)
+    template = template[np.round(np.arange(len(real)) * stretch).astype(int)]
+    a, b = ((x - x.mean(axis=0)) / (x.std(axis=0) + 1e-6) for x in (real, template))
+    path = _warp(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2))
+    return part.start + HOP * np.searchsorted(path, np.array(synth.onsets) / HOP / stretch)
+
+
 def equal_split(part: Part) -> np.ndarray:
     """Baseline onsets: the part cut into syllables of equal length."""
     n = len(part.syllables)
     return part.start + (part.end - part.start) * np.arange(n) / n
 
 
-def evaluate(recordings: list[Recording]) -> dict[str, object]:
+def evaluate(recordings: list[Recording], with_dtw: bool = False) -> dict[str, object]:
     """Onset errors (s) of the aligner and of the baseline, inner-onset mask, aligner seconds, speech seconds."""
-    errors, base, inner, seconds, speech, confidence = [], [], [], 0.0, 0.0, []
+    errors, base, warped, inner, seconds, speech, confidence = [], [], [], [], 0.0, 0.0, []
     for rec in recordings:
         for part in rec.parts:
             started = time.perf_counter()
@@ -176,9 +216,11 @@ def evaluate(recordings: list[Recording]) -> dict[str, object]:
             reference = np.array(part.onsets)
             errors.extend(np.abs(np.array([t.start for t in timings]) - reference))
             base.extend(np.abs(equal_split(part) - reference))
+            if with_dtw:
+                warped.extend(np.abs(espeak_dtw(rec.audio, part) - reference))
             inner.extend([False] + [True] * (len(part.onsets) - 1))
             confidence.extend(t.confidence for t in timings)
-    return {"errors": np.array(errors), "base": np.array(base), "inner": np.array(inner),
+    return {"errors": np.array(errors), "base": np.array(base), "dtw": np.array(warped), "inner": np.array(inner),
             "seconds": seconds, "speech": speech, "confidence": np.array(confidence)}
 
 
@@ -190,12 +232,14 @@ def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
             f"  within 20/50/100 ms {within[0]:5.1f}% {within[1]:5.1f}% {within[2]:5.1f}%  inner@50 {inner50:5.1f}%")
 
 
-def report(name: str, recordings: list[Recording]) -> None:
-    result = evaluate(recordings)
+def report(name: str, recordings: list[Recording], with_dtw: bool = False) -> None:
+    result = evaluate(recordings, with_dtw)
     print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result['speech']:.1f} s of speech, "
           f"aligner {result['speech'] / max(result['seconds'], 1e-9):.0f}x real time")
     print(row("aligner", result["errors"], result["inner"]))
     print(row("equal split", result["base"], result["inner"]))
+    if with_dtw:
+        print(row("espeak+DTW", result["dtw"], result["inner"]))
     bad = result["errors"] > 0.05
     conf = result["confidence"]
     if bad.any() and (~bad).any():
@@ -206,11 +250,11 @@ def main() -> None:
     records = biaobei()
     tuning = [r for r in records if int(r.name) in TUNING]
     held_out = [r for r in records if int(r.name) not in TUNING]
-    report("Biaobei tuning 000001-000035", tuning)
-    report("Biaobei held-out 000036-000070", held_out)
+    report("Biaobei tuning 000001-000035", tuning, with_dtw=True)
+    report("Biaobei held-out 000036-000070", held_out, with_dtw=True)
     report("Biaobei tuning, segmenter parts", [segmenter_parts(r) for r in tuning])
     report("Biaobei held-out, segmenter parts", [segmenter_parts(r) for r in held_out])
-    report("AISHELL-3 (2 speakers)", aishell3())
+    report("AISHELL-3 (2 speakers)", aishell3(), with_dtw=True)
     report("Chao 1922, reference parts", chao(loose=False))
     report(f"Chao 1922, parts widened by <= {LOOSE} s", chao(loose=True))
 

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +9,7 @@ import pytest
 
 from cartoonface.speech.align import LOW_CONFIDENCE, align_syllables, relative_durations, syllable_type
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.espeak import synthesize
 
 RATE = 16000
 
@@ -156,48 +155,27 @@ def test_sentence_final_and_longer_syllables_get_more_time():
     assert np.isclose(weights.mean(), 1.0)
 
 
-def espeak_syllables(pinyin: str) -> tuple[np.ndarray, int, list[float]]:
-    """Synthesise tone-numbered pinyin with espeak-ng (cmn-latn-pinyin); samples, rate and the
-    start time of each syllable from the library's WORD events (one per syllable)."""
-    name = ctypes.util.find_library("espeak-ng") or "libespeak-ng.so.1"
-    lib = ctypes.CDLL(name)
-
-    class Event(ctypes.Structure):
-        _fields_ = [("type", ctypes.c_int), ("unique_identifier", ctypes.c_uint), ("text_position", ctypes.c_int),
-                    ("length", ctypes.c_int), ("audio_position", ctypes.c_int), ("sample", ctypes.c_int),
-                    ("user_data", ctypes.c_void_p), ("id", ctypes.c_char * 8)]
-
-    callback_type = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int, ctypes.POINTER(Event))
-    chunks, words = [], []
-
-    def collect(wav, count, events):
-        if wav and count > 0:
-            chunks.append(np.ctypeslib.as_array(wav, (count,)).copy())
-        i = 0
-        while events[i].type != 0:
-            if events[i].type == 1:   # espeakEVENT_WORD
-                words.append(events[i].sample)
-            i += 1
-        return 0
-
-    rate = lib.espeak_Initialize(2, 0, None, 1)   # AUDIO_OUTPUT_SYNCHRONOUS, phoneme events on
-    keep = callback_type(collect)
-    lib.espeak_SetSynthCallback(keep)
-    if lib.espeak_SetVoiceByName(b"cmn-latn-pinyin") != 0:
-        pytest.skip("espeak-ng voice cmn-latn-pinyin is not installed")
-    text = pinyin.encode()
-    lib.espeak_Synth(text, len(text) + 1, 0, 1, 0, 1, None, None)
-    return np.concatenate(chunks).astype(np.float32) / 32768.0, rate, [s / rate for s in words]
-
-
 def test_espeak_speech_onsets_land_near_the_synthetic_ones():
     pinyin = "bao2 ma3 pei4 gua4 bo3 luo2 an1 diao1 chan2 yuan4 zhen3 dong3 weng1 ta4"
-    samples, rate, onsets = espeak_syllables(pinyin)
     syllables = pinyin.split()
+    speech = synthesize(syllables)
+    if speech is None:
+        pytest.skip("libespeak-ng or its cmn-latn-pinyin voice is not installed")
+    onsets = np.array(speech.onsets)
     assert len(onsets) == len(syllables)
-    audio = Audio(samples, rate, "espeak")
-    span = Span(onsets[0], len(samples) / rate)
+    audio = Audio(speech.samples, speech.rate, "espeak")
+    span = Span(onsets[0], len(speech.samples) / speech.rate)
     timings = align_syllables(audio, span, syllables)
     check_shape(timings, span, len(syllables))
     errors = np.abs(np.array([t.start for t in timings]) - onsets)
     assert np.mean(errors <= 0.05) >= 0.8
+
+
+def test_espeak_reports_one_onset_per_syllable_or_nothing():
+    speech = synthesize(["ni3", "hao3", "wanr2"])
+    if speech is None:
+        pytest.skip("libespeak-ng or its cmn-latn-pinyin voice is not installed")
+    assert len(speech.onsets) == 3 and list(speech.onsets) == sorted(speech.onsets)
+    assert speech.onsets[-1] < len(speech.samples) / speech.rate
+    assert speech.samples.dtype == np.float32 and np.abs(speech.samples).max() <= 1.0
+    assert synthesize([]) is None and synthesize(["ni3", " "]) is None

@@ -1,0 +1,94 @@
+"""Mandarin speech synthesised by espeak-ng, with the exact start time of every syllable.
+
+libespeak-ng (Debian package libespeak-ng1) is driven through ctypes with the voice
+`cmn-latn-pinyin`, which reads tone-numbered pinyin; the library reports one WORD event per
+syllable (see /work/shared/DEPENDENCIES.md). The aligner uses the result as a template of
+the same syllables to warp onto a real recording.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import threading
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+VOICE = b"cmn-latn-pinyin"
+_SYNCHRONOUS = 2          # espeak_AUDIO_OUTPUT AUDIO_OUTPUT_SYNCHRONOUS
+_PHONEME_EVENTS = 1       # espeakINITIALIZE_PHONEME_EVENTS
+_WORD = 1                 # espeakEVENT_WORD
+_CHARACTER = 1            # espeak_POSITION_TYPE POS_CHARACTER
+_UTF8 = 1                 # espeakCHARS_UTF8
+
+
+@dataclass(frozen=True, eq=False)
+class Synthesis:
+    """samples (n,) float32 in [-1, 1] at `rate` Hz; onsets (N,) seconds, one per syllable."""
+
+    samples: np.ndarray
+    rate: int
+    onsets: tuple[float, ...]
+
+
+class _Event(ctypes.Structure):
+    # espeak_EVENT of speak_lib.h (the id union is 8 bytes: int, const char * or char[8])
+    _fields_ = [("type", ctypes.c_int), ("unique_identifier", ctypes.c_uint),
+                ("text_position", ctypes.c_int), ("length", ctypes.c_int),
+                ("audio_position", ctypes.c_int), ("sample", ctypes.c_int),
+                ("user_data", ctypes.c_void_p), ("id", ctypes.c_char * 8)]
+
+
+_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int, ctypes.POINTER(_Event))
+_lock = threading.Lock()
+_state: dict[str, object] = {}
+
+
+def _library():
+    """The initialised library and its sample rate, or None when espeak-ng or the voice is missing."""
+    if "lib" not in _state:
+        _state["lib"] = None
+        name = ctypes.util.find_library("espeak-ng") or "libespeak-ng.so.1"
+        try:
+            lib = ctypes.CDLL(name)
+        except OSError:
+            return None
+        rate = lib.espeak_Initialize(_SYNCHRONOUS, 0, None, _PHONEME_EVENTS)
+        if rate <= 0 or lib.espeak_SetVoiceByName(VOICE) != 0:
+            return None
+        callback = _CALLBACK(_collect)
+        lib.espeak_SetSynthCallback(callback)
+        _state.update(lib=lib, rate=rate, callback=callback)
+    return _state["lib"]
+
+
+def _collect(wav, count, events) -> int:
+    if wav and count > 0:
+        _state["chunks"].append(np.ctypeslib.as_array(wav, (count,)).copy())
+    i = 0
+    while events[i].type != 0:
+        if events[i].type == _WORD:
+            _state["words"].append(events[i].sample)
+        i += 1
+    return 0
+
+
+def synthesize(syllables: Sequence[str]) -> Synthesis | None:
+    """Speak tone-numbered pinyin syllables; None when espeak-ng is unavailable or does not
+    report exactly one syllable per item (odd spellings it reads as letters)."""
+    text = " ".join(s for s in syllables if s.strip()).encode("utf-8")
+    if not text or len(text.split()) != len(syllables):
+        return None
+    with _lock:
+        lib = _library()
+        if lib is None:
+            return None
+        _state["chunks"], _state["words"] = [], []
+        lib.espeak_Synth(text, len(text) + 1, 0, _CHARACTER, 0, _UTF8, None, None)
+        chunks, words, rate = _state["chunks"], _state["words"], int(_state["rate"])
+    if len(words) != len(syllables) or not chunks:
+        return None
+    samples = np.concatenate(chunks).astype(np.float32) / 32768.0
+    return Synthesis(samples, rate, tuple(w / rate for w in words))
