@@ -110,7 +110,7 @@ _ZERO_INITIAL: dict[str, str] = {
     "yan": "ian", "yin": "in", "yang": "iang", "ying": "ing", "yong": "iong",
     "yu": "ü", "yue": "üe", "yuan": "üan", "yun": "ün",
     "wu": "u", "wa": "ua", "wo": "uo", "wai": "uai", "wei": "uei", "wan": "uan",
-    "wen": "uen", "wang": "uang", "weng": "ueng",
+    "wen": "uen", "wang": "uang", "weng": "ueng", "wong": "ueng",
 }
 _ABBREVIATED = {"iu": "iou", "ui": "uei", "un": "uen"}
 _NOT_FRONT = frozenset({"g", "k", "h", "z", "c", "s", "zh", "ch", "sh", "r"})
