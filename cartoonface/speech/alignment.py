@@ -79,6 +79,38 @@ class Alignment:
     notes: tuple[str, ...]
 
 
+def alignment_to_dict(alignment: Alignment) -> dict:
+    """The alignment as JSON-ready data (format "cartoonface-alignment", version 1; docs/alignment.md).
+
+    Times are seconds rounded to the millisecond, confidence to 0.01.
+    """
+    return {
+        "format": "cartoonface-alignment",
+        "version": 1,
+        "duration": round(alignment.duration, 3),
+        "notes": list(alignment.notes),
+        "sentences": [
+            {
+                "text": sentence.text,
+                "start": round(sentence.start, 3),
+                "end": round(sentence.end, 3),
+                "syllables": [
+                    {
+                        "text": s.text,
+                        "pinyin": s.pinyin,
+                        "shapes": list(s.shapes),
+                        "start": round(s.start, 3),
+                        "end": round(s.end, 3),
+                        "confidence": round(s.confidence, 2),
+                    }
+                    for s in sentence.syllables
+                ],
+            }
+            for sentence in alignment.sentences
+        ],
+    }
+
+
 def analyse(
     audio: Audio,
     transcript_text: str,

@@ -1,0 +1,122 @@
+"""`cartoonface align`: recording + transcript -> Praat TextGrid (and JSON) of sentences, syllables, mouth shapes.
+
+A thin shell over `cartoonface.speech.alignment.analyse`: progress on
+stderr, notes on stderr, a one-line summary on stdout. docs/alignment.md
+describes the outputs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from cartoonface.errors import OptionError, TranscriptError
+from cartoonface.files import write_text_atomic
+from cartoonface.speech.alignment import LOW_CONFIDENCE, Alignment, alignment_to_dict, analyse
+from cartoonface.speech.audio import load_audio
+from cartoonface.speech.textgrid import write_textgrid
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the `align` subcommand."""
+    parser = subparsers.add_parser(
+        "align", help="time the sentences, syllables and mouth shapes of a recording (Praat TextGrid)",
+        description="Find when every sentence and syllable of the transcript is spoken in the recording and "
+                    "which mouth shapes each syllable uses; write a Praat TextGrid (tiers sentences, syllables, "
+                    "mouth shapes) that can be corrected in Praat and given back to `generate --alignment`.")
+    parser.add_argument("audio", type=Path, metavar="AUDIO",
+                        help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
+    parser.add_argument("--transcript", type=Path, required=True, metavar="TEXT.txt",
+                        help="what is said, UTF-8 text (Chinese; sentences end with punctuation)")
+    parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.TextGrid", help="TextGrid to write")
+    parser.add_argument("--json", type=Path, metavar="OUT.json", help="also write the alignment as JSON")
+    parser.add_argument("--pause", metavar="START,END",
+                        help="seconds of the first pause between sentences: segment with the thesis's "
+                             "thresholds learned from it (Alg. 3.1) instead of the automatic ones")
+    parser.set_defaults(func=run)
+
+
+def parse_pause(text: str | None) -> tuple[float, float] | None:
+    """'START,END' -> (start, end) seconds, None for None; OptionError when it is not two numbers."""
+    if text is None:
+        return None
+    try:
+        start, end = (float(value) for value in text.split(","))
+    except ValueError:
+        raise OptionError(f"--pause {text!r}: expected START,END in seconds, e.g. 2.1,2.8") from None
+    return start, end
+
+
+def read_text(path: Path) -> str:
+    """The transcript at `path` as text (UTF-8, a BOM allowed); TranscriptError when unreadable."""
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise TranscriptError(f"{path}: no such transcript file") from None
+    except IsADirectoryError:
+        raise TranscriptError(f"{path}: is a folder; expected a UTF-8 text file") from None
+    except UnicodeDecodeError:
+        raise TranscriptError(f"{path}: not UTF-8 text; save the transcript as UTF-8") from None
+    except OSError as exc:
+        raise TranscriptError(f"{path}: cannot read the transcript ({exc.strerror})") from None
+
+
+def check_output(path: Path, option: str) -> None:
+    """OptionError when an output path is an existing folder."""
+    if path.is_dir():
+        raise OptionError(f"{option} {path}: is a folder; expected a file name")
+
+
+class Progress:
+    """A progress(stage, fraction) callback showing the stage and its share done on one stderr line."""
+
+    def __init__(self) -> None:
+        self.open = False  # a progress line is shown and not yet ended
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        print(f"\r{stage:<8} {fraction:4.0%}", end="", file=sys.stderr, flush=True)
+        self.open = True
+
+    def close(self) -> None:
+        """End the progress line (before notes, an error message or the summary)."""
+        if self.open:
+            print(file=sys.stderr, flush=True)
+            self.open = False
+
+
+def summary(alignment: Alignment, output: Path, seconds: float) -> str:
+    """The one-line report of a finished alignment."""
+    syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
+    low = sum(s.confidence < LOW_CONFIDENCE for s in syllables)
+    return (
+        f"{output}: {len(alignment.sentences)} sentences, {len(syllables)} syllables "
+        f"({low} with low confidence) in {alignment.duration:.1f} s of audio, "
+        f"{len(alignment.notes)} note{'' if len(alignment.notes) == 1 else 's'}; took {seconds:.1f} s"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Align the recording with its transcript and write the outputs; returns 0."""
+    started = time.perf_counter()
+    pause = parse_pause(args.pause)
+    check_output(args.output, "-o")
+    if args.json is not None:
+        check_output(args.json, "--json")
+    text = read_text(args.transcript)
+    shown = Progress()
+    try:
+        shown("decode", 0.0)
+        audio = load_audio(args.audio)
+        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript))
+    finally:
+        shown.close()
+    write_text_atomic(args.output, write_textgrid(alignment))
+    if args.json is not None:
+        write_text_atomic(args.json, json.dumps(alignment_to_dict(alignment), ensure_ascii=False, indent=1) + "\n")
+    for note in alignment.notes:
+        print(f"note: {note}", file=sys.stderr)
+    print(summary(alignment, args.output, time.perf_counter() - started))
+    return 0
