@@ -175,8 +175,8 @@ _COMPUTED_RULE = {
     "mw0": "the mouth corner 8.3 must be right of the corner 8.4",
     "jaw_h": "the chin 2.1 must be below the lower lip 8.2",
 }
-# Computed FAPUs that may be zero (a lip drawn as a line); the others must be > 0.
-_MAY_BE_ZERO = ("upper_lip_h", "lower_lip_h")
+# Computed FAPUs that may be zero (a lower lip drawn as a line); the others must be > 0.
+_MAY_BE_ZERO = ("lower_lip_h",)
 
 
 def _number(value: object, where: str, source: str) -> float:

@@ -1,0 +1,226 @@
+"""Turned faces (thesis 002, 2.4.3, Alg. 2.3): the posed 2D points of one FaceState.
+
+pose_face applies the expressions and the mouth to the model points, moves
+the additional points with them (Alg. 2.1), shifts the hair depth (Alg. 2.3
+steps 1-2), rotates (2.4.3.1), projects to the image, replaces the hidden
+contour points (steps 5-6), picks the nose side (step 8) and turns the
+eyeballs to the fixed focus (2.4.3.2). Everything per call is a handful of
+numpy operations on arrays precomputed once per lifted face (the Rig).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cartoonface.face.expression import EXPRESSIONS, LOWER_LIDS, UPPER_LIDS, expression_displacements
+from cartoonface.face.lift import LIFTED_INDEX, LIFTED_NAMES, LiftedFace
+from cartoonface.face.model import POINT_NAMES
+from cartoonface.face.mouth import MOUTH_INDEX, MOUTH_SYMBOLS, shape_displacements
+from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
+
+# Thesis 002, 2.4.3.2: eyeball radius 0.3 d; focus at (EyeMid.x, EyeMid.y, 15 d).
+EYEBALL_RADIUS = 0.3
+FOCUS_DEPTH = 15.0
+# Thesis 002, Alg. 2.3 steps 1-2: at turn +-15 degrees the outermost hair point
+# on the far side, at or above EyeMid, moves 1.0 d towards the viewer; the
+# shift is proportional to |turn| and to the point's x over the largest hair x
+# on that side. 1.0 d brings the hair plane (-0.58 d) to the depth of the
+# temples 11.2 / 11.3 (0.42 d), so the far hair edge turns with the head
+# instead of sliding behind the face. Below EyeMid the shift fades out over
+# HAIR_FADE d (our addition: the text stops it at EyeMid, which would kink
+# long hair at eye level).
+HAIR_SHIFT = 1.0
+HAIR_FADE = 1.0
+# Thesis 002, Alg. 2.3 steps 5-6: beyond +-10 degrees the far contour points
+# are replaced. To avoid a jump while a head turns through 10 degrees, the
+# replacement blends in linearly from SWAP_START to SWAP_END degrees (half
+# way at 10).
+SWAP_START = 8.0
+SWAP_END = 12.0
+SWAP_POSITIVE = (("11.3", "Q"), ("10.9", "M"), ("2.13", "K"))
+SWAP_NEGATIVE = (("11.2", "N"), ("10.10", "L"), ("2.14", "J"))
+# Eyes in PosedFace.pupils order: image-left eye (3.6, radius r1), image-right (3.5, r2).
+EYEBALLS = ("3.6", "3.5")
+
+
+@dataclass(frozen=True, eq=False)
+class PosedFace:
+    """The 2D drawing points of one face state.
+
+    xy: (N, 2) image pixels in LIFTED_NAMES order, contour replacement of
+        Alg. 2.3 steps 5-6 applied, rows 3.6 / 3.5 the gazing pupils.
+    hair: (H, 2) image pixels.
+    pupils: (2, 2) iris centres of the image-left eye (3.6) and image-right
+        eye (3.5); the drawing clips each iris circle by its eye outline
+        (3.12, 3.2, 3.8, 3.4 / 3.7, 3.1, 3.11, 3.3).
+    iris_r: (2,) iris radii r1, r2 in pixels, same order.
+    nose_side: +1 draw the nose bridge through 9.7, C, 9.13 (turn > 0, step 8),
+        -1 through 9.6, C, 9.14.
+    """
+
+    xy: np.ndarray
+    hair: np.ndarray
+    pupils: np.ndarray
+    iris_r: np.ndarray
+    nose_side: int
+
+    def p(self, name: str) -> np.ndarray:
+        """(2,) image position of a lifted point by name."""
+        return self.xy[LIFTED_INDEX[name]]
+
+
+def rotation_matrix(pose: Pose) -> np.ndarray:
+    """(3, 3) rotation in the local frame (x right, y up, z front), thesis 2.4.3.1.
+
+    First about Y by turn (beta), then about X by tilt (alpha), then about Z by
+    roll (gamma); positive angles counter-clockwise. The thesis's
+    z2 = y1 sin(a) - z1 cos(a) is a sign slip (it would mirror depth); we use
+    z2 = y1 sin(a) + z1 cos(a), which projects to the same image.
+    """
+    a, b, g = (math.radians(v) for v in (pose.tilt, pose.turn, pose.roll))
+    ca, sa, cb, sb, cg, sg = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g)
+    ry = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
+    rz = np.array([[cg, -sg, 0.0], [sg, cg, 0.0], [0.0, 0.0, 1.0]])
+    return rz @ rx @ ry
+
+
+def rotate(points: np.ndarray, pose: Pose) -> np.ndarray:
+    """(M, 3) local points rotated by the pose (Alg. 2.3 step 3, before projection)."""
+    return points @ rotation_matrix(pose).T
+
+
+@dataclass(frozen=True, eq=False)
+class Rig:
+    """Per-face arrays for pose_face, in image orientation (x right, y down, z front)
+    relative to the rotation origin. Built once per LiftedFace by rig()."""
+
+    neutral: np.ndarray  # (N*2,) lifted image points minus origin, flattened
+    basis: np.ndarray  # (12 + 3, N*2) mouth shapes then expressions, flattened displacements
+    template: np.ndarray  # (N + H, 3) column 2 filled: depths, hair depths
+    hair_shift: tuple[np.ndarray, np.ndarray]  # (H,) z shift per degree for turn > 0, turn < 0
+    centres: np.ndarray  # (2, 3) eyeball centres
+    focus: np.ndarray  # (3,)
+    radius: float  # eyeball radius, pixels
+    origin: np.ndarray  # (2,)
+    iris_r: np.ndarray  # (2,)
+    lids: tuple[np.ndarray, np.ndarray]  # flat indices of upper / lower lid y
+    pupil_rows: np.ndarray  # rows of 3.6, 3.5 in xy
+    swap: tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]  # (replaced, by) rows
+
+
+def _rows(names: tuple[str, ...]) -> np.ndarray:
+    return np.array([LIFTED_INDEX[n] for n in names])
+
+
+def _hair_shift(lifted: LiftedFace) -> tuple[np.ndarray, np.ndarray]:
+    """(H,) z shift per degree of turn for turn > 0 (image-right half) and turn < 0."""
+    d = lifted.face.fapu.d
+    x, y = lifted.hair[:, 0], lifted.hair[:, 1]
+    eye_y = (lifted.local[LIFTED_INDEX["3.5"], 1] + lifted.local[LIFTED_INDEX["3.6"], 1]) / 2  # EyeMid, local
+    fade = np.clip((y - eye_y) / (HAIR_FADE * d) + 1.0, 0.0, 1.0)
+    per_degree = HAIR_SHIFT * d / MAX_ANGLE
+    out = []
+    for side in (1.0, -1.0):
+        reach = max(float(np.max(side * x)), 1e-9)
+        out.append(per_degree * np.clip(side * x / reach, 0.0, 1.0) * fade)
+    return out[0], out[1]
+
+
+@functools.lru_cache(maxsize=16)
+def rig(lifted: LiftedFace) -> Rig:
+    """The precomputed arrays of pose_face for one lifted face (cached by identity)."""
+    face = lifted.face
+    n, p = len(LIFTED_NAMES), len(POINT_NAMES)
+    flip = np.array([1.0, -1.0, 1.0])
+    image_rel = lifted.local[:, :2] * flip[:2]  # local -> image orientation, origin-relative
+    model_moves = np.concatenate([shape_displacements(face), expression_displacements(face)])
+    basis = (model_moves.reshape(len(model_moves), 2 * p) @ lifted.depends.T)
+    template = np.zeros((n + len(lifted.hair), 3))
+    template[:n, 2] = lifted.local[:, 2]
+    template[n:] = lifted.hair * flip
+    d = face.fapu.d
+    eyes = _rows(EYEBALLS)
+    pupils = lifted.local[eyes]
+    eye_mid = pupils.mean(axis=0)
+    focus_local = np.array([eye_mid[0], eye_mid[1], FOCUS_DEPTH * d])
+    toward = focus_local - pupils
+    centres_local = pupils - EYEBALL_RADIUS * d * toward / np.linalg.norm(toward, axis=1, keepdims=True)
+    upper = np.array([2 * LIFTED_INDEX[POINT_NAMES[i]] + 1 for i in UPPER_LIDS])
+    lower = np.array([2 * LIFTED_INDEX[POINT_NAMES[i]] + 1 for i in LOWER_LIDS])
+    iris_r = np.array([face.fapu.r1, face.fapu.r2])
+    iris_r.flags.writeable = False
+    return Rig(
+        neutral=image_rel.ravel().copy(),
+        basis=basis,
+        template=template,
+        hair_shift=_hair_shift(lifted),
+        centres=centres_local * flip,
+        focus=focus_local * flip,
+        radius=EYEBALL_RADIUS * d,
+        origin=np.asarray(lifted.origin, dtype=float),
+        iris_r=iris_r,
+        lids=(upper, lower),
+        pupil_rows=eyes,
+        swap=(
+            (_rows(tuple(a for a, _ in SWAP_POSITIVE)), _rows(tuple(b for _, b in SWAP_POSITIVE))),
+            (_rows(tuple(a for a, _ in SWAP_NEGATIVE)), _rows(tuple(b for _, b in SWAP_NEGATIVE))),
+        ),
+    )
+
+
+_N_MOUTH = len(MOUTH_SYMBOLS)
+_N_COEF = _N_MOUTH + len(EXPRESSIONS)
+
+
+def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
+    """The posed face: expressions + mouth + hair shift + rotation + projection + gaze.
+
+    Returns a PosedFace in image pixels. With Pose(0, 0, 0) and a neutral
+    state the model points come back unchanged.
+    """
+    r = rig(lifted)
+    n = len(LIFTED_NAMES)
+    coef = np.zeros(_N_COEF)
+    for symbol, weight in state.mouth:
+        coef[MOUTH_INDEX[symbol]] += weight
+    coef[_N_MOUTH] = state.blink
+    coef[_N_MOUTH + 1] = state.smile
+    coef[_N_MOUTH + 2] = state.brow
+    flat = r.neutral + coef @ r.basis
+    upper, lower = r.lids
+    flat[lower] = np.maximum(flat[lower], flat[upper])  # expression.close_lids on the flat rows
+
+    pose = state.pose
+    q = r.template.copy()
+    q[:n, :2] = flat.reshape(n, 2)
+    turn = pose.turn
+    if turn > 0:
+        q[n:, 2] += turn * r.hair_shift[0]
+    elif turn < 0:
+        q[n:, 2] -= turn * r.hair_shift[1]
+    # Rotation of the local frame seen in image orientation (y flipped both ways).
+    m = rotation_matrix(pose)
+    m[1, :] = -m[1, :]
+    m[:, 1] = -m[:, 1]
+    out = q @ m[:2].T + r.origin
+
+    centres = r.centres @ m.T
+    toward = r.focus - centres
+    pupils = centres[:, :2] + (r.radius / np.sqrt((toward * toward).sum(axis=1)))[:, None] * toward[:, :2]
+    pupils += r.origin
+    xy = out[:n]
+    xy[r.pupil_rows] = pupils
+
+    weight = (abs(turn) - SWAP_START) / (SWAP_END - SWAP_START)
+    if weight > 0:
+        replaced, by = r.swap[0] if turn > 0 else r.swap[1]
+        if weight >= 1:
+            xy[replaced] = xy[by]
+        else:
+            xy[replaced] += weight * (xy[by] - xy[replaced])
+    return PosedFace(xy=xy, hair=out[n:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if turn > 0 else -1)
