@@ -21,8 +21,15 @@ Otherwise one syllable ends where the next starts. Syllables are ordered, do not
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
 
+Confidence: how much worse the best cut gets when a syllable's onset (or the next one's) is
+forced more than 50 ms away, from a forward and a time-reversed pass of the same dynamic
+programme, times the part's signal quality (its loudness range).
+
 Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
 all give a duration-prior split with low confidence.
+
+Approach (b) of issue 3, espeak-ng speech of the same syllables warped onto the recording by
+DTW, was measured (bench/align.py) far below this one, also as a prior for it, so it is not used.
 """
 
 from __future__ import annotations
@@ -132,7 +139,8 @@ MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
 MIN_FRAMES = 3             # frames: the shortest syllable
 MARGIN = 20                # frames of context read on each side of the span
-CLEAR_EVIDENCE = 1.0       # evidence of a boundary that counts as fully clear (5 dB fall)
+SURE_DISTANCE = 5          # frames: an onset moved further than this counts as a different answer
+MARGIN_SCALE = 2.0         # score margin (units of evidence) of confidence 1 - 1/e
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 
 
@@ -165,43 +173,55 @@ def onset_evidence(low: np.ndarray) -> dict[str, np.ndarray]:
             "sonorant": dip, "glide": dip, "none": dip}
 
 
+_NEG = -1e18                # score of an impossible cut
+
+
 def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
     ratio = np.log(np.maximum(d, 1) / mean)
     return -0.5 * (ratio / DURATION_SPREAD) ** 2
 
 
-def _segment(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
-             means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Best cut of T frames into N syllables with optional pauses between and around them.
+@dataclass(frozen=True)
+class _Lattice:
+    """Forward dynamic-programming tables over boundary positions k = 0..T (see _forward)."""
+
+    after_syllable: np.ndarray   # (N + 1, T + 1) best score with i syllables done, the last ending at k
+    after_pause: np.ndarray      # (N + 1, T + 1) the same followed by a pause ending at k
+    pause_from: np.ndarray       # (N + 1, T + 1) where that pause started
+    length: np.ndarray           # (N, T + 1) frames of syllable i when it ends at k
+    from_pause: np.ndarray       # (N, T + 1) whether syllable i ending at k followed a pause
+
+
+def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray) -> _Lattice:
+    """Score every cut of T frames into N syllables with optional pauses between and around them.
 
     evidence: (N, T + 1) onset evidence of syllable i starting at boundary k when no pause
-    precedes it; silence: (T,) per-frame pause evidence; edges: (2, T + 1) evidence that a
-    pause starts (sound falls) / ends (sound rises) at k; means: (N,) expected durations in
-    frames. Returns (starts, ends) boundary indices (N,) each, starts[i] < ends[i] <= starts[i + 1].
+    precedes it (row 0 unused: the part's start is given); silence: (T,) per-frame pause
+    evidence; edges: (2, T + 1) evidence that a pause starts (sound falls) / ends (sound
+    rises) at k; means: (N,) expected durations in frames.
     """
     n, positions = evidence.shape
     total = positions - 1
     cum = np.concatenate([[0.0], np.cumsum(silence)])
-    neg = -1e18
-    after_syllable = np.full((n + 1, positions), neg)   # i syllables done, the last ends at k
-    after_pause = np.full((n + 1, positions), neg)      # i syllables done, then a pause ending at k
+    after_syllable = np.full((n + 1, positions), _NEG)
+    after_pause = np.full((n + 1, positions), _NEG)
     pause_from = np.zeros((n + 1, positions), dtype=int)
     length = np.zeros((n, positions), dtype=int)
     from_pause = np.zeros((n, positions), dtype=bool)
     after_syllable[0, 0] = 0.0
     k = np.arange(positions)
     for i in range(n + 1):
-        # pause: best start s <= k - gap of  after_syllable[i, s] - cum[s]
+        # pause: best start s <= k - gap of  after_syllable[i, s] + edges[0, s] - cum[s]
         base = after_syllable[i] + edges[0] - cum
         best = np.maximum.accumulate(base)
         arg = np.zeros(positions, dtype=int)
-        running, where = neg, 0
+        running, where = _NEG, 0
         for s in range(positions):
             if base[s] > running:
                 running, where = base[s], s
             arg[s] = where
         gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
-        shifted = np.full(positions, neg)
+        shifted = np.full(positions, _NEG)
         shifted[gap:] = best[:-gap]
         after_pause[i] = shifted + cum - PAUSE_PENALTY + edges[1]
         pause_from[i, gap:] = arg[:-gap]
@@ -212,23 +232,52 @@ def _segment(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
         longest = min(total, int(4 * means[i]) + MIN_FRAMES)
         d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
         starts = k[:, None] - d[None, :]
-        valid = starts >= 0
-        cand = np.where(valid, start_score[np.clip(starts, 0, None)], neg) + _duration_score(d, means[i])[None, :]
+        cand = np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG) + _duration_score(d, means[i])[None, :]
         choice = cand.argmax(axis=1)
         after_syllable[i + 1] = cand[k, choice]
         length[i] = d[choice]
         from_pause[i] = start_pause[np.clip(k - d[choice], 0, None)]
+    return _Lattice(after_syllable, after_pause, pause_from, length, from_pause)
+
+
+def _best_cut(lattice: _Lattice) -> tuple[np.ndarray, np.ndarray]:
+    """(starts, ends) boundary indices (N,) each of the best cut: starts[i] < ends[i] <= starts[i + 1]."""
+    n, positions = lattice.length.shape
     starts, ends = np.zeros(n, dtype=int), np.zeros(n, dtype=int)
-    pos = total
-    in_pause = after_pause[n, total] > after_syllable[n, total]
+    pos = positions - 1
+    in_pause = lattice.after_pause[n, pos] > lattice.after_syllable[n, pos]
     for i in range(n, 0, -1):
         if in_pause:
-            pos = pause_from[i, pos]
+            pos = lattice.pause_from[i, pos]
         ends[i - 1] = pos
-        starts[i - 1] = pos - length[i - 1, pos]
-        in_pause = from_pause[i - 1, pos]
+        starts[i - 1] = pos - lattice.length[i - 1, pos]
+        in_pause = lattice.from_pause[i - 1, pos]
         pos = starts[i - 1]
     return starts, ends
+
+
+def _onset_margins(lattice: _Lattice, evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
+                   means: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(N,) how much worse the best cut gets when syllable i's onset is moved more than
+    SURE_DISTANCE frames from where it is (large: the onset is well determined).
+
+    The best score with onset i at k is the forward score up to k plus the score of the rest,
+    which is the forward score of the time-reversed problem (syllables and frames reversed,
+    pause edges swapped, each boundary keeping its evidence).
+    """
+    n, positions = evidence.shape
+    total = positions - 1
+    flipped = np.zeros_like(evidence)
+    flipped[1:] = evidence[:0:-1, ::-1]
+    backward = _forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1])
+    k = np.arange(positions)
+    margins = np.zeros(n)
+    for i in range(n):
+        before = np.maximum(lattice.after_syllable[i] + (evidence[i] if i else 0.0), lattice.after_pause[i])
+        score = before + backward.after_syllable[n - i, total - k]
+        far = np.abs(k - starts[i]) > SURE_DISTANCE
+        margins[i] = score.max() - score[far].max() if far.any() else np.inf
+    return margins
 
 
 def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> tuple[SyllableTiming, ...]:
@@ -272,29 +321,20 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     by_class = onset_evidence(low)
     evidence = np.stack([by_class[_CLASS[syllable_type(p).initial]][index] for p in syllables])
     edges = edge_evidence(low, _smooth(feats.high))[:, index]
-    starts, ends = _segment(evidence, silence, edges, means)
+    evidence[0] = 0.0
+    lattice = _forward(evidence, silence, edges, means)
+    starts, ends = _best_cut(lattice)
+    margins = _onset_margins(lattice, evidence, silence, edges, means, starts)
     quality = float(np.clip((loud - floor - 10.0) / 20.0, 0.0, 1.0))
-    confidence = _confidence(starts, ends, evidence, edges, means, quality)
+    confidence = _confidence(margins, quality)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
     times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
     return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
 
 
-def _confidence(starts: np.ndarray, ends: np.ndarray, evidence: np.ndarray, edges: np.ndarray,
-                means: np.ndarray, quality: float) -> np.ndarray:
-    """(N,) confidence 0..1 of each syllable: signal quality (0..1, from the part's loudness
-    range) x how clear its two boundaries are (their evidence, a span edge counts as clear)
-    x how plausible its duration is against the prior."""
-    n, positions = evidence.shape
-    clear = np.ones((n, 2))
-    for i in range(n):
-        if starts[i] > 0:
-            paused = i == 0 or ends[i - 1] < starts[i]
-            clear[i, 0] = edges[1, starts[i]] if paused else evidence[i, starts[i]]
-        if ends[i] < positions - 1:
-            paused = i == n - 1 or starts[i + 1] > ends[i]
-            clear[i, 1] = edges[0, ends[i]] if paused else evidence[i + 1, ends[i]]
-    clarity = np.clip(clear / CLEAR_EVIDENCE, 0.0, 1.0).mean(axis=1)
-    plausible = np.exp(-0.5 * (np.log((ends - starts) / means) / (2 * DURATION_SPREAD)) ** 2)
-    return np.clip(quality * (0.4 + 0.6 * clarity) * plausible, 0.0, 1.0)
+def _confidence(margins: np.ndarray, quality: float) -> np.ndarray:
+    """(N,) confidence 0..1 of each syllable from the onset margins (N,) of it and of the next
+    syllable (see _onset_margins) and the part's signal quality (0..1, from its loudness range)."""
+    worst = np.minimum(margins, np.append(margins[1:], np.inf))
+    return quality * (1.0 - np.exp(-worst / MARGIN_SCALE))
