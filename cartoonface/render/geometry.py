@@ -123,16 +123,19 @@ def chaikin(points: np.ndarray, rounds: int = CHAIKIN_ROUNDS, closed: bool = Fal
 
 # The parts, thesis 002 Alg. 2.2 steps 2-13 (with Alg. 2.3 step 8 for the nose), by the
 # point names of cartoonface.face.lift.LIFTED_NAMES. Left and right follow the thesis's
-# wording ("the left eye" is drawn from 3.12, 3.2, 3.8, 3.4). Each entry: part name, kind,
-# arcs. Kinds: "smooth"/"corner" closed Bezier contours, "open" separate Bezier arcs (one
-# sub-path each), "cut" a closed shape of open corner-cut arcs (eyebrows).
-_FACE = (("11.2", "11.2a", "11.1", "11.3a", "11.3"), ("11.3", "10.9", "2.13"),
+# wording ("the left eye" is drawn from 3.12, 3.2, 3.8, 3.4), which is the image left. Each
+# entry: part name, kind, arcs. The ears (steps 4-5) are the open arc(10.8, 10.2, A) in the
+# thesis; we close each ear smoothly back from A to 10.8 along the face side, where the face
+# covers it, so the top of the ear is round rather than a spike at 10.2.
+# Kinds: "smooth"/"corner" closed Bezier contours, "open" separate Bezier arcs (one sub-path
+# each), "cut" a closed shape of open corner-cut arcs (eyebrows).
+FACE_CONTOUR = (("11.2", "11.2a", "11.1", "11.3a", "11.3"), ("11.3", "10.9", "2.13"),
          ("2.13", "2.1", "2.14"), ("2.14", "10.10", "11.2"))        # step 3
 _NOSE_TAIL = (("9.14", "9.2", "9.4"), ("9.13", "9.1", "9.5"), ("D", "9.15", "E"))  # step 6
 PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
-    ("face", "smooth", _FACE),
-    ("ear_l", "open", (("10.8", "10.2", "A"),)),                         # step 4
-    ("ear_r", "open", (("10.7", "10.1", "B"),)),                         # step 5
+    ("face", "smooth", FACE_CONTOUR),
+    ("ear_l", "smooth", (("10.8", "10.2", "A"), ("A", "10.8"))),         # step 4, closed
+    ("ear_r", "smooth", (("10.7", "10.1", "B"), ("B", "10.7"))),         # step 5
     ("nose", "open", (("9.6", "C", "9.14"), *_NOSE_TAIL)),               # step 6
     ("brow_l", "cut", (("4.6", "4.4a", "4.4", "4.2"), ("4.2", "G", "F", "4.6"))),  # step 7
     ("brow_r", "cut", (("4.5", "4.3a", "4.3", "4.1"), ("4.1", "H", "I", "4.5"))),  # step 8
@@ -143,12 +146,13 @@ PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
     ("mouth", "corner", (("8.1", "8.9", "8.4"), ("8.4", "8.2", "8.3"), ("8.3", "8.10", "8.1"))),  # step 13
     ("mouth_inner", "corner", (("R", "2.2", "S"), ("S", "2.3", "R"))),             # step 13
     ("lips_line", "open", (("R", "2.2", "S"),)),     # the line where the lips meet
+    ("lower_inner", "open", (("S", "2.3", "R"),)),   # lower edge of the opening (tongue)
 )
 # Thesis 002, Alg. 2.3 step 8: when the head turns the other way (beta > 0) the nose
 # bridge is drawn on the visible side, arc(9.7, C, 9.13) instead of arc(9.6, C, 9.14).
 _NOSE_OTHER_SIDE = ("nose", "open", (("9.7", "C", "9.13"), *_NOSE_TAIL))
-# Which PosedFace.nose_side value selects that variant.
-NOSE_SIDE_OTHER = -1
+# Which PosedFace.nose_side value selects that variant (pose.py: +1 for turn > 0).
+NOSE_SIDE_OTHER = 1
 
 
 @dataclass(frozen=True)
@@ -238,7 +242,7 @@ def face_shapes(posed: Posed) -> dict[str, str]:
     order with the contour replacement of Alg. 2.3 already applied, `hair` (H, 2),
     `nose_side`). Returns {part: path d} for "hair" (empty if fewer than 3 hair points),
     "face", "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
-    "lid_r", "mouth", "mouth_inner", "lips_line"; coordinates in pixels rounded to 0.1.
+    "lid_r", "mouth", "mouth_inner", "lips_line", "lower_inner"; coordinates in pixels rounded to 0.1.
     """
     from cartoonface.face.lift import LIFTED_NAMES
 

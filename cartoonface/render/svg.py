@@ -1,0 +1,311 @@
+"""A posed cartoon face as SVG, built with lxml (thesis 002, 6.3.1).
+
+Layers, back to front (thesis 002, 6.3.1, Figs. 6.7/6.8): background, hair, clothes,
+face. The hair is one corner-cut polygon behind the body; the face layer holds, in
+order, the ears, the face, the cheeks, the nose, the eyebrows, the eyes and the mouth.
+
+Each eye is its white, then the iris (radial gradient), pupil and highlight clipped by
+the eye outline (thesis 002, 6.3.1, Fig. 6.5: "during eye blinks, the eyeball will be
+hidden, an effect of clipping paths is utilized"): when the lids meet the clip path has
+no area left and nothing of the eyeball shows. Then the outline and a bolder upper lid.
+
+`face_defs(face)` gives the gradients once per document (ids "cf-..."); `face_group`
+gives one state's drawing as a `<g>` whose children are the parts, each with a class
+naming it ("hair", "ear-l", "face", "eye-l", "mouth", ...), and whose own clip paths carry
+the caller's `uid` so many states can share one document (render/animation.py). Colours
+are written as hex: cairosvg paints hsl() black (shared DEPENDENCIES.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import resvg_py
+from lxml import etree
+
+from cartoonface.face.lift import LIFTED_INDEX, lift
+from cartoonface.face.model import FaceModel
+from cartoonface.face.pose import PosedFace, pose_face
+from cartoonface.face.state import FaceState
+from cartoonface.render.geometry import FACE_CONTOUR, face_shapes, number_text
+from cartoonface.render.scenery import Figure, background_layer, clothes_layer
+
+SVG = "http://www.w3.org/2000/svg"
+NSMAP = {None: SVG}
+
+# Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
+# face of any size is drawn alike. Our own choice, tuned by eye on the sample faces.
+OUTLINE = 0.022   # face, ears, eye outline
+LID = 0.045       # upper lid (lash line)
+FEATURE = 0.02    # nose, the line between the lips
+HAIR_LINE = 0.018
+TEETH = 0.07      # height of the visible upper teeth
+TONGUE = 0.1      # height of the tongue at the bottom of an open mouth
+PUPIL = 0.48      # pupil radius / iris radius
+GLINT = 0.26      # highlight radius / iris radius
+CHEEK = (0.2, 0.12)  # blush ellipse radii / d
+
+# Eye outline points (thesis 002, Alg. 2.2 steps 9-10) by drawn eye.
+EYES = {"l": ("3.12", "3.2", "3.8", "3.4"), "r": ("3.7", "3.1", "3.11", "3.3")}
+
+
+def _mix(colour: str, other: str, t: float) -> str:
+    """The hex colour `t` (0..1) of the way from `colour` to `other` (both '#rgb' or '#rrggbb')."""
+
+    def rgb(hex_: str) -> np.ndarray:
+        h = hex_.lstrip("#")
+        h = "".join(c * 2 for c in h) if len(h) == 3 else h
+        return np.array([int(h[i:i + 2], 16) for i in (0, 2, 4)], dtype=float)
+
+    mixed = np.rint(rgb(colour) * (1 - t) + rgb(other) * t).astype(int)
+    return "#" + "".join(f"{v:02x}" for v in mixed)
+
+
+def _el(parent: etree._Element, tag: str, attrs: dict[str, str]) -> etree._Element:
+    """Append SVG element `tag` with string attributes `attrs` to `parent`; return it."""
+    return etree.SubElement(parent, f"{{{SVG}}}{tag}", attrs)
+
+
+def _gradient(kind: str, gid: str, stops: tuple[tuple[float, str, float], ...], **attrs: str) -> etree._Element:
+    """A linear/radial gradient `gid` with (offset, colour, opacity) stops."""
+    grad = etree.Element(f"{{{SVG}}}{kind}Gradient", {"id": gid, **attrs})
+    for offset, colour, opacity in stops:
+        stop = _el(grad, "stop", {"offset": f"{offset:g}", "stop-color": colour})
+        if opacity < 1:
+            stop.set("stop-opacity", f"{opacity:g}")
+    return grad
+
+
+def face_defs(face: FaceModel) -> tuple[etree._Element, ...]:
+    """The gradients every drawing of `face` uses, once per document: skin "cf-skin", hair
+    "cf-hair", iris "cf-iris", lips "cf-lip", blush "cf-cheek", nose line "cf-nose" (each in the element's own
+    bounding box, so they fit any pose). Returns the elements, to go into `<defs>`."""
+    p = face.palette
+    nose = _mix(p.skin_shadow, p.outline, 0.4)
+    return (
+        _gradient("radial", "cf-skin", ((0, _mix(p.skin, "#ffffff", 0.1), 1), (0.62, p.skin, 1),
+                                        (1, _mix(p.skin, p.skin_shadow, 0.7), 1)),
+                  cx=".5", cy=".42", r=".62", fy=".36"),
+        _gradient("linear", "cf-hair", ((0, _mix(p.hair, "#ffffff", 0.18), 1), (0.3, p.hair, 1),
+                                        (1, _mix(p.hair, "#000000", 0.25), 1)), x2="0", y2="1"),
+        _gradient("radial", "cf-iris", ((0, _mix(p.iris, "#ffffff", 0.3), 1), (0.6, p.iris, 1),
+                                        (1, _mix(p.iris, "#000000", 0.45), 1)), fy=".62"),
+        _gradient("linear", "cf-lip", ((0, _mix(p.lip, "#000000", 0.08), 1), (0.45, p.lip, 1),
+                                       (1, _mix(p.lip, "#ffffff", 0.12), 1)), x2="0", y2="1"),
+        _gradient("radial", "cf-cheek", ((0, p.cheek, 0.55), (1, p.cheek, 0))),
+        # The nose bridge fades out towards the eyes; the nostrils and tip are drawn fully.
+        _gradient("linear", "cf-nose", ((0, nose, 0), (0.55, nose, 0.45), (0.8, nose, 1)), x2="0", y2="1"),
+    )
+
+
+def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
+    """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`.
+
+    Children, in drawing order: a `<defs>` with this state's clip paths (ids end in
+    "-{uid}"), then the parts "hair", "ear-l", "ear-r", "face", "cheeks", "nose",
+    "brow-l", "brow-r", "eye-l", "eye-r", "mouth". Fills use face_defs' gradients.
+    """
+    d = face.fapu.d
+    p = face.palette
+    shapes = face_shapes(posed)
+    outline = {"fill": "none", "stroke": p.outline, "stroke-linecap": "round", "stroke-linejoin": "round"}
+    group = etree.Element(f"{{{SVG}}}g", {"class": "cf-face"})
+    defs = _el(group, "defs", {})
+    if shapes["hair"]:
+        _el(group, "path", {"class": "hair", "d": shapes["hair"], "fill": "url(#cf-hair)",
+                            "stroke": _mix(p.hair, "#000000", 0.35), "stroke-width": number_text(HAIR_LINE * d),
+                            "stroke-linejoin": "round"})
+    skin_line = {**outline, "fill": "url(#cf-skin)", "stroke-width": number_text(OUTLINE * d)}
+    for side in "lr":
+        _el(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **skin_line})
+    _el(group, "path", {"class": "face", "d": shapes["face"], **skin_line})
+    _cheeks(group, posed, d)
+    _el(group, "path", {"class": "nose", "d": shapes["nose"], **outline,
+                        "stroke": "url(#cf-nose)", "stroke-width": number_text(FEATURE * d)})
+    for side in "lr":
+        _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], "fill": p.brow,
+                            "stroke": p.brow, "stroke-width": number_text(0.006 * d), "stroke-linejoin": "round"})
+    for side, eyeball in zip("lr", _eyeballs(posed)):
+        _eye(group, defs, shapes, side, eyeball, face, uid)
+    _mouth(group, defs, shapes, face, uid)
+    return group
+
+
+def _cheeks(group: etree._Element, posed: PosedFace, d: float) -> None:
+    """Blush under each eye, between the eye's lower lid and the mouth corner on its side."""
+    cheeks = _el(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
+    for corners, mouth_corner in ((("3.12", "3.8", "3.4"), "8.4"), (("3.7", "3.11", "3.3"), "8.3")):
+        outer, inner, lower = (posed.xy[LIFTED_INDEX[n]] for n in corners)
+        width = np.hypot(*(outer - inner)) / (0.46 * d)  # foreshortening: narrower when turned away
+        centre = 0.55 * outer + 0.45 * inner
+        cy = 0.5 * lower[1] + 0.5 * posed.xy[LIFTED_INDEX[mouth_corner]][1] - 0.08 * d
+        _el(cheeks, "ellipse", {"cx": number_text(centre[0]), "cy": number_text(cy),
+                                "rx": number_text(CHEEK[0] * d * min(width, 1.2)), "ry": number_text(CHEEK[1] * d)})
+
+
+def _eyeballs(posed: PosedFace) -> tuple[tuple[np.ndarray, float], tuple[np.ndarray, float]]:
+    """(pupil centre (2,), iris radius) for the eye drawn "l" and "r", each pupil paired with
+    the eye whose outline centre is nearest (PosedFace gives them in its own order)."""
+    centres = [posed.xy[[LIFTED_INDEX[n] for n in EYES[s]]].mean(axis=0) for s in "lr"]
+    pupils = np.asarray(posed.pupils, dtype=float)
+    first = int(np.argmin([np.hypot(*(pupil - centres[0])) for pupil in pupils]))
+    order = (first, 1 - first)
+    return tuple((pupils[i], float(posed.iris_r[i])) for i in order)  # type: ignore[return-value]
+
+
+def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], side: str,
+         eyeball: tuple[np.ndarray, float], face: FaceModel, uid: str) -> None:
+    """Append eye `side`: white, clipped iris + pupil + highlight, outline, upper lid."""
+    p, d = face.palette, face.fapu.d
+    clip_id = f"cf-eye-{side}-{uid}"
+    clip = _el(defs, "clipPath", {"id": clip_id})
+    _el(clip, "path", {"d": shapes[f"eye_{side}"]})
+    eye = _el(group, "g", {"class": f"eye-{side}"})
+    _el(eye, "path", {"d": shapes[f"eye_{side}"], "fill": p.eye_white})
+    ball = _el(eye, "g", {"clip-path": f"url(#{clip_id})"})
+    (x, y), r = eyeball
+    cx, cy = number_text(x), number_text(y)
+    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
+    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": p.pupil})
+    _el(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
+                         "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": "0.9"})
+    line = {"fill": "none", "stroke": p.outline, "stroke-linecap": "round", "stroke-linejoin": "round"}
+    _el(eye, "path", {"d": shapes[f"eye_{side}"], **line, "stroke-width": number_text(OUTLINE * d * 0.8)})
+    _el(eye, "path", {"d": shapes[f"lid_{side}"], **line, "stroke-width": number_text(LID * d)})
+
+
+def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], face: FaceModel, uid: str) -> None:
+    """Append the mouth: lips, the opening with the upper teeth and the tongue clipped to it,
+    the line where the lips meet."""
+    p, d = face.palette, face.fapu.d
+    clip_id = f"cf-mouth-{uid}"
+    clip = _el(defs, "clipPath", {"id": clip_id})
+    _el(clip, "path", {"d": shapes["mouth_inner"]})
+    mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
+    _el(mouth, "path", {"d": shapes["mouth"], "fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4),
+                        "stroke-width": number_text(0.012 * d)})
+    _el(mouth, "path", {"d": shapes["mouth_inner"], "fill": p.mouth})
+    inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})", "fill": "none"})
+    _el(inside, "path", {"d": shapes["lower_inner"], "stroke": _mix(p.lip, p.mouth, 0.3),
+                         "stroke-width": number_text(2 * TONGUE * d)})
+    _el(inside, "path", {"d": shapes["lips_line"], "stroke": "#ffffff", "stroke-width": number_text(2 * TEETH * d)})
+    _el(mouth, "path", {"d": shapes["lips_line"], "fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25),
+                        "stroke-width": number_text(FEATURE * d * 0.8)})
+
+
+def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
+    """`face` in `state` as a whole SVG document root, canvas-sized, with the layers
+    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order.
+
+    `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
+    """
+    width, height = float(face.width), float(face.height)
+    root = etree.Element(f"{{{SVG}}}svg", {"width": f"{width:g}", "height": f"{height:g}",
+                                            "viewBox": f"0 0 {width:g} {height:g}"}, nsmap=NSMAP)
+    defs = _el(root, "defs", {})
+    defs.extend(face_defs(face))
+    contour = np.array([face.point(name) for arc in FACE_CONTOUR for name in arc])
+    chin = face.point("2.1")
+    figure = Figure(box=(0.0, 0.0, width, height), chin_x=float(chin[0]), chin_y=float(chin[1]),
+                    face_width=float(np.ptp(contour[:, 0])), skin=face.palette.skin)
+    root.append(background_layer(background, figure, defs))
+    group = face_group(face, pose_face(lift(face), state), "0")
+    hair = _el(root, "g", {"id": "hair"})
+    hair.extend(group.findall(f"{{{SVG}}}path[@class='hair']"))
+    dressed = clothes_layer(clothes, figure, defs)
+    root.append(dressed if dressed is not None else etree.Element(f"{{{SVG}}}g", {"id": "clothes"}))
+    group.set("id", "face")
+    root.append(group)
+    return root
+
+
+def svg_bytes(root: etree._Element) -> bytes:
+    """The document `root` as UTF-8 SVG bytes with an XML declaration."""
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+
+
+def svg_to_png(data: bytes) -> bytes:
+    """Rasterise SVG bytes at their own size with resvg; returns PNG bytes."""
+    return bytes(resvg_py.svg_to_bytes(svg_string=data.decode("utf-8")))
+
+
+def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
+    """(x, y, width, height) around the hair and the head of `face`, with room for a head
+    turned, tilted or rolled by 15 degrees."""
+    points = np.concatenate([face.points, face.hair])
+    low, high = points.min(axis=0), points.max(axis=0)
+    margin = 0.3 * face.fapu.d
+    return low[0] - margin, low[1] - margin, high[0] - low[0] + 2 * margin, high[1] - low[1] + 2 * margin
+
+
+def sheet_svg(face: FaceModel, cells: list[tuple[str, FaceState]], columns: int, cell_width: float) -> etree._Element:
+    """A contact sheet: each (label, state) of `cells` drawn as a head (hair and face layers)
+    in a grid of `columns`, `cell_width` pixels wide, with its label underneath.
+    Returns the SVG root."""
+    x0, y0, w, h = _head_box(face)
+    scale = cell_width / w
+    cell_height = h * scale
+    label = max(11.0, cell_width * 0.08)
+    pitch_x, pitch_y = cell_width + 8, cell_height + label * 1.6 + 8
+    rows = -(-len(cells) // columns)
+    width, height = columns * pitch_x + 8, rows * pitch_y + 8
+    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(width), "height": number_text(height),
+                                            "viewBox": f"0 0 {number_text(width)} {number_text(height)}"}, nsmap=NSMAP)
+    _el(root, "defs", {}).extend(face_defs(face))
+    _el(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
+    lifted = lift(face)
+    for i, (text, state) in enumerate(cells):
+        left, top = 8 + (i % columns) * pitch_x, 8 + (i // columns) * pitch_y
+        _el(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
+                           "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
+                           "fill": "#f1ede6"})
+        head = face_group(face, pose_face(lifted, state), f"s{i}")
+        head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
+                              f"scale({scale:.5g})")
+        root.append(head)
+        caption = _el(root, "text", {"x": number_text(left + cell_width / 2),
+                                     "y": number_text(top + cell_height + label * 1.25),
+                                     "font-family": "DejaVu Sans, sans-serif", "font-size": number_text(label),
+                                     "text-anchor": "middle", "fill": "#333333"})
+        caption.text = text
+    return root
+
+
+def diagram_svg(face: FaceModel, scale: float = 2.5) -> etree._Element:
+    """The labelled point diagram of `face` (docs/face-model.md): the frontal drawing faded,
+    every model point (black), additional point A..S (red, thesis 002 Alg. 2.1) and hair
+    point (blue, numbered from 0) with its name; points at the same place share a label.
+    The drawing is `scale` times the face canvas. Returns the SVG root."""
+    from cartoonface.face.lift import LIFTED_NAMES
+    from cartoonface.face.model import POINT_NAMES
+
+    width, height = face.width * scale, face.height * scale
+    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(width), "height": number_text(height),
+                                            "viewBox": f"0 0 {number_text(face.width)} {number_text(face.height)}"},
+                         nsmap=NSMAP)
+    _el(root, "defs", {}).extend(face_defs(face))
+    _el(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
+    posed = pose_face(lift(face), FaceState())
+    drawing = face_group(face, posed, "d")
+    drawing.set("opacity", "0.4")
+    root.append(drawing)
+    size = 0.055 * face.fapu.d
+    centre = posed.xy.mean(axis=0)
+    groups: dict[tuple[float, float], list[str]] = {}
+    colour: dict[tuple[float, float], str] = {}
+    named = [(n, xy, "#000000" if n in POINT_NAMES else "#c62828") for n, xy in zip(LIFTED_NAMES, posed.xy)]
+    named += [(str(i), xy, "#1565c0") for i, xy in enumerate(posed.hair)]
+    for name, xy, ink in named:
+        key = (round(float(xy[0]), 1), round(float(xy[1]), 1))
+        groups.setdefault(key, []).append(name)
+        colour.setdefault(key, ink)
+    marks = _el(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(size * 1.9)})
+    for (x, y), names in groups.items():
+        _el(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(size * 0.55),
+                              "fill": colour[(x, y)]})
+        away = np.array([x, y]) - centre
+        away = away / max(float(np.hypot(*away)), 1e-9)
+        text = _el(marks, "text", {"x": number_text(x + away[0] * size * 1.6),
+                                   "y": number_text(y + away[1] * size * 1.6 + size * 0.6),
+                                   "text-anchor": "start" if away[0] >= 0 else "end", "fill": colour[(x, y)]})
+        text.text = "/".join(names)
+    return root
