@@ -8,6 +8,7 @@ from scipy import stats
 
 from cartoonface.animate import behaviour
 from cartoonface.animate.behaviour import Action, schedule, speech_pauses
+from cartoonface.speech.alignment import Alignment, Sentence
 
 DURATION = 600.0
 
@@ -158,15 +159,9 @@ def test_short_audio_gets_a_valid_schedule():
 
 
 def test_speech_pauses_from_sentences():
-    class Sentence:
-        def __init__(self, start, end):
-            self.start, self.end = start, end
-
-    class Alignment:
-        sentences = (Sentence(0.5, 2.0), Sentence(2.6, 4.0), Sentence(4.0, 5.0))
-        duration = 6.0
-
-    assert speech_pauses(Alignment()) == ((2.0, 2.6), (5.0, 6.0))
+    sentences = tuple(Sentence("s", start, end, ()) for start, end in ((0.5, 2.0), (2.6, 4.0), (4.0, 5.0)))
+    assert speech_pauses(Alignment(sentences, 6.0, ())) == ((2.0, 2.6), (5.0, 6.0))
+    assert speech_pauses(Alignment(sentences, 5.0, ())) == ((2.0, 2.6),)
 
 
 @pytest.mark.parametrize("kind", ["tilt", "turn"])
