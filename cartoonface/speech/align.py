@@ -214,12 +214,7 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
         # pause: best start s <= k - gap of  after_syllable[i, s] + edges[0, s] - cum[s]
         base = after_syllable[i] + edges[0] - cum
         best = np.maximum.accumulate(base)
-        arg = np.zeros(positions, dtype=int)
-        running, where = _NEG, 0
-        for s in range(positions):
-            if base[s] > running:
-                running, where = base[s], s
-            arg[s] = where
+        arg = np.maximum.accumulate(np.where(base >= best, k, 0))
         gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
         shifted = np.full(positions, _NEG)
         shifted[gap:] = best[:-gap]
