@@ -27,9 +27,8 @@ EASINGS = {
     "smoothstep": lambda u: u * u * (3.0 - 2.0 * u),
     "cosine": lambda u: 0.5 - 0.5 * np.cos(np.pi * u),
 }
-# A nod bends the head down. Pose.tilt is the rotation about X (ARCHITECTURE.md);
-# with the thesis's rotation (002, 2.4.3.1: y' = y cos a - z sin a, z towards the
-# viewer) a positive angle moves the nose down, so a nod of depth d is tilt +d.
+# A nod bends the head down: Pose.tilt is the rotation about X and positive
+# means the face looks down (face/state.py), so a nod of depth d is tilt +d.
 NOD_SIGN = 1.0
 SMILE = 0.0  # the announcer keeps a neutral mouth corner; speech drives the lips
 
