@@ -136,6 +136,7 @@ def analyse(
     parsed = parse_transcript(transcript_text, source)
     spoken = [sentence for sentence in parsed if sentence.syllables]
     for sentence in parsed:
+        notes += sentence.notes
         if not sentence.syllables:
             notes.append(f"sentence {_quote(sentence.text)} has no syllables to speak: left out")
     if not spoken:

@@ -164,20 +164,27 @@ def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
 def learn_pause(gaps: np.ndarray) -> float:
     """The shortest sentence pause (seconds) learned from the pause lengths `gaps` (seconds, any order).
 
-    Pauses between syllables and words are short, pauses between sentences
-    long; the split is put at the largest ratio between consecutive sorted
-    pause lengths (geometric middle), kept within PAUSE_MIN..PAUSE_MAX, so a
-    pause of PAUSE_MAX or more always ends a speaking part. Without a clear
-    split (ratio below CLUSTER_RATIO, or fewer than two pauses) PAUSE_MAX.
+    Pauses inside sentences (between words, at commas) are short, pauses
+    between sentences long: the log pause lengths are split into two classes
+    by Otsu's rule (largest between-class variance) and the threshold is put
+    midway (in log) between the classes, kept within PAUSE_MIN..PAUSE_MAX, so
+    a pause of PAUSE_MAX or more always ends a speaking part. With fewer than
+    two pauses, or classes whose geometric means differ by less than
+    CLUSTER_RATIO, PAUSE_MAX.
     """
-    values = np.sort(gaps[gaps > 0])
+    values = np.log(np.sort(gaps[gaps > 0]))
     if len(values) < 2:
         return PAUSE_MAX
-    ratios = values[1:] / values[:-1]
-    best = int(np.argmax(ratios))
-    if ratios[best] < CLUSTER_RATIO:
+    count = len(values)
+    left = np.arange(1, count)
+    left_mean = np.cumsum(values)[:-1] / left
+    right_mean = (values.sum() - np.cumsum(values)[:-1]) / (count - left)
+    spread = left * (count - left) * (right_mean - left_mean) ** 2
+    best = int(np.argmax(spread))
+    if right_mean[best] - left_mean[best] < np.log(CLUSTER_RATIO):
         return PAUSE_MAX
-    return float(np.clip(np.sqrt(values[best] * values[best + 1]), PAUSE_MIN, PAUSE_MAX))
+    middle = np.exp((values[best] + values[best + 1]) / 2)
+    return float(np.clip(middle, PAUSE_MIN, PAUSE_MAX))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
