@@ -55,11 +55,10 @@ POINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(POINT_NAMES)}
 HAIR_POINTS = 23
 MIN_HAIR_POINTS = 3
 
-# Points bounding the face (Alg. 2.2 step 3): the "face box" for validation.
-CONTOUR_NAMES = ("11.2", "11.2a", "11.1", "11.3a", "11.3", "10.9", "2.13", "2.1", "2.14", "10.10")
-# A point may lie at most this many face-box sizes outside the face box (long
-# hair, ears); anything further is a typo or a wrong coordinate system.
-FACE_BOX_MARGIN = 0.75
+# Half-size of the face box in median deviations of the model points from
+# their median (about 2.4 d across and 3.6 d down for the samples): room for
+# long hair and ears; a point beyond it is a typo or a wrong coordinate system.
+FACE_BOX_SPREADS = 8.0
 MAX_CANVAS = 10000.0
 
 # FAPUs the file must give (not computable from the points).
@@ -256,6 +255,7 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
     for key in ("r1", "r2"):
         if values[key] <= 0:
             raise FaceModelError(f"{source}: fapu.{key} is {values[key]:g}; an iris radius must be > 0")
+    _check_box(points, hair, source)
     for key, value in computed_fapu(points).items():
         if value < 0 or (value == 0 and key not in _MAY_BE_ZERO):
             raise FaceModelError(
@@ -269,7 +269,6 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
         if not isinstance(value, str) or not _COLOUR.match(value):
             raise FaceModelError(f"{source}: palette.{key} is {value!r}; expected a colour like '#a0522d'")
 
-    _check_box(points, hair, source)
     return FaceModel(
         name=name.strip(),
         points=_frozen(points),
@@ -282,13 +281,15 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
 
 
 def _check_box(points: np.ndarray, hair: np.ndarray, source: str) -> None:
-    """Every point lies within the face box grown by FACE_BOX_MARGIN of its size."""
-    contour = points[[POINT_INDEX[n] for n in CONTOUR_NAMES]]
-    low, high = contour.min(axis=0), contour.max(axis=0)
-    size = high - low
-    if np.any(size <= 0):
-        raise FaceModelError(f"{source}: the face contour points {', '.join(CONTOUR_NAMES)} enclose no area")
-    low, high = low - FACE_BOX_MARGIN * size, high + FACE_BOX_MARGIN * size
+    """Every point and hair point lies in the face box.
+
+    The face box is centred on the per-axis median of the model points and
+    reaches FACE_BOX_SPREADS median deviations each way: robust, so one wild
+    point cannot stretch the box that is meant to catch it.
+    """
+    centre = np.median(points, axis=0)
+    spread = np.maximum(np.median(np.abs(points - centre), axis=0), 1.0)
+    low, high = centre - FACE_BOX_SPREADS * spread, centre + FACE_BOX_SPREADS * spread
     box = f"[{low[0]:.0f}..{high[0]:.0f}] x [{low[1]:.0f}..{high[1]:.0f}]"
     for label, array in (("points", points), ("hair", hair)):
         outside = np.nonzero(np.any((array < low) | (array > high), axis=1))[0]

@@ -26,14 +26,14 @@ from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
 EYEBALL_RADIUS = 0.3
 FOCUS_DEPTH = 15.0
 # Thesis 002, Alg. 2.3 steps 1-2: at turn +-15 degrees the outermost hair point
-# on the far side, at or above EyeMid, moves 1.0 d towards the viewer; the
-# shift is proportional to |turn| and to the point's x over the largest hair x
-# on that side. 1.0 d brings the hair plane (-0.58 d) to the depth of the
-# temples 11.2 / 11.3 (0.42 d), so the far hair edge turns with the head
-# instead of sliding behind the face. Below EyeMid the shift fades out over
-# HAIR_FADE d (our addition: the text stops it at EyeMid, which would kink
-# long hair at eye level).
-HAIR_SHIFT = 1.0
+# on the far side, at or above EyeMid, moves HAIR_SHIFT d towards the viewer;
+# the shift is proportional to |turn| and to the point's x over the largest
+# hair x on that side. 1.43 d brings the hair plane (-0.58 d) to the depth of
+# N / Q (0.85 d), the points that form the far temple once the contour is
+# replaced (steps 5-6), so the far hair edge stays outside the face instead of
+# sliding behind it. Below EyeMid the shift fades out over HAIR_FADE d (our
+# addition: the text stops it at EyeMid, which would kink long hair there).
+HAIR_SHIFT = 1.43
 HAIR_FADE = 1.0
 # Thesis 002, Alg. 2.3 steps 5-6: beyond +-10 degrees the far contour points
 # are replaced. To avoid a jump while a head turns through 10 degrees, the

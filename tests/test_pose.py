@@ -1,0 +1,218 @@
+"""Turned faces (thesis 002, 2.4.3, Alg. 2.3): frontal identity, mirror symmetry,
+rigid rotation, sign conventions, hair shift, contour swap, nose side, gaze."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from cartoonface.errors import OptionError
+from cartoonface.face.lift import LIFTED_INDEX, LIFTED_NAMES, lift
+from cartoonface.face.model import POINT_NAMES, face_from_dict, face_to_dict, load_face
+from cartoonface.face.pose import pose_face, rotate, rotation_matrix
+from cartoonface.face.state import FaceState, Pose
+
+# Left-right partner of every lifted point (docs/face-model.md); unlisted points lie on the midline.
+PAIRS = [
+    ("2.13", "2.14"), ("3.1", "3.2"), ("3.3", "3.4"), ("3.5", "3.6"), ("3.7", "3.12"), ("3.8", "3.11"),
+    ("4.1", "4.2"), ("4.3", "4.4"), ("4.3a", "4.4a"), ("4.5", "4.6"), ("8.3", "8.4"), ("8.9", "8.10"),
+    ("9.1", "9.2"), ("9.4", "9.5"), ("9.6", "9.7"), ("9.13", "9.14"), ("10.1", "10.2"), ("10.7", "10.8"),
+    ("10.9", "10.10"), ("11.2", "11.3"), ("11.2a", "11.3a"),
+    ("A", "B"), ("D", "E"), ("F", "I"), ("G", "H"), ("J", "K"), ("L", "M"), ("N", "Q"), ("R", "S"),
+]
+PARTNER = {n: n for n in LIFTED_NAMES} | {a: b for a, b in PAIRS} | {b: a for a, b in PAIRS}
+SWAP = np.array([LIFTED_INDEX[PARTNER[n]] for n in LIFTED_NAMES])
+
+
+@pytest.fixture(params=("female", "male"), scope="module")
+def face(request):
+    from tests.conftest import ROOT
+
+    return load_face(ROOT / "samples" / "faces" / f"{request.param}.json")
+
+
+def mirrored(face, skew=0.0):
+    """The face reflected left-right about x = width / 2, names swapped; `skew`
+    first moves some image-left points so the face is not symmetric."""
+    obj = face_to_dict(face)
+    points = {n: list(p) for n, p in obj["points"].items()}
+    if skew:
+        for name in ("3.12", "4.6", "8.4", "11.2a", "10.10"):
+            points[name] = [points[name][0] - skew, points[name][1] + skew / 2]
+        obj["points"] = points
+        face = face_from_dict(obj, "skewed")
+        obj = face_to_dict(face)
+        points = obj["points"]
+    w = obj["canvas"][0]
+    flipped = dict(obj)
+    flipped["points"] = {PARTNER[n]: [w - x, y] for n, (x, y) in points.items()}
+    flipped["hair"] = [[w - x, y] for x, y in obj["hair"]]
+    flipped["fapu"] = dict(obj["fapu"], r1=obj["fapu"]["r2"], r2=obj["fapu"]["r1"])
+    return face, face_from_dict(flipped, "mirrored")
+
+
+def test_neutral_frontal_pose_reproduces_the_model(face):
+    posed = pose_face(lift(face), FaceState())
+    assert np.allclose(posed.xy[: len(POINT_NAMES)], face.points)
+    assert np.allclose(posed.hair, face.hair)
+    assert np.allclose(posed.pupils, [face.point("3.6"), face.point("3.5")])
+    assert np.allclose(posed.iris_r, [face.fapu.r1, face.fapu.r2])
+    assert posed.p("9.15") == pytest.approx(face.point("9.15"))
+
+
+@pytest.mark.parametrize(("tilt", "turn", "roll"), [(0, 6, 0), (0, 15, 0), (0, 11, 0), (7, 13, -9), (-15, 9.5, 15)])
+def test_mirrored_face_at_plus_turn_mirrors_face_at_minus_turn(face, tilt, turn, roll):
+    original, mirror = mirrored(face, skew=4.0)
+    state = FaceState(blink=0.3, smile=0.6, brow=0.4, mouth=(("a", 0.7), ("u", 0.3)))
+    a = pose_face(lift(original), FaceState(**{**state.__dict__, "pose": Pose(tilt, -turn, -roll)}))
+    b = pose_face(lift(mirror), FaceState(**{**state.__dict__, "pose": Pose(tilt, turn, roll)}))
+    w = face.width
+    assert np.allclose(w - b.xy[SWAP, 0], a.xy[:, 0], atol=1e-6)
+    assert np.allclose(b.xy[SWAP, 1], a.xy[:, 1], atol=1e-6)
+    assert np.allclose(w - b.hair[:, 0], a.hair[:, 0], atol=1e-6)
+    assert np.allclose(b.hair[:, 1], a.hair[:, 1], atol=1e-6)
+    assert np.allclose(w - b.pupils[::-1, 0], a.pupils[:, 0], atol=1e-6)
+    assert a.nose_side == -b.nose_side
+
+
+def test_rotation_keeps_3d_distances(face):
+    local = np.vstack([lift(face).local, lift(face).hair])
+    before = np.linalg.norm(local[:, None] - local[None], axis=2)
+    for angles in itertools.product((-15, -4, 0, 9, 15), repeat=3):
+        pose = Pose(*angles)
+        after = rotate(local, pose)
+        assert np.allclose(np.linalg.norm(after[:, None] - after[None], axis=2), before)
+        m = rotation_matrix(pose)
+        assert np.allclose(m @ m.T, np.eye(3)) and np.linalg.det(m) == pytest.approx(1.0)
+
+
+def test_rotation_order_is_turn_then_tilt_then_roll():
+    pose = Pose(tilt=12, turn=-9, roll=5)
+    p = np.array([[10.0, 20.0, 30.0]])
+    one_at_a_time = rotate(rotate(rotate(p, Pose(turn=-9)), Pose(tilt=12)), Pose(roll=5))
+    assert np.allclose(rotate(p, pose), one_at_a_time)
+    assert not np.allclose(rotate(rotate(rotate(p, Pose(roll=5)), Pose(tilt=12)), Pose(turn=-9)), one_at_a_time)
+
+
+def test_sign_conventions(face):
+    lifted = lift(face)
+    front = pose_face(lifted, FaceState())
+    nose = LIFTED_INDEX["9.15"]
+    right = pose_face(lifted, FaceState(pose=Pose(turn=10)))
+    assert right.xy[nose, 0] > front.xy[nose, 0]  # positive turn: nose to the image right
+    down = pose_face(lifted, FaceState(pose=Pose(tilt=10)))
+    assert down.xy[nose, 1] > front.xy[nose, 1]  # positive tilt: the face looks down
+    rolled = pose_face(lifted, FaceState(pose=Pose(roll=10)))
+    top = LIFTED_INDEX["11.1"]
+    assert rolled.xy[top, 0] < front.xy[top, 0]  # positive roll: counter-clockwise on screen
+
+
+def test_contour_points_are_replaced_beyond_10_degrees(face):
+    lifted = lift(face)
+    for turn, hidden, by in ((15, ("11.3", "10.9", "2.13"), ("Q", "M", "K")), (-15, ("11.2", "10.10", "2.14"), ("N", "L", "J"))):
+        posed = pose_face(lifted, FaceState(pose=Pose(turn=turn)))
+        for a, b in zip(hidden, by):
+            assert posed.p(a) == pytest.approx(posed.p(b))
+        other = ("11.2", "10.10", "2.14") if turn > 0 else ("11.3", "10.9", "2.13")
+        for a, b in zip(other, ("N", "L", "J") if turn > 0 else ("Q", "M", "K")):
+            assert posed.p(a) != pytest.approx(posed.p(b))
+    small = pose_face(lifted, FaceState(pose=Pose(turn=5)))
+    for a, b in zip(("11.3", "10.9", "2.13"), ("Q", "M", "K")):
+        assert small.p(a) != pytest.approx(small.p(b))
+
+
+def test_contour_swap_moves_continuously(face):
+    lifted = lift(face)
+    turns = np.linspace(0, 15, 301)
+    xs = np.array([pose_face(lifted, FaceState(pose=Pose(turn=t))).p("10.9") for t in turns])
+    steps = np.linalg.norm(np.diff(xs, axis=0), axis=1)
+    assert steps.max() < 0.02 * face.fapu.d
+
+
+def test_nose_is_drawn_from_the_turned_side(face):
+    lifted = lift(face)
+    assert pose_face(lifted, FaceState(pose=Pose(turn=3))).nose_side == 1
+    assert pose_face(lifted, FaceState(pose=Pose(turn=-3))).nose_side == -1
+    assert pose_face(lifted, FaceState()).nose_side == -1
+
+
+def test_far_side_hair_turns_with_the_head(face):
+    lifted = lift(face)
+    pose = Pose(turn=15)
+    posed = pose_face(lifted, FaceState(pose=pose))
+    plain = rotate(lifted.hair, pose)[:, 0] + lifted.origin[0]  # rotation without the depth shift
+    right = lifted.hair[:, 0] > 0
+    above = lifted.hair[:, 1] >= lifted.local[LIFTED_INDEX["3.5"], 1]
+    moved = posed.hair[:, 0] - plain
+    assert np.all(moved[right & above] > 0)
+    assert np.allclose(moved[~right], 0)
+    # the outermost far-side hair stays outside the temple on the contour
+    outer = np.argmax(np.where(above, lifted.hair[:, 0], -np.inf))
+    assert posed.hair[outer, 0] > posed.p("11.3")[0]
+
+
+def test_eyes_keep_gazing_at_the_focus(face):
+    lifted = lift(face)
+    front = pose_face(lifted, FaceState())
+
+    def offset(posed):
+        corners = (posed.p("3.12") + posed.p("3.8")) / 2, (posed.p("3.7") + posed.p("3.11")) / 2
+        return posed.pupils[:, 0] - np.array([corners[0][0], corners[1][0]])
+
+    base = offset(front)
+    turned = offset(pose_face(lifted, FaceState(pose=Pose(turn=15))))
+    assert np.all(turned < base)  # head turns right, the eyes turn back left in their sockets
+    turned = offset(pose_face(lifted, FaceState(pose=Pose(turn=-15))))
+    assert np.all(turned > base)
+
+
+def _inside(point, polygon):
+    x, y = point
+    inside = False
+    for (x1, y1), (x2, y2) in zip(polygon, np.roll(polygon, -1, axis=0)):
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            inside = not inside
+    return inside
+
+
+def _distance_to_outline(point, polygon):
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    t = np.clip(np.einsum("ij,ij->i", point - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0, 1)
+    return float(np.min(np.linalg.norm(a + t[:, None] * (b - a) - point, axis=1)))
+
+
+@pytest.mark.parametrize("angles", list(itertools.product((-15, 0, 15), repeat=3)))
+def test_irises_show_in_the_open_eyes(face, angles):
+    """Turned eyes roll in their sockets (a face tilted down looks up), so a pupil may
+    pass under a lid, but some of each iris always shows and it never leaves the eye's width."""
+    posed = pose_face(lift(face), FaceState(pose=Pose(*angles)))
+    eyes = (("3.12", "3.2", "3.8", "3.4"), ("3.7", "3.1", "3.11", "3.3"))
+    for pupil, radius, names in zip(posed.pupils, posed.iris_r, eyes):
+        outline = np.array([posed.p(n) for n in names])
+        assert _inside(pupil, outline) or _distance_to_outline(pupil, outline) < radius
+        corners = outline[[0, 2]]
+        along = (pupil - corners[0]) @ (corners[1] - corners[0]) / np.sum((corners[1] - corners[0]) ** 2)
+        assert 0.2 < along < 0.8
+
+
+def test_frontal_pupils_are_inside_the_eyes(face):
+    posed = pose_face(lift(face), FaceState())
+    assert _inside(posed.pupils[0], np.array([posed.p(n) for n in ("3.12", "3.2", "3.8", "3.4")]))
+    assert _inside(posed.pupils[1], np.array([posed.p(n) for n in ("3.7", "3.1", "3.11", "3.3")]))
+
+
+def test_each_call_returns_fresh_arrays(face):
+    lifted = lift(face)
+    a = pose_face(lifted, FaceState(pose=Pose(turn=12)))
+    copy = a.xy.copy()
+    b = pose_face(lifted, FaceState(pose=Pose(turn=-12)))
+    b.xy[:] = 0
+    assert np.array_equal(a.xy, copy)
+
+
+@pytest.mark.parametrize(("field", "value"), [("turn", 40), ("tilt", -15.5), ("roll", float("nan")), ("turn", "left")])
+def test_out_of_range_angle_is_refused(field, value):
+    with pytest.raises(OptionError, match=field):
+        Pose(**{field: value})
