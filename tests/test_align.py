@@ -179,3 +179,16 @@ def test_espeak_reports_one_onset_per_syllable_or_nothing():
     assert speech.onsets[-1] < len(speech.samples) / speech.rate
     assert speech.samples.dtype == np.float32 and np.abs(speech.samples).max() <= 1.0
     assert synthesize([]) is None and synthesize(["ni3", " "]) is None
+
+
+def test_noise_lowers_the_confidence_but_keeps_the_count():
+    durations = [0.2, 0.3, 0.25, 0.22, 0.28]
+    clean, onsets = bursts_with_dips(durations)
+    rng = np.random.default_rng(5)
+    noisy = Audio((clean.samples + 0.03 * rng.standard_normal(clean.samples.size)).astype(np.float32), RATE, "noisy")
+    span = Span(onsets[0], onsets[0] + sum(durations))
+    syllables = ["ba1"] * len(durations)
+    sure = align_syllables(clean, span, syllables)
+    unsure = align_syllables(noisy, span, syllables)
+    check_shape(unsure, span, len(syllables))
+    assert np.mean([t.confidence for t in unsure]) < np.mean([t.confidence for t in sure]) - 0.2
