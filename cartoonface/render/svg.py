@@ -18,9 +18,12 @@ are written as hex: cairosvg paints hsl() black (shared DEPENDENCIES.md).
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 import resvg_py
 from lxml import etree
+from PIL import Image
 
 from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
@@ -223,9 +226,17 @@ def svg_bytes(root: etree._Element) -> bytes:
     return etree.tostring(root, xml_declaration=True, encoding="utf-8")
 
 
-def svg_to_png(data: bytes) -> bytes:
-    """Rasterise SVG bytes at their own size with resvg; returns PNG bytes."""
-    return bytes(resvg_py.svg_to_bytes(svg_string=data.decode("utf-8")))
+def svg_to_png(data: bytes, palette: bool = False) -> bytes:
+    """Rasterise SVG bytes at their own size with resvg; returns PNG bytes (RGBA). With
+    `palette`, the picture (drawn on an opaque background) is stored with a 256-colour
+    palette instead: a third of the size, for large sheets."""
+    png = bytes(resvg_py.svg_to_bytes(svg_string=data.decode("utf-8")))
+    if not palette:
+        return png
+    with Image.open(io.BytesIO(png)) as image:
+        out = io.BytesIO()
+        image.convert("RGB").quantize(256).save(out, "PNG", optimize=True)
+    return out.getvalue()
 
 
 def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
@@ -233,40 +244,51 @@ def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
     turned, tilted or rolled by 15 degrees."""
     points = np.concatenate([face.points, face.hair])
     low, high = points.min(axis=0), points.max(axis=0)
-    margin = 0.3 * face.fapu.d
+    margin = 0.45 * face.fapu.d
     return low[0] - margin, low[1] - margin, high[0] - low[0] + 2 * margin, high[1] - low[1] + 2 * margin
 
 
-def sheet_svg(face: FaceModel, cells: list[tuple[str, FaceState]], columns: int, cell_width: float) -> etree._Element:
-    """A contact sheet: each (label, state) of `cells` drawn as a head (hair and face layers)
-    in a grid of `columns`, `cell_width` pixels wide, with its label underneath.
-    Returns the SVG root."""
+def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns: list[str],
+              cell_width: float) -> etree._Element:
+    """A contact sheet: a grid of heads (hair and face layers), one row per (label, states)
+    of `rows` (a label may hold several lines, split at "\n"), each column headed by its label
+    in `columns`, cells `cell_width` pixels wide. Returns the SVG root."""
     x0, y0, w, h = _head_box(face)
     scale = cell_width / w
     cell_height = h * scale
-    label = max(11.0, cell_width * 0.08)
-    pitch_x, pitch_y = cell_width + 8, cell_height + label * 1.6 + 8
-    rows = -(-len(cells) // columns)
-    width, height = columns * pitch_x + 8, rows * pitch_y + 8
+    font = max(11.0, cell_width * 0.12)
+    gap = cell_width * 0.05
+    longest = max(len(line) for label, _ in rows for line in label.split("\n"))
+    left_margin, top_margin = font * (0.62 * longest + 1), font * 2
+    pitch_x, pitch_y = cell_width + gap, cell_height + gap
+    width = left_margin + len(columns) * pitch_x + gap
+    height = top_margin + len(rows) * pitch_y + gap
     root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(width), "height": number_text(height),
                                             "viewBox": f"0 0 {number_text(width)} {number_text(height)}"}, nsmap=NSMAP)
     _el(root, "defs", {}).extend(face_defs(face))
     _el(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
+    text_style = {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font), "fill": "#333333"}
+    for j, label in enumerate(columns):
+        _el(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
+                           "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
     lifted = lift(face)
-    for i, (text, state) in enumerate(cells):
-        left, top = 8 + (i % columns) * pitch_x, 8 + (i // columns) * pitch_y
-        _el(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
-                           "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
-                           "fill": "#f1ede6"})
-        head = face_group(face, pose_face(lifted, state), f"s{i}")
-        head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
-                              f"scale({scale:.5g})")
-        root.append(head)
-        caption = _el(root, "text", {"x": number_text(left + cell_width / 2),
-                                     "y": number_text(top + cell_height + label * 1.25),
-                                     "font-family": "DejaVu Sans, sans-serif", "font-size": number_text(label),
-                                     "text-anchor": "middle", "fill": "#333333"})
-        caption.text = text
+    for i, (label, states) in enumerate(rows):
+        top = top_margin + i * pitch_y
+        lines = label.split("\n")
+        caption = _el(root, "text", {"text-anchor": "end", **text_style})
+        for k, line in enumerate(lines):
+            _el(caption, "tspan", {"x": number_text(left_margin - gap * 2),
+                                   "y": number_text(top + cell_height / 2 + font * (1.25 * k - 0.6 * len(lines) + 1))
+                                   }).text = line
+        for j, state in enumerate(states):
+            left = left_margin + j * pitch_x
+            _el(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
+                               "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
+                               "fill": "#f1ede6"})
+            head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
+            head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
+                                  f"scale({scale:.5g})")
+            root.append(head)
     return root
 
 
