@@ -216,3 +216,16 @@ def test_each_call_returns_fresh_arrays(face):
 def test_out_of_range_angle_is_refused(field, value):
     with pytest.raises(OptionError, match=field):
         Pose(**{field: value})
+
+
+def test_rotation_follows_the_thesis_equations():
+    """Thesis 2.4.3.1 step by step: about Y, then X, then Z (x, y as printed)."""
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a, b, g = rng.uniform(-15, 15, 3)
+        x, y, z = rng.uniform(-100, 100, 3)
+        ra, rb, rg = np.radians([a, b, g])
+        x1, y1, z1 = x * np.cos(rb) + z * np.sin(rb), y, -x * np.sin(rb) + z * np.cos(rb)
+        x2, y2 = x1, y1 * np.cos(ra) - z1 * np.sin(ra)
+        x3, y3 = x2 * np.cos(rg) - y2 * np.sin(rg), x2 * np.sin(rg) + y2 * np.cos(rg)
+        assert rotate(np.array([[x, y, z]]), Pose(a, b, g))[0, :2] == pytest.approx([x3, y3])

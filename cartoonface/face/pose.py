@@ -83,10 +83,12 @@ def rotation_matrix(pose: Pose) -> np.ndarray:
     """
     a, b, g = (math.radians(v) for v in (pose.tilt, pose.turn, pose.roll))
     ca, sa, cb, sb, cg, sg = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g)
-    ry = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
-    rz = np.array([[cg, -sg, 0.0], [sg, cg, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ rx @ ry
+    # Rz(g) @ Rx(a) @ Ry(b), multiplied out
+    return np.array([
+        [cg * cb - sg * sa * sb, -sg * ca, cg * sb + sg * sa * cb],
+        [sg * cb + cg * sa * sb, cg * ca, sg * sb - cg * sa * cb],
+        [-ca * sb, sa, ca * cb],
+    ])
 
 
 def rotate(points: np.ndarray, pose: Pose) -> np.ndarray:
