@@ -11,8 +11,9 @@ import os
 import threading
 from collections.abc import Mapping
 from pathlib import Path
+from typing import IO
 
-from flask import Flask, Response
+from flask import Flask, Request, Response
 
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
@@ -23,6 +24,22 @@ from cartoonface.web.store import apply_retention, fail_interrupted
 from cartoonface.web.views import JobIdConverter, WebState, bp
 
 ENV_PREFIX = "CARTOONFACE"
+
+
+class UploadRequest(Request):
+    """Flask's request, also closing the temporary files of uploads whose form could not be
+    parsed (a truncated multipart body): Werkzeug drops those without closing them."""
+
+    def _get_file_stream(self, total_content_length: int | None, content_type: str | None,
+                         filename: str | None = None, content_length: int | None = None) -> IO[bytes]:
+        stream = super()._get_file_stream(total_content_length, content_type, filename, content_length)
+        self.__dict__.setdefault("_upload_streams", []).append(stream)
+        return stream
+
+    def close(self) -> None:
+        super().close()
+        for stream in self.__dict__.get("_upload_streams", ()):
+            stream.close()
 
 
 def create_app(config: Mapping[str, object] | None = None) -> Flask:
@@ -36,6 +53,7 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     instance = config.get("INSTANCE_PATH") or os.environ.get(f"{ENV_PREFIX}_INSTANCE_PATH")
     app = Flask(__name__, instance_path=str(Path(str(instance)).resolve()) if instance else None,
                 instance_relative_config=True, template_folder=str(PACKAGE / "templates"), static_folder=None)
+    app.request_class = UploadRequest
     app.config.from_mapping(DEFAULTS)
     app.config.from_pyfile("config.py", silent=True)
     app.config.from_prefixed_env(ENV_PREFIX)

@@ -51,6 +51,21 @@ def zip_top_name(spec: dict[str, object]) -> str:
     return f"cartoonface-{str(spec['id'])[:8]}"
 
 
+def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> str:
+    """The error's message with the job's own file paths replaced by what the user called
+    them (their file names, "transcript"), so no server path is shown."""
+    message = str(error)
+    names = {
+        folder / str(spec["audio_file"]): str(spec.get("audio_label", "recording")),
+        folder / "face.json": str(spec.get("face_label", "face model")),
+        folder / "transcript.txt": "transcript",
+        folder: "job",
+    }
+    for path, label in names.items():
+        message = message.replace(str(path), label)
+    return message
+
+
 def run_job(folder: Path, parent_pid: int) -> None:
     """Generate the job stored in `folder`, writing status.json as it goes."""
     spec = read_spec(folder)
@@ -74,7 +89,8 @@ def run_job(folder: Path, parent_pid: int) -> None:
                           folder / "transcript.txt", folder / SITE, options, progress)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
     except InputError as exc:
-        write_status(folder, Status(state=FAILED, stage=last["stage"], error=str(exc), updated=time.time()))
+        write_status(folder, Status(state=FAILED, stage=last["stage"], error=user_message(exc, folder, spec),
+                                    updated=time.time()))
         return
     summary = {
         "duration": result.duration,
