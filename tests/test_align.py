@@ -110,7 +110,8 @@ def test_one_syllable_fills_its_span():
     assert (timing.start, timing.end) == (span.start, span.end)
 
 
-@pytest.mark.parametrize("case", ["too short", "pure noise", "digital silence", "outside the audio", "zero length"])
+@pytest.mark.parametrize("case", ["too short", "pure noise", "digital silence", "outside the audio", "zero length",
+                                  "reversed"])
 def test_degenerate_parts_fall_back_to_the_duration_prior_with_low_confidence(case):
     rng = np.random.default_rng(7)
     noise = Audio((0.1 * rng.standard_normal(2 * RATE)).astype(np.float32), RATE, "noise")
@@ -121,13 +122,15 @@ def test_degenerate_parts_fall_back_to_the_duration_prior_with_low_confidence(ca
         "digital silence": (silent, Span(0.2, 1.8)),
         "outside the audio": (noise, Span(5.0, 6.0)),
         "zero length": (noise, Span(1.0, 1.0)),
+        "reversed": (noise, Span(1.0, 0.5)),
     }[case]
     syllables = ["ni3", "hao3", "shi4", "jie4", "wanr2"]
     timings = align_syllables(audio, span, syllables)
     assert len(timings) == len(syllables)
     assert all(t.confidence <= LOW_CONFIDENCE for t in timings)
     starts = [t.start for t in timings]
-    assert starts == sorted(starts) and timings[0].start == span.start and timings[-1].end == span.end
+    assert starts == sorted(starts) and all(t.end >= t.start for t in timings)
+    assert timings[0].start == span.start and timings[-1].end == max(span.end, span.start)
     weights = relative_durations(syllables)
     lengths = np.array([t.end - t.start for t in timings])
     if span.end > span.start:

@@ -7,7 +7,8 @@ pauses between them (and before the first / after the last), maximising
 
     sum over syllables of  onset evidence at its start (by the class of its initial)
                          + log duration prior (by syllable type, scaled to the speaking rate)
-    + sum over pause frames of their silence evidence - a penalty per pause.
+    + sum over pauses of   their frames' silence evidence + the energy fall where the pause
+                           starts + the rise where it ends - a fixed penalty.
 
 Onset evidence: the syllable starts where the vowel of the one before it ends, i.e. where the
 100-1000 Hz band energy falls (stops, affricates, fricatives: their closure or frication
@@ -15,8 +16,9 @@ begins) or sits in a dip (nasals, laterals, glides, vowel-initial syllables). Th
 dip measures, the duration factors per syllable type and the pause penalty were tuned on
 Biaobei sentences 000001-000035 only (bench/align.py; docs/BENCHMARKS.md).
 
-Pauses: a pause inside the part (Biaobei's `sp`) or silence at its edges is modelled as a
-gap: the syllable before it ends where the silence starts, the next starts where it ends.
+Pauses: a pause inside the part (Biaobei's `sp`, at least 0.1 s: shorter silences are taken
+for stop closures) or silence at its edges (at least 0.04 s) is modelled as a gap: the
+syllable before it ends where the silence starts, the next starts where it ends.
 Otherwise one syllable ends where the next starts. Syllables are ordered, do not overlap and
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
@@ -278,10 +280,11 @@ def _onset_margins(lattice: _Lattice, evidence: np.ndarray, silence: np.ndarray,
 
 
 def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> tuple[SyllableTiming, ...]:
-    """The span cut in proportion to the duration prior, every syllable with `confidence`."""
+    """The span cut in proportion to the duration prior, every syllable with `confidence`
+    (a span ending before it starts is taken as empty)."""
     weights = relative_durations(syllables)
-    edges = span.start + (span.end - span.start) * np.concatenate([[0.0], np.cumsum(weights)]) / max(weights.sum(), 1e-9)
-    edges[-1] = span.end
+    edges = span.start + max(span.end - span.start, 0.0) * np.concatenate([[0.0], np.cumsum(weights)]) / max(weights.sum(), 1e-9)
+    edges[-1] = max(span.end, span.start)
     return tuple(SyllableTiming(float(a), float(b), confidence) for a, b in zip(edges[:-1], edges[1:]))
 
 
