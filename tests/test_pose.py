@@ -229,3 +229,11 @@ def test_rotation_follows_the_thesis_equations():
         x2, y2 = x1, y1 * np.cos(ra) - z1 * np.sin(ra)
         x3, y3 = x2 * np.cos(rg) - y2 * np.sin(rg), x2 * np.sin(rg) + y2 * np.cos(rg)
         assert rotate(np.array([[x, y, z]]), Pose(a, b, g))[0, :2] == pytest.approx([x3, y3])
+
+
+def test_numpy_numbers_are_accepted_as_plain_floats():
+    pose = Pose(np.float32(3.5), np.int64(-7), np.float64(0.25))
+    assert pose == Pose(3.5, -7.0, 0.25)
+    assert type(pose.turn) is float
+    state = FaceState(pose=pose, blink=np.float32(0.5), mouth=(("a", np.float64(1.0)),))
+    assert type(state.blink) is float and state.blink == 0.5

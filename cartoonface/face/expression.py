@@ -18,14 +18,16 @@ EXPRESSIONS: tuple[str, ...] = ("blink", "smile", "brow")
 Move = tuple[str, float, str, float, str]  # (point, dx coefficient, dx FAPU, dy coefficient, dy FAPU)
 
 # Thesis 002, 2.4.2: blinking sets 3.2, 3.4, 3.1, 3.3 from LeftEyeH / RightEyeH.
-# At blink 1 the upper lid has come down 0.8 of the eye opening and the lower
-# lid up 0.2: the lids meet (the eye outline collapses, hiding the eyeball).
+# (lid, other lid, share): at blink 1 each lid has moved this share of the way
+# to the other along the line between them (vertically: 0.8 LeftEyeH down for
+# the upper lid, 0.2 up for the lower), so the lids meet, the eye outline
+# collapses and the clipped eyeball is hidden.
 UPPER_LID_SHARE = 0.8
-BLINK: tuple[Move, ...] = (
-    ("3.2", 0.0, "d", UPPER_LID_SHARE, "left_eye_h"),
-    ("3.4", 0.0, "d", UPPER_LID_SHARE - 1.0, "left_eye_h"),
-    ("3.1", 0.0, "d", UPPER_LID_SHARE, "right_eye_h"),
-    ("3.3", 0.0, "d", UPPER_LID_SHARE - 1.0, "right_eye_h"),
+BLINK: tuple[tuple[str, str, float], ...] = (
+    ("3.2", "3.4", UPPER_LID_SHARE),
+    ("3.4", "3.2", 1.0 - UPPER_LID_SHARE),
+    ("3.1", "3.3", UPPER_LID_SHARE),
+    ("3.3", "3.1", 1.0 - UPPER_LID_SHARE),
 )
 # Thesis 002, 2.4.2: smiling moves the mouth corners 8.4, 8.3 by UpperLipH and
 # squints by moving the lower lids 3.4, 3.3 by LeftEyeH / RightEyeH.
@@ -48,7 +50,6 @@ BROW: tuple[Move, ...] = (
     ("4.6", 0.0, "d", -0.6, "eyebrow_h"),
     ("4.5", 0.0, "d", -0.6, "eyebrow_h"),
 )
-TABLES: dict[str, tuple[Move, ...]] = {"blink": BLINK, "smile": SMILE, "brow": BROW}
 
 # Upper / lower lid point indices, image-left eye then image-right eye.
 UPPER_LIDS = np.array([POINT_INDEX["3.2"], POINT_INDEX["3.1"]])
@@ -58,8 +59,10 @@ LOWER_LIDS = np.array([POINT_INDEX["3.4"], POINT_INDEX["3.3"]])
 def expression_displacements(face: FaceModel) -> np.ndarray:
     """(len(EXPRESSIONS), P, 2) image displacement of each model point at amount 1."""
     out = np.zeros((len(EXPRESSIONS), len(POINT_NAMES), 2))
-    for k, name in enumerate(EXPRESSIONS):
-        for point, dx, dx_unit, dy, dy_unit in TABLES[name]:
+    for lid, other, share in BLINK:
+        out[0, POINT_INDEX[lid]] = share * (face.point(other) - face.point(lid))
+    for k, table in ((1, SMILE), (2, BROW)):
+        for point, dx, dx_unit, dy, dy_unit in table:
             out[k, POINT_INDEX[point]] = (dx * getattr(face.fapu, dx_unit), dy * getattr(face.fapu, dy_unit))
     return out
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, replace
 
 from cartoonface.errors import OptionError
@@ -16,7 +17,8 @@ WEIGHT_TOLERANCE = 1e-6
 
 
 def _finite(value: object, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    """value as a float; OptionError unless it is a finite real number (numpy ones too)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
         raise OptionError(f"{name} is {value!r}; expected a number")
     return float(value)
 
@@ -39,6 +41,7 @@ class Pose:
             value = _finite(getattr(self, name), name)
             if abs(value) > MAX_ANGLE:
                 raise OptionError(f"{name} {value:g} degrees is out of range; expected -15 to 15")
+            object.__setattr__(self, name, value)
 
 
 @dataclass(frozen=True)
@@ -63,6 +66,7 @@ class FaceState:
             value = _finite(getattr(self, name), name)
             if not 0.0 <= value <= 1.0:
                 raise OptionError(f"{name} {value:g} is out of range; expected 0 to 1")
+            object.__setattr__(self, name, value)
         if not self.mouth:
             raise OptionError("mouth is empty; expected (symbol, weight) pairs")
         total = 0.0
