@@ -6,7 +6,7 @@ Sets, all from ../shared/bench/zh/:
   (1 sentence each), and the 6 files joined as recorded (their own leading and
   trailing silence is the pause between sentences: 6 sentences).
 * Biaobei (70 read sentences, commas inside some): the files joined as recorded
-  (70 sentences); per file, speaking parts against punctuation clauses.
+  (70 sentences, and the first 20 alone); per file, speaking parts against punctuation clauses.
 * Chao 1922 (noisy gramophone, isolated syllables): parts against the runs of
   labelled syllables between `sil` intervals of 0.3 s or more.
 
@@ -113,6 +113,7 @@ def biaobei() -> Audio:
         clauses = len([c for c in re.split(r"[,.，。!?！？;；、]", row["hanzi_meta"]) if c.strip()])
         same += len(find_speech_parts(load_audio(path))) == clauses
     print(f"Biaobei each file alone: parts = punctuation clauses in {same}/{len(rows)} files")
+    report_joined("Biaobei 000001-000020", paths[:20], counts[:20])
     return report_joined("Biaobei", paths, counts)
 
 

@@ -151,6 +151,17 @@ def test_learned_pause_separates_two_clusters():
     assert learn_pause(syllable_gaps) > syllable_gaps.max()
 
 
+def test_learned_pause_with_one_class_of_pauses():
+    # Only pauses between sentences (a steady reader): every one of them ends a part.
+    sentence_gaps = np.array([0.41, 0.44, 0.47, 0.5, 0.52, 0.55])
+    assert learn_pause(sentence_gaps) <= sentence_gaps.min()
+    # Only short pauses inside one long sentence: none does.
+    comma_gaps = np.array([0.16, 0.2, 0.22, 0.25, 0.27])
+    assert learn_pause(comma_gaps) > comma_gaps.max()
+    # Two classes of long pauses (isolated words, sentence breaks): all end a part.
+    assert learn_pause(np.array([0.5, 0.52, 0.55, 0.6, 1.0, 1.1])) <= 0.5
+
+
 def test_dips_prefer_a_real_pause():
     samples, truth = recording([6, 6], [0.22], lead=0.0, tail=0.0)
     audio = noisy(samples)

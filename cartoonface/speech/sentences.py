@@ -51,9 +51,12 @@ PITCH_RANGE_HZ = (70.0, 400.0)
 UNVOICED_EDGE = 0.2
 # A group whose loudest frame is this far below the speech level is a click or a breath, not speech.
 GROUP_BELOW_SPEECH_DB = 25.0
-# Learned sentence pause: between these bounds; the default when the pauses show no two clusters.
-PAUSE_MIN, PAUSE_MAX = 0.25, 0.5
+# Learned sentence pause: kept between these bounds (a pause of PAUSE_MAX or more always ends a part).
+PAUSE_MIN, PAUSE_MAX = 0.25, 0.6
+# Pause classes whose geometric means differ less than this are one class. A class of pauses
+# whose geometric mean is SENTENCE_PAUSE or more holds pauses between sentences.
 CLUSTER_RATIO = 1.5
+SENTENCE_PAUSE = 0.35
 # Silence kept around each speaking part, so soft onsets and releases are not cut.
 PAD = 0.05
 # Parts shorter than this are clicks, not speech (both modes).
@@ -164,27 +167,34 @@ def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
 def learn_pause(gaps: np.ndarray) -> float:
     """The shortest sentence pause (seconds) learned from the pause lengths `gaps` (seconds, any order).
 
-    Pauses inside sentences (between words, at commas) are short, pauses
-    between sentences long: the log pause lengths are split into two classes
-    by Otsu's rule (largest between-class variance) and the threshold is put
-    midway (in log) between the classes, kept within PAUSE_MIN..PAUSE_MAX, so
-    a pause of PAUSE_MAX or more always ends a speaking part. With fewer than
-    two pauses, or classes whose geometric means differ by less than
-    CLUSTER_RATIO, PAUSE_MAX.
+    The log pause lengths are split into a short and a long class by Otsu's
+    rule (largest between-class variance); classes less than CLUSTER_RATIO
+    apart are one class. When the short (or only) class is short (geometric
+    mean below SENTENCE_PAUSE) it holds pauses inside sentences: the
+    threshold lies midway (in log) between the classes, or is PAUSE_MAX
+    without a long class. Otherwise every pause is a sentence pause: the
+    threshold is 0.95 (c1 of Alg. 3.1) of the shortest. No pauses: PAUSE_MAX.
+    The result is kept within PAUSE_MIN..PAUSE_MAX.
     """
     values = np.log(np.sort(gaps[gaps > 0]))
-    if len(values) < 2:
+    if len(values) == 0:
         return PAUSE_MAX
     count = len(values)
-    left = np.arange(1, count)
-    left_mean = np.cumsum(values)[:-1] / left
-    right_mean = (values.sum() - np.cumsum(values)[:-1]) / (count - left)
-    spread = left * (count - left) * (right_mean - left_mean) ** 2
-    best = int(np.argmax(spread))
-    if right_mean[best] - left_mean[best] < np.log(CLUSTER_RATIO):
-        return PAUSE_MAX
-    middle = np.exp((values[best] + values[best + 1]) / 2)
-    return float(np.clip(middle, PAUSE_MIN, PAUSE_MAX))
+    short_count = count
+    if count > 1:
+        left = np.arange(1, count)
+        left_mean = np.cumsum(values)[:-1] / left
+        right_mean = (values.sum() - np.cumsum(values)[:-1]) / (count - left)
+        best = int(np.argmax(left * (count - left) * (right_mean - left_mean) ** 2))
+        if right_mean[best] - left_mean[best] >= np.log(CLUSTER_RATIO):
+            short_count = best + 1
+    if values[:short_count].mean() >= np.log(SENTENCE_PAUSE):
+        threshold = C1 * np.exp(values[0])
+    elif short_count < count:
+        threshold = np.exp((values[short_count - 1] + values[short_count]) / 2)
+    else:
+        threshold = PAUSE_MAX
+    return float(np.clip(threshold, PAUSE_MIN, PAUSE_MAX))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
