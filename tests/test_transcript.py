@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from pypinyin import Style, lazy_pinyin
 
 from cartoonface.errors import InputError, TranscriptError
 from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shapes_for, syllable_parts
@@ -117,9 +118,25 @@ def test_third_tone_pairs_rise(parse):
     assert pinyins(parse("水果")) == ["shui2", "guo3"]
 
 
-@pytest.mark.parametrize("text", ["我很好", "展览馆", "我也很好"])
-def test_runs_of_third_tones_keep_only_the_last(parse, text):
-    assert tones(parse(text)) == [2] * (len(text) - 1) + [3]
+@pytest.mark.parametrize("text", ["我很好", "展览馆", "我也很好", "小老板", "我想买五把好雨伞"])
+def test_runs_of_third_tones_leave_no_two_in_a_row(parse, text):
+    """Every third tone before a third tone changes; the last of a run stays third."""
+    sandhi_free = [syllable_parts(p).tone for p in
+                   lazy_pinyin(text, style=Style.TONE3, neutral_tone_with_five=True)]
+    surface = tones(parse(text))
+    assert not any(a == b == 3 for a, b in zip(surface, surface[1:]))
+    assert surface[-1] == sandhi_free[-1] == 3
+    assert all(s == b or (b, s) == (3, 2) for s, b in zip(surface, sandhi_free))
+
+
+def test_third_tones_group_from_the_right(parse):
+    assert pinyins(parse("小老板")) == ["xiao3", "lao2", "ban3"]
+    assert tones(parse("我很好")) == [3, 2, 3]
+
+
+def test_doubled_third_tone_takes_the_neutral_tone(parse):
+    assert pinyins(parse("姐姐")) == ["jie3", "jie5"]
+    assert tones(parse("奶奶好")) == [3, 5, 3]
 
 
 def test_third_tone_sandhi_stops_at_a_pause(parse):
@@ -142,7 +159,8 @@ def test_tone_changes_of_bu(parse):
     assert reading_of(parse("不对"), "不") == ["bu2"]
     assert reading_of(parse("不好"), "不") == ["bu4"]
     assert reading_of(parse("不来"), "不") == ["bu4"]
-    assert reading_of(parse("是不是"), "不") == ["bu5"]
+    assert reading_of(parse("是不是"), "不") == ["bu2"]
+    assert reading_of(parse("好不好"), "不") == ["bu4"]
 
 
 # --- numbers ---------------------------------------------------------------------------

@@ -79,6 +79,8 @@ _REAL_ER_NEXT = frozenset("子童女孙媳科歌")
 # and inside numbers 十一 一一) and before a digit.
 _YI_FIRST_AFTER = frozenset("第统唯万单专之逐初〇零一二三四五六七八九十百千")
 _DIGIT_CHARS = frozenset("〇零一二三四五六七八九十")
+# Doubled adjectives that keep their tone as adverbs (好好 hao2 hao3), not 姐姐-like nouns.
+_AA_KEEP = frozenset("好早远满稳小老久饱紧短浅")
 
 # Letter names as Mandarin speakers say them (our approximation), for spelled acronyms.
 _LETTERS: dict[str, tuple[str, ...]] = {
@@ -479,8 +481,9 @@ def _tone(unit: _Unit | None) -> int:
 def _tone_changes(units: list[_Unit]) -> list[_Unit]:
     """Surface tones: 一 and 不 first (on citation tones), then third-tone sandhi.
 
-    Units with no_sandhi (overrides, digit-by-digit numbers, spelled letters) keep their
-    reading but are context for their neighbours.
+    不 before a 4th tone is bu2 also in A-not-A questions (用不用 yong4 bu2 yong4), as
+    Biaobei's readers say it. Units with no_sandhi (overrides, digit-by-digit numbers,
+    spelled letters) keep their reading but are context for their neighbours.
     """
     out = list(units)
     for k, unit in enumerate(units):
@@ -489,8 +492,8 @@ def _tone_changes(units: list[_Unit]) -> list[_Unit]:
         prev = units[k - 1] if k else None
         nxt = units[k + 1] if k + 1 < len(units) else None
         base = "yi" if unit.han == "一" else "bu"
-        if nxt is not None and prev is not None and prev.han and prev.han == nxt.han:
-            tone = 5    # A一A, A不A: 看一看, 是不是
+        if unit.han == "一" and nxt is not None and prev is not None and prev.han == nxt.han:
+            tone = 5    # A一A: 看一看
         elif unit.han == "一" and (nxt is None or (prev is not None and prev.han in _YI_FIRST_AFTER)
                                    or nxt.han in _DIGIT_CHARS):
             tone = 1    # final, ordinal, word-final, inside numbers
@@ -504,7 +507,22 @@ def _tone_changes(units: list[_Unit]) -> list[_Unit]:
             tone = 4    # 一天 yi4, 一年 yi4, 一起 yi4; 不好 bu4
         out[k] = replace(unit, pinyin=_with_tone(unit.pinyin, tone) if unit.pinyin.startswith(base)
                          else unit.pinyin)
-    return _third_tones(out)
+    return _third_tones(_reduplicated(out))
+
+
+def _reduplicated(units: list[_Unit]) -> list[_Unit]:
+    """A doubled third-tone syllable takes the neutral tone on its second half (姐姐 jie3 jie5,
+    奶奶, 嫂嫂, 想想), except adjectives doubled as adverbs (_AA_KEEP: 好好, 早早)."""
+    out = list(units)
+    for k in range(len(units) - 1):
+        a, b = units[k], units[k + 1]
+        if (a.han and a.han == b.han and a.han not in _AA_KEEP and a.han not in _DIGIT_CHARS
+                and not b.no_sandhi
+                and _tone(a) == 3 and _tone(b) == 3
+                and (k == 0 or units[k - 1].han != a.han)
+                and (k + 2 == len(units) or units[k + 2].han != a.han)):
+            out[k + 1] = replace(b, pinyin=_with_tone(b.pinyin, 5))
+    return out
 
 
 def _with_tone(pinyin: str, tone: int) -> str:
@@ -515,17 +533,18 @@ def _third_tones(units: list[_Unit]) -> list[_Unit]:
     """3-3 sandhi: a third tone before a third tone is said as a second tone.
 
     Grouped by words (pypinyin's phrase segmentation; characters outside its phrase
-    dictionary count as one-character words): first inside each word every third tone
-    but the last of a run becomes second (展览馆 zhan2 lan2 guan3); then, left to right,
-    a word's last syllable becomes second when the next word still starts with a third
-    tone (保管 好 -> bao2 guan2 hao3; 老 [保管] -> lao3 bao2 guan3; 我 很 好 -> wo2 hen2
-    hao3). A neutral tone blocks it.
+    dictionary count as one-character words). First, inside each word every third tone
+    but the last of a run becomes second (你好 ni2 hao3, 所有 suo2 you3). Then across word
+    boundaries, right to left, a word's last syllable becomes second when the syllable after
+    it is (still) third: 小 老板 -> xiao3 lao2 ban3, 保管 好 -> bao2 guan2 hao3, 我 很 好 ->
+    wo3 hen2 hao3. On Biaobei's surface tones this beat left-to-right grouping (bench
+    transcript). A neutral tone blocks it.
     """
     out = list(units)
     for k in range(len(out) - 1):
         if out[k].word == out[k + 1].word and _tone(units[k]) == 3 and _tone(units[k + 1]) == 3:
             out[k] = _second(out[k])
-    for k in range(len(out) - 1):
+    for k in range(len(out) - 2, -1, -1):
         if out[k].word != out[k + 1].word and _tone(out[k]) == 3 and _tone(out[k + 1]) == 3:
             out[k] = _second(out[k])
     return out
