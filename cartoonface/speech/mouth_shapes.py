@@ -18,11 +18,9 @@ import re
 from dataclasses import dataclass
 
 from cartoonface.errors import TranscriptError
+from cartoonface.face.mouth import MOUTH_SYMBOLS  # the twelve shapes of thesis 002 5.2.2, one definition
 
-# The twelve basic mouth shapes, thesis 002 section 5.2.2, in the canonical order of the
-# contract (docs/ARCHITECTURE.md, face/mouth.py). Defined here because speech/ does not
-# import from face/; tests check that face/mouth.py agrees once it exists.
-MOUTH_SYMBOLS: tuple[str, ...] = ("m", "f", "h'", "h", "r", "z", "a", "i", "u", "e", "o", "n")
+__all__ = ["MOUTH_SYMBOLS", "SyllableParts", "shape_onsets", "shapes_for", "syllable_parts"]
 
 # Table 5.5 rebuilt (thesis 002, 5.2.2): the shape of each of the 21 initials.
 # Surviving member counts: m 3, f 1, h' 6, h 3, r 4, z 3. m = bilabials (as in Table 5.3),
