@@ -1,0 +1,118 @@
+"""`cartoonface generate`: face model + recording + transcript -> page folder.
+
+A thin shell over `cartoonface.pipeline.generate`: parses the options, shows a
+progress bar on stderr and prints a one-line summary on stdout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TextIO
+
+from cartoonface.errors import OptionError
+from cartoonface.pipeline import Options, Result, generate
+from cartoonface.render.pages import PAGES
+from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
+
+BAR_WIDTH = 24  # characters
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the `generate` subcommand."""
+    defaults = Options()
+    parser = subparsers.add_parser(
+        "generate", help="make the talking-face pages from a face, a recording and its transcript",
+        description="Make a folder with index.html (audio book or virtual announcer), animation.svg, the "
+                    "audio, alignment.TextGrid and actions.json. Open index.html in a browser (docs/output.md).")
+    parser.add_argument("--face", type=Path, required=True, metavar="FACE.json", help="face model (docs/face-model.md)")
+    parser.add_argument("--audio", type=Path, required=True, metavar="SPEECH",
+                        help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
+    parser.add_argument("--transcript", type=Path, required=True, metavar="TEXT.txt", help="what is said, UTF-8 text")
+    parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR",
+                        help="folder to write (replaced if it holds a previous output)")
+    parser.add_argument("--page", choices=PAGES, default=defaults.page, help="page kind (default %(default)s)")
+    parser.add_argument("--title", default=defaults.title, help="page title")
+    parser.add_argument("--fps", type=int, default=defaults.fps, help="frames per second, 12-60 (default %(default)s)")
+    parser.add_argument("--seed", type=int, default=defaults.seed,
+                        help="seed of the blinks and head movements (default %(default)s)")
+    parser.add_argument("--actions", type=Path, metavar="ACTIONS.json",
+                        help="an edited actions.json to use instead of a new schedule (docs/actions.md)")
+    parser.add_argument("--alignment", type=Path, metavar="EDITED.TextGrid",
+                        help="an edited alignment.TextGrid to use instead of aligning again")
+    parser.add_argument("--background", choices=BACKGROUNDS, default=defaults.background,
+                        help="backdrop (default %(default)s)")
+    parser.add_argument("--clothes", choices=CLOTHES, default=defaults.clothes, help="clothes (default %(default)s)")
+    parser.add_argument("--pause", metavar="S,E",
+                        help="a stretch of pure silence in the recording (start,end seconds): sentence "
+                             "segmentation then uses the thesis's threshold from it (Alg. 3.1)")
+    parser.add_argument("--link", action="append", default=[], metavar="LABEL=URL",
+                        help="a link under the audio-book text (repeatable)")
+    parser.set_defaults(func=run)
+
+
+def parse_pause(text: str | None) -> tuple[float, float] | None:
+    """'S,E' -> (S, E) seconds; OptionError when it is not two numbers."""
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        start, end = (float(part) for part in parts)
+    except ValueError:
+        raise OptionError(f"--pause {text!r}: expected START,END in seconds, e.g. 0.2,0.7") from None
+    return start, end
+
+
+def parse_link(text: str) -> tuple[str, str]:
+    """'LABEL=URL' -> (label, url); OptionError without '='."""
+    label, sep, url = text.partition("=")
+    if not sep:
+        raise OptionError(f"--link {text!r}: expected LABEL=URL")
+    return label, url
+
+
+class ProgressBar:
+    """A progress(stage, fraction) callback drawing one self-overwriting line on `stream`."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+        self.open = False  # a bar line is drawn and not yet ended
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        filled = round(fraction * BAR_WIDTH)
+        self.stream.write(f"\r[{'#' * filled}{'.' * (BAR_WIDTH - filled)}] {fraction:4.0%} {stage:<8}")
+        self.open = True
+        if fraction >= 1:
+            self.close()
+        self.stream.flush()
+
+    def close(self) -> None:
+        """End the bar's line (before an error message or the summary)."""
+        if self.open:
+            self.stream.write("\n")
+            self.open = False
+
+
+def summary(result: Result) -> str:
+    """The one-line report of a finished run."""
+    return (f"{result.out_dir}: {result.duration:.1f} s of audio, {result.frames} frames, "
+            f"{result.size / 1e6:.1f} MB written in {result.seconds:.1f} s; open {result.out_dir / 'index.html'}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Generate the folder; print the summary and any notes. Returns 0."""
+    options = Options(
+        page=args.page, title=args.title, fps=args.fps, seed=args.seed, background=args.background,
+        clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
+        links=tuple(parse_link(link) for link in args.link),
+    )
+    bar = ProgressBar(sys.stderr)
+    try:
+        result = generate(args.face, args.audio, args.transcript, args.output, options, bar)
+    finally:
+        bar.close()
+    for note in result.notes:
+        print(f"note: {note}", file=sys.stderr)
+    print(summary(result))
+    return 0

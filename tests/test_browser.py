@@ -1,0 +1,154 @@
+"""The generated page in real Chromium (Playwright, Debian's chromium): the face stays on the voice.
+
+One short page is generated per session from speech made here with espeak-ng.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import shutil
+import subprocess
+from io import BytesIO
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from cartoonface.pipeline import Options, generate
+
+pytestmark = [
+    pytest.mark.browser,
+    pytest.mark.skipif(not Path("/usr/bin/chromium").exists() or not shutil.which("espeak-ng"),
+                       reason="needs Debian's chromium and espeak-ng"),
+]
+
+ROOT = Path(__file__).resolve().parent.parent
+FPS = 30
+TEXT = "小猫在花园里玩。它看见了一只蝴蝶。"
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
+# What the page is asked, in one evaluation so both clocks are read at the same moment.
+CLOCKS = """() => ({audio: document.getElementById('cf-audio').currentTime,
+                    svg: document.getElementById('cf-face').getCurrentTime()})"""
+VISIBLE_MOUTH = """() => [...document.querySelectorAll('#cf-face g[data-part=mouth] > g[data-shape]')]
+    .filter(g => getComputedStyle(g).visibility === 'visible').map(g => g.dataset.shape)"""
+
+
+@pytest.fixture(scope="session")
+def site(tmp_path_factory) -> Path:
+    """A generated audio-book folder for ~5 s of espeak-ng Mandarin."""
+    folder = tmp_path_factory.mktemp("browser")
+    speech = folder / "speech.wav"
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-s", "150", "-w", str(speech), TEXT], check=True)
+    generate(ROOT / "samples" / "faces" / "female.json", speech, TEXT, folder / "site",
+             Options(title="小猫 <test>", fps=FPS, seed=3))
+    return folder / "site"
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Debian chromium driven by Playwright (never a downloaded browser)."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as play:
+        launched = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
+        yield launched
+        launched.close()
+
+
+@pytest.fixture
+def page(browser, site):
+    """The generated index.html opened from file://, its script errors collected in page.errors."""
+    opened = browser.new_page(viewport={"width": 900, "height": 700})
+    errors: list[str] = []
+    opened.on("pageerror", lambda error: errors.append(str(error)))
+    opened.goto((site / "index.html").as_uri(), wait_until="load")
+    opened.wait_for_function("document.getElementById('cf-audio').readyState >= 1")
+    yield opened
+    assert errors == []
+    opened.close()
+
+
+def seek(page, seconds: float) -> None:
+    """Seek the audio element and wait until the page has handled it."""
+    page.evaluate("""t => new Promise(done => { const a = document.getElementById('cf-audio');
+        a.addEventListener('seeked', () => requestAnimationFrame(() => done()), {once: true}); a.currentTime = t; })""",
+                  seconds)
+
+
+def mouth_shape_intervals(textgrid: str) -> list[tuple[float, float, str]]:
+    """(start, end, symbol) of the labelled intervals of the 'mouth shapes' tier of a long-format TextGrid."""
+    tier = textgrid.split('name = "mouth shapes"', 1)[1]
+    found = re.findall(r'xmin = ([\d.]+)\s+xmax = ([\d.]+)\s+text = "([^"]*)"', tier)
+    return [(float(a), float(b), text) for a, b, text in found if text]
+
+
+def test_svg_time_follows_audio_while_playing(page):
+    page.evaluate("document.getElementById('cf-audio').play()")
+    page.wait_for_timeout(2000)
+    clocks = page.evaluate(CLOCKS)
+    assert clocks["audio"] > 1.0, "the audio did not play"
+    assert abs(clocks["svg"] - clocks["audio"]) <= 1 / FPS
+
+
+def test_seek_to_middle_shows_the_aligned_mouth_shape(page, site):
+    intervals = mouth_shape_intervals((site / "alignment.TextGrid").read_text(encoding="utf-8"))
+    duration = page.evaluate("document.getElementById('cf-audio').duration")
+    # A shape shown for at least 4 frames, nearest the middle: at its first frame it dominates the mix.
+    long_enough = [i for i in intervals if i[1] - i[0] >= 4 / FPS]
+    start, _, symbol = min(long_enough, key=lambda i: abs(i[0] - duration / 2))
+    frame = math.ceil(start * FPS - 1e-6)
+    seek(page, frame / FPS + 0.002)
+    clocks = page.evaluate(CLOCKS)
+    assert abs(clocks["svg"] - clocks["audio"]) < 0.5 / FPS
+    assert page.evaluate(VISIBLE_MOUTH) == [symbol]
+
+
+def test_pause_stops_the_face(page):
+    page.evaluate("document.getElementById('cf-audio').play()")
+    page.wait_for_timeout(800)
+    page.evaluate("document.getElementById('cf-audio').pause()")
+    page.wait_for_timeout(100)
+    before = page.evaluate(CLOCKS)
+    page.wait_for_timeout(600)
+    after = page.evaluate(CLOCKS)
+    assert before["audio"] > 0.3
+    assert after["svg"] == pytest.approx(before["svg"], abs=1e-3)
+    assert abs(after["svg"] - after["audio"]) <= 0.5 / FPS
+
+
+def test_space_toggles_play_and_sentence_is_highlighted(page):
+    seek(page, 0.0)
+    page.keyboard.press("Space")
+    page.wait_for_timeout(1500)
+    assert page.evaluate("!document.getElementById('cf-audio').paused")
+    assert page.evaluate("document.querySelectorAll('.cf-speaking').length") == 1
+    page.keyboard.press("Space")
+    assert page.evaluate("document.getElementById('cf-audio').paused")
+
+
+def test_faster_playback_keeps_the_face_on_the_audio(page):
+    page.evaluate("const a = document.getElementById('cf-audio'); a.playbackRate = 1.5; a.play()")
+    page.wait_for_timeout(1500)
+    clocks = page.evaluate(CLOCKS)
+    assert clocks["audio"] > 1.5
+    assert abs(clocks["svg"] - clocks["audio"]) <= 1 / FPS
+
+
+def test_screenshot_is_not_blank(page):
+    shot = page.locator("#cf-face").screenshot()
+    pixels = Image.open(BytesIO(shot)).convert("RGB")
+    colours = pixels.getcolors(maxcolors=1 << 20)
+    assert colours is not None and len(colours) > 20, "the face drew (almost) nothing"
+    assert max(count for count, _ in colours) < 0.9 * pixels.width * pixels.height
+
+
+def test_phone_layout_fits_the_screen(browser, site):
+    phone = browser.new_page(viewport={"width": 375, "height": 740}, device_scale_factor=2)
+    phone.goto((site / "index.html").as_uri(), wait_until="load")
+    widths = phone.evaluate("""() => ({page: document.documentElement.scrollWidth,
+        face: document.getElementById('cf-face').getBoundingClientRect().width})""")
+    phone.close()
+    assert widths["page"] <= 375
+    assert 250 <= widths["face"] <= 375

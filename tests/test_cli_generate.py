@@ -1,0 +1,94 @@
+"""`cartoonface generate` run as a user would: progress, summary, and exit 2 on bad input."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import run_cli
+
+pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
+
+ROOT = Path(__file__).resolve().parent.parent
+FACE = ROOT / "samples" / "faces" / "female.json"
+TEXT = "你好。谢谢你。"
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory) -> tuple[Path, Path]:
+    """A short espeak-ng recording and its transcript file."""
+    folder = tmp_path_factory.mktemp("cli")
+    speech, transcript = folder / "speech.wav", folder / "text.txt"
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-s", "150", "-w", str(speech), TEXT], check=True)
+    transcript.write_text(TEXT, encoding="utf-8")
+    return speech, transcript
+
+
+def generate_args(speech: Path, transcript: Path, out: Path, *extra: str) -> list[str]:
+    """The command line of one run."""
+    return ["generate", "--face", str(FACE), "--audio", str(speech), "--transcript", str(transcript),
+            "-o", str(out), *extra]
+
+
+def test_generate_prints_progress_and_a_summary(inputs, tmp_path):
+    speech, transcript = inputs
+    out = tmp_path / "site"
+    done = run_cli(*generate_args(speech, transcript, out, "--page", "announcer", "--title", "新闻",
+                                  "--background", "newsroom", "--clothes", "shirt", "--fps", "24", "--seed", "9"))
+    assert done.returncode == 0, done.stderr
+    assert "100%" in done.stderr and "svg" in done.stderr
+    lines = done.stdout.strip().splitlines()
+    assert len(lines) == 1
+    size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+    assert f"{size / 1e6:.1f} MB" in lines[0]
+    assert " frames" in lines[0] and " s of audio" in lines[0] and str(out) in lines[0]
+    assert (out / "index.html").is_file() and 'id="cf-face"' in (out / "index.html").read_text(encoding="utf-8")
+
+
+def bad_actions(tmp_path: Path, **action) -> str:
+    path = tmp_path / "actions.json"
+    path.write_text(json.dumps({"format": "cartoonface-actions", "version": 1, "actions": [action]}), encoding="utf-8")
+    return str(path)
+
+
+@pytest.mark.parametrize("case", ["missing audio", "unreadable audio", "transcript does not match", "fps 0",
+                                  "angle 40", "past the end", "missing face"])
+def test_bad_input_exits_2_with_one_line_and_no_folder(case, inputs, tmp_path):
+    speech, transcript = inputs
+    extra: list[str] = []
+    expect = ""
+    if case == "missing audio":
+        speech = tmp_path / "gone.wav"
+        expect = "gone.wav"
+    elif case == "unreadable audio":
+        speech = tmp_path / "noise.wav"
+        speech.write_bytes(b"RIFF\x00\x00\x00\x00WAVEjunkjunk")
+        expect = "noise.wav"
+    elif case == "transcript does not match":
+        transcript = tmp_path / "long.txt"
+        transcript.write_text("这是一段很长的文字，" * 40, encoding="utf-8")
+        expect = "long.txt"
+    elif case == "fps 0":
+        extra = ["--fps", "0"]
+        expect = "fps"
+    elif case == "angle 40":
+        extra = ["--actions", bad_actions(tmp_path, kind="turn", start=0.1, duration=0.5, amplitude=40)]
+        expect = "40"
+    elif case == "past the end":
+        extra = ["--actions", bad_actions(tmp_path, kind="blink", start=99, duration=0.3, amplitude=1)]
+        expect = "actions.json"
+    else:
+        extra = ["--face", str(tmp_path / "noface.json")]
+        expect = "noface.json"
+    out = tmp_path / "out"
+    done = run_cli(*generate_args(speech, transcript, out), *extra)
+    assert done.returncode == 2
+    message = [line for line in done.stderr.splitlines() if line.startswith("cartoonface: error:")]
+    assert len(message) == 1 and expect in message[0], done.stderr
+    assert "Traceback" not in done.stderr
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]
