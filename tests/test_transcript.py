@@ -179,6 +179,7 @@ def test_numbers_are_read_in_chinese(parse):
     assert spoken(parse, "12:30") == "十二点三十"
     assert spoken(parse, "25℃") == "二十五摄氏度"
     assert spoken(parse, "２０２４年") == "二零二四年"
+    assert spoken(parse, "增长５０％，－３．５") == "增长百分之五十负三点五"
 
 
 def test_years_and_long_numbers_are_read_digit_by_digit(parse):

@@ -254,8 +254,8 @@ def _ends_sentence(clean: str, i: int) -> bool:
 
 
 def _ascii(ch: str) -> str:
-    """Full-width digits and Latin letters -> ASCII; other characters unchanged."""
-    if "\uff10" <= ch <= "\uff19" or "\uff21" <= ch <= "\uff3a" or "\uff41" <= ch <= "\uff5a":
+    """Full-width ASCII forms (digits, letters, ％ － ．) -> ASCII; other characters unchanged."""
+    if "\uff01" <= ch <= "\uff5e":
         return chr(ord(ch) - 0xFEE0)
     return ch
 
