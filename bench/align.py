@@ -29,7 +29,7 @@ from cartoonface.speech.align import align_syllables
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.espeak import synthesize
 from cartoonface.speech.features import HOP, frames
-from cartoonface.speech.sentences import find_speech_parts
+from cartoonface.speech.sentences import Span, find_speech_parts
 
 ZH = Path(__file__).resolve().parents[1].parent / "shared" / "bench" / "zh"
 TUNING = range(1, 36)     # Biaobei 000001-000035: the only sentences the aligner was tuned on
@@ -52,12 +52,6 @@ class Recording:
     name: str
     audio: Audio
     parts: tuple[Part, ...]
-
-
-@dataclass(frozen=True)
-class SpanStandIn:
-    start: float
-    end: float
 
 
 def read_tiers(path: Path) -> dict[str, list[tuple[float, float, str]]]:
@@ -210,7 +204,7 @@ def evaluate(recordings: list[Recording], with_dtw: bool = False) -> dict[str, o
     for rec in recordings:
         for part in rec.parts:
             started = time.process_time()
-            timings = align_syllables(rec.audio, SpanStandIn(part.start, part.end), part.syllables)
+            timings = align_syllables(rec.audio, Span(part.start, part.end), part.syllables)
             seconds += time.process_time() - started
             speech += part.end - part.start
             reference = np.array(part.onsets)

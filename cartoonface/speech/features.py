@@ -87,7 +87,9 @@ def band_db(power: np.ndarray, lo: float, hi: float) -> np.ndarray:
 def frames(samples: np.ndarray, rate: int) -> Frames:
     """(n,) mono samples at `rate` Hz -> Frames at 100 frames per second."""
     power = power_spectrum(to_rate(samples, rate))
-    logmel = np.log(power @ _BANK + 1e-8)
+    # einsum rather than a BLAS product: a small product on a loaded machine is slowed many
+    # times by BLAS threads waiting for cores (measured in bench/align.py)
+    logmel = np.log(np.einsum("tf,fm->tm", power, _BANK) + 1e-8)
     return Frames(
         logmel=logmel,
         mfcc=dct(logmel, type=2, norm="ortho", axis=1)[:, :CEPSTRA],
