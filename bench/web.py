@@ -32,6 +32,7 @@ import tempfile
 import threading
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 import wave
 import zipfile
@@ -380,6 +381,7 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
 def send_raw(port: int, method: str, path: str, body, headers: dict) -> int:
     """Send one request; return the status (0 when the server closed the connection early)."""
     connection = http.client.HTTPConnection(HOST, port, timeout=120)
+    path = urllib.parse.quote(path, safe="/%?=&")
     try:
         if isinstance(body, tuple):  # ("huge", n): a text field of n bytes, sent in pieces
             size = body[1]

@@ -403,6 +403,8 @@ def test_transcript_file_is_used_instead_of_pasted_text(app, client, speech, sam
 @pytest.mark.parametrize("content, expected", [
     (b"\x89PNG\r\n\x1a\n", "not a face model: expected UTF-8 JSON"),
     (b"{\"format\": ", "not a face model: expected UTF-8 JSON"),
+    (b"[" * 100_000, "the JSON is nested too deeply"),
+    (b"1e999999", "face.json"),
     (b"[1, 2, 3]", "face.json"),
     (b"{\"format\": \"cartoonface-face\", \"version\": 1}", "face.json"),
 ])

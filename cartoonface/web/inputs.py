@@ -105,6 +105,9 @@ def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], li
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             errors["face_file"] = f"{name}: not a face model: expected UTF-8 JSON ({exc})."
             return None, name
+        except RecursionError:
+            errors["face_file"] = f"{name}: not a face model: the JSON is nested too deeply."
+            return None, name
         try:
             face_from_dict(obj, name)
         except InputError as exc:
