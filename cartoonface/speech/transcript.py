@@ -432,7 +432,7 @@ def _look_up(domain: list[_Unit], notes: list[str]) -> list[_Unit]:
     k = 0
     for unit in domain:
         if not unit.han:
-            out.append(replace(unit, word=-1 - len(out), pinyin=unit.reading))
+            out.append(replace(unit, word=-1 - len(out), pinyin=unit.reading))  # a word of its own
             continue
         index, simple, reading = spans[k]
         k += 1
