@@ -74,6 +74,18 @@ def test_transcript_far_longer_than_the_speech_is_refused():
         analyse(noisy(samples), text, source="story.txt")
 
 
+def test_transcript_in_another_language_is_refused():
+    samples, _ = recording([8], [])
+    with pytest.raises(TranscriptError, match="story.txt: the transcript looks like another language"):
+        analyse(noisy(samples), "Good morning, how are you today?", source="story.txt")
+
+
+def test_a_few_latin_words_in_chinese_text_are_accepted():
+    samples, _ = recording([8], [])
+    alignment = analyse(noisy(samples), "我用iPhone和OK{ou1 kei1}上网。", source="story.txt")
+    assert len(alignment.sentences) == 1
+
+
 @pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency (scripts/setup.sh)")
 def test_analyse_espeak_speech(tmp_path):
     texts = ["你好，我是老师。", "今天天气很好。", "我们去公园吧！"]

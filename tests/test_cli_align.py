@@ -134,6 +134,5 @@ def test_wrong_language_transcript_is_refused(speech, tmp_path, capsys):
     path.write_text("Hello, I am the teacher. The weather is fine today!", encoding="utf-8")
     code = main(["align", str(recording), "--transcript", str(path), "-o", str(tmp_path / "out.TextGrid")])
     err = capsys.readouterr().err
-    # Latin words are not read as Mandarin (docs/alignment.md): a clear error naming the file.
     assert code == 2
-    assert f"{path}: no Mandarin syllables" in err
+    assert f"{path}: the transcript looks like another language" in err

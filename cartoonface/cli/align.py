@@ -92,10 +92,15 @@ def summary(alignment: Alignment, output: Path, seconds: float) -> str:
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
     low = sum(s.confidence < LOW_CONFIDENCE for s in syllables)
     return (
-        f"{output}: {len(alignment.sentences)} sentences, {len(syllables)} syllables "
+        f"{output}: {_count(len(alignment.sentences), 'sentence')}, {_count(len(syllables), 'syllable')} "
         f"({low} with low confidence) in {alignment.duration:.1f} s of audio, "
-        f"{len(alignment.notes)} note{'' if len(alignment.notes) == 1 else 's'}; took {seconds:.1f} s"
+        f"{_count(len(alignment.notes), 'note')}; took {seconds:.1f} s"
     )
+
+
+def _count(number: int, noun: str) -> str:
+    """'1 note', '3 notes'."""
+    return f"{number} {noun}{'' if number == 1 else 's'}"
 
 
 def run(args: argparse.Namespace) -> int:

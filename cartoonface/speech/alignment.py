@@ -20,6 +20,7 @@ or split is said in `Alignment.notes`. docs/alignment.md has the details.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -44,6 +45,7 @@ MIN_DIPS = 3
 MAX_RATE = 12.0
 MIN_RATE = 1.0
 LOW_CONFIDENCE = 0.5
+_CJK = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 
 
 @dataclass(frozen=True)
@@ -131,6 +133,7 @@ def analyse(
     report = progress or (lambda stage, fraction: None)
     if not transcript_text.strip():
         raise TranscriptError(f"{source}: the transcript is empty; expected the text spoken in the recording")
+    _check_language(transcript_text, source)
     notes: list[str] = []
     report("segment", 0.0)
     parsed = parse_transcript(transcript_text, source)
@@ -164,6 +167,22 @@ def analyse(
             f"first at {low[0].start:.2f} s: check them in the TextGrid"
         )
     return Alignment(tuple(sentences), audio.duration, tuple(notes))
+
+
+def _check_language(text: str, source: str) -> None:
+    """Refuse a transcript with more Latin words than Chinese characters (another language).
+
+    Readings in braces (`OK{ou1 kei1}`) are not counted.
+    """
+    plain = re.sub(r"\{[^}]*\}", "", text)
+    chinese = len(_CJK.findall(plain))
+    latin = len(re.findall(r"[A-Za-z]+", plain))
+    if latin > chinese:
+        raise TranscriptError(
+            f"{source}: the transcript looks like another language ({latin} Latin words, {chinese} Chinese "
+            "characters); expected the Mandarin text spoken in the recording (give a Latin word its reading "
+            "in braces, like OK{ou1 kei1})"
+        )
 
 
 def _check_rate(syllables: int, speech: float, source: str, notes: list[str]) -> None:
