@@ -125,8 +125,10 @@ def chaikin(points: np.ndarray, rounds: int = CHAIKIN_ROUNDS, closed: bool = Fal
 # point names of cartoonface.face.lift.LIFTED_NAMES. Left and right follow the thesis's
 # wording ("the left eye" is drawn from 3.12, 3.2, 3.8, 3.4), which is the image left. Each
 # entry: part name, kind, arcs. The ears (steps 4-5) are the open arc(10.8, 10.2, A) in the
-# thesis; we close each ear smoothly back from A to 10.8 along the face side, where the face
-# covers it, so the top of the ear is round rather than a spike at 10.2.
+# thesis, which turns sharply at 10.2 (A lies just below it) and reads as a pointed elf ear.
+# We draw each ear as a smooth closed loop 10.8, E', 10.2, A, where E' (see DERIVED) lies
+# below 10.2 by 0.6 of the ear's attachment A -> 10.8: the outer rim runs parallel to the
+# face, the top is round, and the loop closes from A to 10.8 behind the face.
 # Kinds: "smooth"/"corner" closed Bezier contours, "open" separate Bezier arcs (one sub-path
 # each), "cut" a closed shape of open corner-cut arcs (eyebrows).
 FACE_CONTOUR = (("11.2", "11.2a", "11.1", "11.3a", "11.3"), ("11.3", "10.9", "2.13"),
@@ -134,8 +136,8 @@ FACE_CONTOUR = (("11.2", "11.2a", "11.1", "11.3a", "11.3"), ("11.3", "10.9", "2.
 _NOSE_TAIL = (("9.14", "9.2", "9.4"), ("9.13", "9.1", "9.5"), ("D", "9.15", "E"))  # step 6
 PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
     ("face", "smooth", FACE_CONTOUR),
-    ("ear_l", "smooth", (("10.8", "10.2", "A"), ("A", "10.8"))),         # step 4, closed
-    ("ear_r", "smooth", (("10.7", "10.1", "B"), ("B", "10.7"))),         # step 5
+    ("ear_l", "smooth", (("10.8", "ear_l", "10.2", "A"), ("A", "10.8"))),  # step 4, closed
+    ("ear_r", "smooth", (("10.7", "ear_r", "10.1", "B"), ("B", "10.7"))),  # step 5
     ("nose", "open", (("9.6", "C", "9.14"), *_NOSE_TAIL)),               # step 6
     ("brow_l", "cut", (("4.6", "4.4a", "4.4", "4.2"), ("4.2", "G", "F", "4.6"))),  # step 7
     ("brow_r", "cut", (("4.5", "4.3a", "4.3", "4.1"), ("4.1", "H", "I", "4.5"))),  # step 8
@@ -148,6 +150,11 @@ PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
     ("lips_line", "open", (("R", "2.2", "S"),)),     # the line where the lips meet
     ("lower_inner", "open", (("S", "2.3", "R"),)),   # lower edge of the opening (tongue)
 )
+# Points made for the drawing as linear combinations of named points: (coefficient, name).
+DERIVED: dict[str, tuple[tuple[float, str], ...]] = {
+    "ear_l": ((1.0, "10.2"), (0.6, "10.8"), (-0.6, "A")),
+    "ear_r": ((1.0, "10.1"), (0.6, "10.7"), (-0.6, "B")),
+}
 # Thesis 002, Alg. 2.3 step 8: when the head turns the other way (beta > 0) the nose
 # bridge is drawn on the visible side, arc(9.7, C, 9.13) instead of arc(9.6, C, 9.14).
 _NOSE_OTHER_SIDE = ("nose", "open", (("9.7", "C", "9.13"), *_NOSE_TAIL))
@@ -183,8 +190,10 @@ def _polygon(rows: list[np.ndarray], points: np.ndarray) -> str:
 def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
     """Compile the linear map and template for points named `names` plus `hair_count` hair
     points, with the nose drawn for `nose_side`."""
-    index = {name: i for i, name in enumerate(names)}
     basis = np.eye(len(names) + hair_count)
+    rows_of = {name: basis[i] for i, name in enumerate(names)}
+    for name, terms in DERIVED.items():
+        rows_of[name] = sum(coefficient * rows_of[point] for coefficient, point in terms)
     rows: list[np.ndarray] = []
     texts = []
     part_names = ["hair"]
@@ -192,7 +201,7 @@ def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
     texts.append(_polygon(rows, chaikin(hair, closed=True)) if hair_count >= 3 else "")
     parts = [_NOSE_OTHER_SIDE if p[0] == "nose" and nose_side == NOSE_SIDE_OTHER else p for p in PARTS]
     for name, kind, arc_names in parts:
-        arcs = [basis[[index[n] for n in names_]] for names_ in arc_names]
+        arcs = [np.array([rows_of[n] for n in arc_]) for arc_ in arc_names]
         if kind in ("smooth", "corner"):
             texts.append(_move(rows, arcs[0][0], contour(arcs, kind == "smooth")) + "Z")
         elif kind == "open":
