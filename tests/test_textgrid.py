@@ -11,7 +11,7 @@ pytest.importorskip("cartoonface.speech.transcript", reason="speech/transcript.p
 from cartoonface.errors import AlignmentError  # noqa: E402
 from cartoonface.speech.alignment import Alignment, Sentence, Syllable  # noqa: E402
 from cartoonface.speech.mouth_shapes import shape_onsets, shapes_for  # noqa: E402
-from cartoonface.speech.textgrid import TIERS, read_textgrid, write_textgrid  # noqa: E402
+from cartoonface.speech.textgrid import TIERS, load_textgrid, read_textgrid, write_textgrid  # noqa: E402
 
 
 def syllable(text: str, pinyin: str, start: float, end: float) -> Syllable:
@@ -144,3 +144,19 @@ def test_not_a_textgrid():
         read_textgrid('"hello" world\n', "notes.txt")
     with pytest.raises(AlignmentError, match="empty.TextGrid: the TextGrid ends early"):
         read_textgrid("", "empty.TextGrid")
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "utf-8-sig", "utf-16"])
+def test_load_textgrid_in_the_encodings_praat_writes(alignment, tmp_path, encoding):
+    path = tmp_path / "saved.TextGrid"
+    path.write_bytes(write_textgrid(alignment).encode(encoding))
+    assert_same_timing(load_textgrid(path), alignment)
+
+
+def test_load_textgrid_errors(tmp_path):
+    with pytest.raises(AlignmentError, match="missing.TextGrid: no such TextGrid file"):
+        load_textgrid(tmp_path / "missing.TextGrid")
+    binary = tmp_path / "binary.TextGrid"
+    binary.write_bytes(bytes(range(256)))
+    with pytest.raises(AlignmentError, match="binary.TextGrid: not a text file"):
+        load_textgrid(binary)

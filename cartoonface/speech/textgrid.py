@@ -6,7 +6,8 @@ text is the pinyin itself) and `mouth shapes` (one interval per basic mouth
 shape, starting at the in-syllable onsets of thesis 002, section 5.3). Empty
 intervals fill the time between labelled ones, as Praat requires.
 
-Reading accepts Praat's long and short text formats (UTF-8). Sentences and
+Reading accepts Praat's long and short text formats, in UTF-8 or (`load_textgrid`)
+UTF-16, which Praat uses when saving Chinese text. Sentences and
 syllables come from their tiers; a syllable's shapes from the labels of the
 `mouth shapes` intervals inside it (their boundaries are not kept: the onsets
 are always those of 5.3), or from its pinyin when that tier is absent.
@@ -16,8 +17,11 @@ a person). See docs/alignment.md.
 
 from __future__ import annotations
 
+import codecs
+import os
 import re
 from dataclasses import dataclass
+from pathlib import Path
 
 from cartoonface.errors import AlignmentError, TranscriptError
 from cartoonface.speech.alignment import Alignment, Sentence, Syllable
@@ -185,6 +189,28 @@ class _Reader:
             self.position -= 1
             raise self.fail(what)
         return int(token.value)
+
+
+def load_textgrid(path: str | os.PathLike[str]) -> Alignment:
+    """Read the TextGrid file at `path` into an Alignment (see read_textgrid).
+
+    Accepts UTF-8 (with or without a BOM) and UTF-16 with a BOM, which is what
+    Praat writes for text outside Latin-1 such as Chinese. Raises
+    AlignmentError when the file is missing or cannot be decoded.
+    """
+    file = Path(path)
+    try:
+        data = file.read_bytes()
+    except FileNotFoundError:
+        raise AlignmentError(f"{file}: no such TextGrid file") from None
+    except OSError as exc:
+        raise AlignmentError(f"{file}: cannot read the TextGrid ({exc.strerror})") from None
+    encoding = "utf-16" if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else "utf-8-sig"
+    try:
+        text = data.decode(encoding)
+    except UnicodeDecodeError:
+        raise AlignmentError(f"{file}: not a text file in UTF-8 or UTF-16; expected a Praat TextGrid") from None
+    return read_textgrid(text, str(file))
 
 
 def read_textgrid(text: str, source: str) -> Alignment:
