@@ -126,7 +126,10 @@ def test_without_mouth_tier_shapes_come_from_pinyin(alignment):
     [
         (lambda t: t.replace('"ooTextFile"', '"something"'), r"line 1: expected \"ooTextFile\""),
         (lambda t: t.replace('name = "syllables"', 'name = "words"'), "no interval tier named 'syllables'"),
-        (lambda t: t.replace("xmax = 0.8123 ", "xmax = oops ", 1), r"line \d+: expected xmax of interval 2 of tier sentences"),
+        (
+            lambda t: t.replace("xmax = 0.8123 ", "xmax = oops ", 1),
+            r"line \d+: expected xmax of interval 2 of tier sentences",
+        ),
         (lambda t: t.replace("xmin = 1.5009 ", "xmin = 2.9 ", 1), r"line \d+: tier sentences, interval 4"),
         (lambda t: t.replace('text = "u"', 'text = "q"', 1), "tier mouth shapes, label 'q'"),
         (lambda t: t[: len(t) // 2], "ends early"),

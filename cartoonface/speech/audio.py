@@ -76,7 +76,8 @@ def load_audio(path: str | os.PathLike[str]) -> Audio:
         raise AudioError(f"{file}: the recording holds no samples; expected speech")
     if len(samples) > MAX_SECONDS * rate:
         raise AudioError(
-            f"{file}: the recording is longer than {MAX_SECONDS // 60} minutes; split it into parts of at most 30 minutes"
+            f"{file}: the recording is longer than {MAX_SECONDS // 60} minutes; "
+            "split it into parts of at most 30 minutes"
         )
     np.clip(samples, -1.0, 1.0, out=samples)
     peak = float(np.max(np.abs(samples)))

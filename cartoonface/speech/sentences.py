@@ -115,20 +115,16 @@ def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -
     inside = rms[int(np.ceil(start / HOP)) : max(int(np.ceil(start / HOP)) + 1, int(end / HOP))]
     v_noise = float(inside.max()) * C2  # steps 2 and 4
     d_pause = (end - start) * C1  # step 3
-    silent = rms < v_noise
-    # Steps 5-8: silences of at least d_pause; the rest are speaking parts.
+    # Steps 5-8: silences (quieter than v_noise) of at least d_pause; the rest are speaking parts.
     # The whole recording is searched (not only from t_s), so a leading silence is cut off too.
-    parts = []
-    for run_start, run_end in _runs(~silent):
-        parts.append([run_start * HOP, run_end * HOP])
-    merged: list[list[float]] = []
-    for part in parts:
-        if merged and part[0] - merged[-1][1] < d_pause:
-            merged[-1][1] = part[1]
-        else:
-            merged.append(part)
+    sounding = _runs(rms >= v_noise)
+    if not sounding:
+        return ()
+    parts = _join(sounding, round(d_pause / HOP))
     return tuple(
-        Span(round(s, 3), round(min(e, audio.duration), 3)) for s, e in merged if e - s >= MIN_PART
+        Span(round(first * HOP, 3), round(min(last * HOP, audio.duration), 3))
+        for first, last in parts
+        if (last - first) * HOP >= MIN_PART
     )
 
 
@@ -145,8 +141,8 @@ def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
     voiced = _voiced_frames(audio, groups)
     speech = []
     for (first, last), flags in zip(groups, voiced, strict=True):
-        hits = np.flatnonzero(flags)
-        if len(hits) * HOP * 2 < VOICED_MIN or level[first:last].max() < loud - GROUP_BELOW_SPEECH_DB:  # voicing is measured on every second frame
+        hits = np.flatnonzero(flags)  # voicing is measured on every second frame
+        if len(hits) * HOP * 2 < VOICED_MIN or level[first:last].max() < loud - GROUP_BELOW_SPEECH_DB:
             continue
         edge = round(UNVOICED_EDGE / HOP)
         speech.append((max(first, first + hits[0] * 2 - edge), min(last, first + hits[-1] * 2 + 1 + edge)))
