@@ -126,9 +126,11 @@ def analyse(
     segmentation mode (Alg. 3.1); None the automatic one. `progress(stage,
     fraction)` is called with stage "segment" then "align" and the fraction
     0..1 done of that stage. `source` names the transcript in messages.
-    Raises TranscriptError for an empty transcript, one with no syllables, or
-    one far longer than the speech (over MAX_RATE syllables per second);
-    OptionError for a pause outside the recording.
+    Raises TranscriptError for an empty transcript, one in another language
+    (more Latin words than Chinese characters), one with no Mandarin
+    syllables (from parse_transcript), or one far longer than the speech
+    (over MAX_RATE syllables per second); OptionError for a pause outside
+    the recording.
     """
     report = progress or (lambda stage, fraction: None)
     if not transcript_text.strip():
@@ -136,16 +138,9 @@ def analyse(
     _check_language(transcript_text, source)
     notes: list[str] = []
     report("segment", 0.0)
-    parsed = parse_transcript(transcript_text, source)
-    spoken = [sentence for sentence in parsed if sentence.syllables]
-    for sentence in parsed:
+    spoken = parse_transcript(transcript_text, source)  # every sentence has syllables
+    for sentence in spoken:
         notes += sentence.notes
-        if not sentence.syllables:
-            notes.append(f"sentence {_quote(sentence.text)} has no syllables to speak: left out")
-    if not spoken:
-        raise TranscriptError(
-            f"{source}: no Mandarin syllables found in the transcript; expected Chinese text (or tone-numbered pinyin)"
-        )
     parts = find_speech_parts(audio, pause)
     if not parts:
         parts = (Span(0.0, round(audio.duration, 3)),)
