@@ -102,3 +102,48 @@ def test_number_text_rounds_to_a_tenth_with_fewest_characters(value: float) -> N
     assert abs(float(text) - value) <= 0.05 + 1e-9
     assert not text.endswith(".0") and not text.startswith(("0.", "-0."))
     assert number_texts(np.array([value])) == (text,)
+
+
+@pytest.fixture(scope="module")
+def posed_sample():
+    from cartoonface.face.lift import lift
+    from cartoonface.face.model import load_face
+    from cartoonface.face.pose import pose_face
+    from cartoonface.face.state import FaceState, Pose
+    from tests.conftest import ROOT
+
+    lifted = lift(load_face(ROOT / "samples" / "faces" / "female.json"))
+    return {turn: pose_face(lifted, FaceState(pose=Pose(4, turn, -3), smile=0.3).with_mouth("o")) for turn in (-12, 12)}
+
+
+def anchors(d: str) -> np.ndarray:
+    """The on-curve points of an absolute M/C path: (n, 2)."""
+    import re
+
+    points = []
+    for command, args in re.findall(r"([MCLZ])([^MCLZ]*)", d):
+        values = np.array([float(v) for v in re.findall(r"-?(?:\d+\.?\d*|\.\d+)", args)]).reshape(-1, 2)
+        points.extend(values[2::3] if command == "C" else values)
+    return np.array(points)
+
+
+def test_face_shapes_draw_every_part_through_its_points(posed_sample) -> None:
+    from cartoonface.render.geometry import FACE_CONTOUR, PARTS, face_shapes
+
+    posed = posed_sample[12]
+    shapes = face_shapes(posed)
+    assert set(shapes) == {"hair"} | {name for name, _, _ in PARTS}
+    assert all(shapes.values())
+    contour = [name for arc_ in FACE_CONTOUR for name in arc_[:-1]]
+    expected = np.array([posed.p(name) for name in contour + contour[:1]])
+    np.testing.assert_allclose(anchors(shapes["face"]), expected, atol=0.051)
+
+
+def test_nose_bridge_is_drawn_on_the_side_the_pose_shows(posed_sample) -> None:
+    from cartoonface.render.geometry import face_shapes
+
+    for turn, posed in posed_sample.items():
+        start = anchors(face_shapes(posed)["nose"])[0]
+        bridge = "9.7" if posed.nose_side == 1 else "9.6"
+        np.testing.assert_allclose(start, posed.p(bridge), atol=0.051)
+    assert {p.nose_side for p in posed_sample.values()} == {-1, 1}
