@@ -257,5 +257,8 @@ def face_shapes(posed: Posed) -> dict[str, str]:
 
     plan = _plan(tuple(LIFTED_NAMES), len(posed.hair), int(posed.nose_side))
     points = np.concatenate([posed.xy, np.asarray(posed.hair, dtype=float).reshape(-1, 2)])
-    text = plan.template % number_texts(plan.matrix @ points)
+    coordinates = np.empty((len(plan.matrix), 2))
+    for axis in (0, 1):  # two matrix-vector products: 4x faster than one product with (P, 2)
+        coordinates[:, axis] = plan.matrix @ points[:, axis]
+    text = plan.template % number_texts(coordinates)
     return dict(zip(plan.names, text.replace(" -", "-").split("|")))
