@@ -36,6 +36,7 @@ import urllib.parse
 import urllib.request
 import wave
 import zipfile
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -283,13 +284,18 @@ def restart_round(server: Server, sentences: list, sig: int, round_no: int) -> N
     after = {job_id: client.status(job_id) for job_id in ids}
     kept = sum(after[job_id]["state"] == "done" and result_matches(client, job_id, *titles[job_id])
                for job_id in done_before)
-    failed_with_reason = sum(after[job_id]["state"] == "failed" and bool(after[job_id]["error"])
-                             for job_id in unfinished)
-    reasons = sorted({after[job_id]["error"] for job_id in unfinished if after[job_id]["state"] == "failed"})
+    # A job may finish between the last look and the stop: it must then be whole too.
+    late = [job_id for job_id in unfinished if after[job_id]["state"] == "done"]
+    late_whole = sum(result_matches(client, job_id, *titles[job_id]) for job_id in late)
+    reasons = Counter(after[job_id]["error"].split(":")[0] for job_id in unfinished
+                      if after[job_id]["state"] == "failed" and after[job_id]["error"])
+    other = len(unfinished) - len(late) - sum(reasons.values())
     name = signal.Signals(sig).name
     print(f"restart ({name}): {len(done_before)} done before the stop, {kept} still done and intact after "
-          f"the restart (lost {len(done_before) - kept}); {len(unfinished)} interrupted, "
-          f"{failed_with_reason} marked failed with a reason: {reasons}")
+          f"the restart (lost {len(done_before) - kept}); of {len(unfinished)} unfinished: "
+          f"{len(late)} finished during the stop ({late_whole} intact), "
+          + ", ".join(f"{count} failed '{reason}'" for reason, count in sorted(reasons.items()))
+          + f", {other} in any other state")
 
 
 def restart_run(work: Path, sentences: list) -> None:

@@ -535,6 +535,25 @@ def test_closing_the_runner_fails_the_job_it_was_running(tmp_path, speech):
     assert (status.state, status.error) == (FAILED, STOPPED)
 
 
+def test_a_worker_whose_server_is_gone_stops_without_finishing(tmp_path, speech):
+    job = create_job(tmp_path, spec(), stored_inputs(speech))
+    # Parent pid 1 is not the worker's parent: it acts as if its server had died.
+    done = subprocess.run([sys.executable, "-m", "cartoonface.web.worker", str(job.folder), "1"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 3
+    assert "the server went away" in done.stderr
+    assert load_job(tmp_path, job.id).status.state == RUNNING
+    assert not (job.folder / "site").exists()
+
+
+def test_unreadable_job_folders_are_skipped(app, client):
+    broken = Path(app.instance_path) / "jobs" / new_id()
+    broken.mkdir(parents=True)
+    (broken / "job.json").write_text("{not json")
+    assert client.get(f"/jobs/{broken.name}").status_code == 404
+    assert broken.name not in {job.id for job in list_jobs(Path(app.instance_path))}
+
+
 def test_retention_by_age_and_by_total_size(tmp_path, speech):
     now = time.time()
     jobs = [create_job(tmp_path, spec(f"job {i}"), {"audio.wav": bytes(300_000)}) for i in range(4)]

@@ -83,16 +83,15 @@ class Runner:
         with self._lock:
             if self._closed:
                 return
-            log = open(folder / "worker.log", "wb")  # noqa: SIM115 - closed below
-            process = subprocess.Popen(
-                [sys.executable, "-m", "cartoonface.web.worker", str(folder), str(os.getpid())],
-                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-            )
+            with open(folder / "worker.log", "wb") as log:
+                process = subprocess.Popen(
+                    [sys.executable, "-m", "cartoonface.web.worker", str(folder), str(os.getpid())],
+                    stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                )
             self._running[folder] = process
         try:
             code = process.wait()
         finally:
-            log.close()
             with self._lock:
                 self._running.pop(folder, None)
                 closed = self._closed

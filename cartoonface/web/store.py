@@ -152,13 +152,13 @@ def read_spec(folder: Path) -> dict[str, object]:
 
 
 def load_job(instance: Path, job_id: str) -> Job | None:
-    """The stored job `job_id`, or None when the id is malformed or no such job exists."""
+    """The stored job `job_id`, or None when the id is malformed or no such job is readable."""
     if not valid_id(job_id):
         return None
     folder = job_folder(instance, job_id)
     try:
         return Job(job_id, folder, read_spec(folder), read_status(folder))
-    except (FileNotFoundError, NotADirectoryError):
+    except (OSError, ValueError, KeyError):  # gone, or not a job folder this app wrote
         return None
 
 
