@@ -13,8 +13,11 @@ chooses where each sentence ends among the pauses between parts, the energy
 dips inside parts and, as a last resort, evenly spaced cut points. A sentence
 costs the squared log ratio of its speech time to the time its syllable count
 predicts at the recording's mean rate; spanning a pause between parts
-(merging) and cutting inside a part (splitting) cost extra. What was merged
-or split is said in `Alignment.notes`. docs/alignment.md has the details.
+(merging) and cutting inside a part (splitting) cost extra. Sentences that
+end up sharing a speaking part are then aligned together, so the boundary
+between them is the aligner's syllable boundary, not the dip. What was
+merged or split is said in `Alignment.notes`. docs/alignment.md has the
+details.
 """
 
 from __future__ import annotations
@@ -45,6 +48,9 @@ MIN_DIPS = 3
 MAX_RATE = 12.0
 MIN_RATE = 1.0
 LOW_CONFIDENCE = 0.5
+# Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
+# cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
+MAX_JOINT = 60.0
 _CJK = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 
 
@@ -150,11 +156,19 @@ def analyse(
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
     spans, reconciled = reconcile(audio, parts, counts, [sentence.text for sentence in spoken])
     notes += reconciled
-    sentences = []
-    for index, (sentence, span) in enumerate(zip(spoken, spans, strict=True)):
-        report("align", index / len(spoken))
-        sentences.append(_aligned(audio, sentence, span))
+    sentences: list[Sentence] = []
+    for block in _blocks(spans):
+        report("align", len(sentences) / len(spoken))
+        span = Span(spans[block[0]].start, spans[block[-1]].end)
+        if len(block) > 1 and span.duration <= MAX_JOINT:
+            # Sentences sharing a speaking part are aligned together: the boundary between them
+            # is where the aligner puts it, not the dip the reconciling chose.
+            sentences += _aligned(audio, [spoken[k] for k in block], span)
+        else:
+            for k in block:
+                sentences += _aligned(audio, [spoken[k]], spans[k])
     report("align", 1.0)
+    notes += _split_notes(sentences, spans, parts)
     low = [s for sentence in sentences for s in sentence.syllables if s.confidence < LOW_CONFIDENCE]
     if low:
         notes.append(
@@ -195,14 +209,29 @@ def _check_rate(syllables: int, speech: float, source: str, notes: list[str]) ->
         )
 
 
-def _aligned(audio: Audio, sentence: SentenceText, span: Span) -> Sentence:
-    """Time the syllables of `sentence` inside `span` of `audio`."""
-    timings = align_syllables(audio, span, [syllable.pinyin for syllable in sentence.syllables])
-    syllables = tuple(
-        Syllable(text.text, text.pinyin, tuple(text.shapes), timing.start, timing.end, timing.confidence)
-        for text, timing in zip(sentence.syllables, timings, strict=True)
-    )
-    return Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables)
+def _blocks(spans: tuple[Span, ...]) -> list[list[int]]:
+    """Indices of the sentences in runs whose spans touch (cut inside one speaking part)."""
+    blocks = [[0]]
+    for index in range(1, len(spans)):
+        if spans[index - 1].end >= spans[index].start:
+            blocks[-1].append(index)
+        else:
+            blocks.append([index])
+    return blocks
+
+
+def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[Sentence]:
+    """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`."""
+    pinyin = [syllable.pinyin for sentence in texts for syllable in sentence.syllables]
+    timings = iter(align_syllables(audio, span, pinyin))
+    sentences = []
+    for sentence in texts:
+        syllables = tuple(
+            Syllable(text.text, text.pinyin, tuple(text.shapes), timing.start, timing.end, timing.confidence)
+            for text, timing in zip(sentence.syllables, timings)
+        )
+        sentences.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
+    return sentences
 
 
 @dataclass(frozen=True)
@@ -222,8 +251,10 @@ def reconcile(
     """Lay sentences of `counts` syllables (texts `texts`) over the speaking `parts` of `audio`.
 
     Returns one Span per sentence, in order, and the notes saying which
-    parts were merged or split. The spans cover the parts' speech, do not
-    overlap, and the first starts where the first part does.
+    parts were merged. The spans cover the parts' speech and do not overlap;
+    two consecutive spans touch (end == next start) where a part was cut
+    between them (at a dip, or an evenly spaced point), and are apart where
+    a pause between parts separates them.
     """
     cuts = _cuts(audio, parts, len(counts))
     speech_before = _speech_clock(parts)
@@ -237,7 +268,7 @@ def reconcile(
     spans = tuple(
         Span(round(float(right[a]), 3), round(float(left[b]), 3)) for a, b in zip(boundaries, boundaries[1:])
     )
-    return spans, _notes(cuts, boundaries, parts, texts)
+    return spans, _notes(cuts, boundaries, texts)
 
 
 def _cuts(audio: Audio, parts: tuple[Span, ...], sentences: int) -> list[_Cut]:
@@ -321,8 +352,8 @@ def _best_cuts(
     return path[::-1]
 
 
-def _notes(cuts: list[_Cut], boundaries: list[int], parts: tuple[Span, ...], texts: list[str]) -> list[str]:
-    """Say which sentences span several speaking parts and which parts were cut, for the user."""
+def _notes(cuts: list[_Cut], boundaries: list[int], texts: list[str]) -> list[str]:
+    """Say which sentences span several speaking parts (merged), for the user."""
     notes = []
     for number, (a, b) in enumerate(zip(boundaries, boundaries[1:]), start=1):
         merged = [cut for cut in cuts[a + 1 : b] if cut.kind == "pause"]
@@ -332,15 +363,22 @@ def _notes(cuts: list[_Cut], boundaries: list[int], parts: tuple[Span, ...], tex
                 f"sentence {number} {_quote(texts[number - 1])}: speaking parts {first + 1}-{last + 1} merged "
                 f"(the speaker paused {len(merged)} time(s) inside it)"
             )
-    for number, index in enumerate(boundaries[1:-1], start=1):
-        cut = cuts[index]
-        if cut.kind in ("dip", "forced"):
-            part = parts[cut.part]
-            how = "at a dip in loudness" if cut.kind == "dip" else "at the expected time (no pause found there)"
-            notes.append(
-                f"speaking part {cut.part + 1} ({part.start:.2f}-{part.end:.2f} s) split at {cut.left:.2f} s "
-                f"{how}, between sentences {number} and {number + 1}"
-            )
+    return notes
+
+
+def _split_notes(sentences: list[Sentence], spans: tuple[Span, ...], parts: tuple[Span, ...]) -> list[str]:
+    """Say where a speaking part holding several sentences was split, at the aligned boundary."""
+    notes = []
+    for number in range(1, len(sentences)):
+        if spans[number - 1].end < spans[number].start:
+            continue  # the sentences are separated by a pause between parts
+        time = (sentences[number - 1].end + sentences[number].start) / 2
+        index = min(range(len(parts)), key=lambda i: max(parts[i].start - time, time - parts[i].end, 0.0))
+        part = parts[index]
+        notes.append(
+            f"speaking part {index + 1} ({part.start:.2f}-{part.end:.2f} s) split at {time:.2f} s, "
+            f"between sentences {number} and {number + 1} (no pause there)"
+        )
     return notes
 
 
