@@ -31,7 +31,7 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-ges
 # What the page is asked, in one evaluation so both clocks are read at the same moment.
 CLOCKS = """() => ({audio: document.getElementById('cf-audio').currentTime,
                     svg: document.getElementById('cf-face').getCurrentTime()})"""
-VISIBLE_MOUTH = """() => [...document.querySelectorAll('#cf-face g[data-part=mouth] > g[data-shape]')]
+VISIBLE_MOUTH = """() => [...document.querySelectorAll('#cf-face g[data-shape]')]
     .filter(g => getComputedStyle(g).visibility === 'visible').map(g => g.dataset.shape)"""
 
 

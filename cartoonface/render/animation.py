@@ -8,19 +8,19 @@ Temporal domain (6.3.2): the thesis shows each frame as
 We keep that form and make it small:
 
 - the face of render/svg.py is split into part tracks (TRACK_OF): hair, ears,
-  face (outline and cheeks, which follow the jaw), features (nose and brows),
-  eyes, mouth. Each track has its own frames, so a moving mouth does not
+  face (outline, cheeks and mouth, which follow the jaw), features (nose and
+  brows), eyes. Each track has its own frames, so a moving mouth does not
   repeat the eyes, and a still head does not repeat the hair;
 - a part drawing that looks the same in consecutive frames is one longer
   `<set>`; a drawing that comes back later (the rest mouth, open eyes) is
   written once with one `<set>` per time it is shown;
 - a track whose drawing never changes is written once, outside any frame;
-- coordinates are rounded to whole pixels of the face canvas and written as
-  relative path commands; runs of straight segments (the corner-cut hair and
-  brows) drop points within half a pixel of the line through their
-  neighbours (Douglas-Peucker): below what a screen shows, at a third of the
-  bytes;
-- repeated presentation attributes become a handful of CSS classes.
+- coordinates are whole pixels in relative path commands (render/pathdata.py);
+- an outline drawn twice in one part (the eye's white, its outline and its
+  clip path) is defined once and drawn with `<use>`; so is a part shown in
+  several drawings of its track (the face outline under different mouths);
+- repeated presentation attributes become a handful of CSS classes;
+- the head pose is held for two frames at 30 fps (POSE_RATE).
 
 Frame i shows time i / fps. Times are written in whole milliseconds, each
 `begin`/`dur` derived from the frame boundaries round(i * 1000 / fps), so the
@@ -32,8 +32,10 @@ own plays silently; the pages drive its clock from the audio (static/cartoonface
 
 from __future__ import annotations
 
-import functools
+import copy
+import dataclasses
 import re
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -44,6 +46,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState
+from cartoonface.render.pathdata import compact_paths
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 from cartoonface.render.svg import face_defs, face_group
 
@@ -51,25 +54,30 @@ SVG = "http://www.w3.org/2000/svg"
 NSMAP = {None: SVG}
 # The track of each part of render/svg.py's face_group (by its class), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
+# The mouth moves with the jaw, so it shares the track of the face outline: it is then drawn
+# before the nose, brows and eyes rather than after them, which changes nothing on screen
+# (they never overlap; where a nodding nose tip comes near the upper lip, the nose in front is right).
 TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "cheeks": "face",
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
-            "mouth": "mouth"}
+            "mouth": "face"}
+MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
 # Elements that only define something referenced by id: hoisted out of the frames into <defs>
 # (inside a hidden frame a clip path's children would inherit visibility="hidden" and clip everything).
-DEFINITIONS = frozenset(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
-                                                       "pattern", "filter", "marker", "symbol"))
-# Attributes that place an element (rounded, kept on it); every other attribute but these
-# and the references below is style, moved into a CSS class.
+DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
+                                                  "pattern", "filter", "marker", "symbol"))
+# Attributes that place an element (rounded to whole pixels, kept on it). Every other
+# attribute but KEPT ones and references to per-state definitions is style: a CSS class.
 POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
-KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "id",
+KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
                   "offset"))
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle
-TOLERANCE = 0.5  # pixels: straight runs lose points closer than this to the simplified line
-_TOKEN = re.compile(r"[A-Za-z]|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+# Head poses drawn per second at most: at 30 fps the head moves "on twos" (each pose held for
+# two frames, as animators draw slow movements), lips and eyes still change on every frame.
+# Halves the frames that redraw the whole head during a tilt, turn or nod (docs/output.md).
+POSE_RATE = 15
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "S": 4, "T": 2, "H": 1, "V": 1, "Z": 0}
 
 
 @dataclass(frozen=True)
@@ -102,135 +110,6 @@ def runs(keys: Sequence[int]) -> tuple[Run, ...]:
     return tuple(merged)
 
 
-def _simplify(points: list[tuple[int, int]]) -> list[tuple[int, int]]:
-    """Douglas-Peucker: the points of a polyline (first and last kept) whose dropping would move
-    the line by more than TOLERANCE pixels."""
-    if len(points) < 3:
-        return points
-    xy = np.array(points, dtype=float)
-    keep = np.zeros(len(xy), dtype=bool)
-    keep[[0, -1]] = True
-    stack = [(0, len(xy) - 1)]
-    while stack:
-        first, last = stack.pop()
-        if last - first < 2:
-            continue
-        chord = xy[last] - xy[first]
-        offsets = xy[first + 1 : last] - xy[first]
-        length = float(np.hypot(*chord))
-        if length == 0:
-            distance = np.hypot(offsets[:, 0], offsets[:, 1])
-        else:
-            distance = np.abs(chord[0] * offsets[:, 1] - chord[1] * offsets[:, 0]) / length
-        worst = int(np.argmax(distance))
-        if distance[worst] > TOLERANCE:
-            middle = first + 1 + worst
-            keep[middle] = True
-            stack += [(first, middle), (middle, last)]
-    return [point for point, kept in zip(points, keep.tolist(), strict=True) if kept]
-
-
-def _numbers(values: Sequence[int]) -> str:
-    """Integers joined the SVG way: a comma only where the next one has no minus sign."""
-    text = ""
-    for value in values:
-        text += f"{value}" if not text or value < 0 else f",{value}"
-    return text
-
-
-@functools.lru_cache(maxsize=1 << 16)
-def compact_path(d: str) -> str:
-    """Path data `d` (absolute M/L/C/Q/S/T/H/V/Z commands) rounded to whole pixels, straight runs
-    simplified (TOLERANCE), written with relative commands; `d` unchanged if it holds anything else."""
-    tokens = _TOKEN.findall(d)
-    commands: list[tuple[str, list[int]]] = []
-    x = y = start_x = start_y = 0
-    index, command = 0, ""
-    while index < len(tokens):
-        if tokens[index].isalpha():
-            command = tokens[index]
-            index += 1
-        if command not in _ARITY:
-            return d
-        if command == "Z":
-            commands.append(("z", []))
-            x, y = start_x, start_y
-            continue
-        arity = _ARITY[command]
-        try:
-            values = [round(float(v)) for v in tokens[index : index + arity]]
-        except ValueError:
-            return d
-        if len(values) < arity:
-            return d
-        index += arity
-        if command == "H":
-            command, values = "L", [values[0], y]
-        elif command == "V":
-            command, values = "L", [x, values[0]]
-        commands.append((command, values))
-        x, y = values[-2], values[-1]
-        if command == "M":
-            start_x, start_y = x, y
-            command = "L"  # numbers after a moveto are linetos
-    return _relative(_straightened(commands))
-
-
-def _straightened(commands: list[tuple[str, list[int]]]) -> list[tuple[str, list[int]]]:
-    """The commands with each run of linetos simplified (`_simplify`) and zero-length linetos dropped."""
-    out: list[tuple[str, list[int]]] = []
-    current = run_start = (0, 0)
-    run: list[tuple[int, int]] = []
-    for command, values in [*commands, ("end", [])]:
-        if command == "L":
-            if not run:
-                run_start = current
-            run.append((values[0], values[1]))
-        else:
-            if run:
-                kept = _simplify([run_start, *run])[1:]
-                out += [("L", [px, py]) for (px, py), (qx, qy) in zip(kept, [run_start, *kept]) if (px, py) != (qx, qy)]
-                run = []
-            if command != "end":
-                out.append((command, values))
-        if values:
-            current = (values[-2], values[-1])
-        elif command == "z":
-            current = _subpath_start(out)
-    return out
-
-
-def _subpath_start(commands: list[tuple[str, list[int]]]) -> tuple[int, int]:
-    """Where the last subpath of `commands` began (its moveto), (0, 0) if none."""
-    for command, values in reversed(commands):
-        if command == "M":
-            return values[0], values[1]
-    return 0, 0
-
-
-def _relative(commands: list[tuple[str, list[int]]]) -> str:
-    """Absolute integer commands as relative path text (z returns to the subpath start)."""
-    text, previous = "", ""
-    x = y = start_x = start_y = 0
-    for command, values in commands:
-        if command == "z":
-            text += "z"
-            x, y, previous = start_x, start_y, "z"
-            continue
-        relative = [v - (y if i % 2 else x) for i, v in enumerate(values)]
-        letter = command.lower()
-        numbers = _numbers(relative)
-        if letter == previous and letter != "m":
-            text += numbers if numbers.startswith("-") else "," + numbers
-        else:
-            text += letter + numbers
-        x, y = values[-2], values[-1]
-        if command == "M":
-            start_x, start_y = x, y
-        previous = letter
-    return text
-
-
 def figure_of(face: FaceModel, box: tuple[float, float, float, float]) -> Figure:
     """Where the neck and shoulders go for `face` inside the picture `box` (the face is as wide as
     its widest feature points, the contour)."""
@@ -250,84 +129,121 @@ def track_of(part: etree._Element) -> str:
     return TRACK_OF.get(name[0], name[0]) if name else "face"
 
 
-class _Drawings:
-    """Distinct part drawings of every track, the definitions they share and their style classes."""
+@dataclass
+class _RawPart:
+    """A part as face_group drew it, with the per-state definitions it references."""
+
+    track: str
+    element: etree._Element
+    definitions: list[etree._Element]
+
+
+class _Writer:
+    """Collects the drawn states, then writes the distinct part drawings compactly."""
 
     def __init__(self, defs: etree._Element) -> None:
         self.defs = defs
+        self.raw_ids: dict[bytes, int] = {}
+        self.raw: list[_RawPart] = []
         self.definition_ids: dict[bytes, str] = {}
+        self.shared_paths: dict[str, str] = {}
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
-        self.order: list[str] = []  # tracks in drawing order
-        self.keys: dict[str, dict[bytes, int]] = {}
-        self.parts: dict[str, list[list[etree._Element]]] = {}
-        self.shapes: list[str] = []  # dominant mouth symbol of each mouth drawing
+
+    def collect(self, group: etree._Element) -> tuple[int, ...]:
+        """Take one face_group drawing; return the raw part numbers, in drawing order."""
+        definitions = {node.get("id"): node for node in group.iter(*DEFINITIONS) if node.get("id")}
+        numbers = []
+        for part in group:
+            if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
+                continue
+            raw = etree.tostring(part)
+            used = [node for name, node in definitions.items() if f"#{name})".encode() in raw]
+            key = raw + b"".join(etree.tostring(node) for node in used)
+            number = self.raw_ids.get(key)
+            if number is None:
+                number = self.raw_ids[key] = len(self.raw)
+                self.raw.append(_RawPart(track_of(part), part, used))
+            numbers.append(number)
+        return tuple(numbers)
+
+    def finish(self) -> tuple[list[int], list[etree._Element]]:
+        """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
+        and the tidy drawings."""
+        compact = compact_paths(node.get("d") for part in self.raw
+                                for top in (part.element, *part.definitions) for node in top.iter() if node.get("d"))
+        tidy_ids: dict[bytes, int] = {}
+        tidy: list[etree._Element] = []
+        mapping = []
+        for part in self.raw:
+            element = self._tidy_part(part, compact)
+            key = etree.tostring(element)
+            number = tidy_ids.get(key)
+            if number is None:
+                number = tidy_ids[key] = len(tidy)
+                tidy.append(element)
+            mapping.append(number)
+        return mapping, tidy
+
+    def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> etree._Element:
+        """The part with compact paths, shared outlines as <use>, definitions hoisted, style as classes."""
+        tops = (part.element, *part.definitions)
+        paths = [node for top in tops for node in top.iter() if node.get("d")]
+        for node in paths:
+            node.set("d", compact[node.get("d")])
+        counts = Counter(node.get("d") for node in paths)
+        for node in paths:
+            if counts[node.get("d")] > 1:
+                d = node.attrib.pop("d")
+                node.tag = f"{{{SVG}}}use"
+                node.set("href", f"#{self._shared_path(d)}")
+        renamed = {}
+        for definition in part.definitions:
+            renamed[definition.get("id")] = self._hoist(definition)
+        for node in part.element.iter():
+            self._tidy_node(node, renamed)
+        return part.element
+
+    def _shared_path(self, d: str) -> str:
+        """The id of a `<path d="d">` in <defs> (made on first use)."""
+        name = self.shared_paths.get(d)
+        if name is None:
+            name = self.shared_paths[d] = f"p{len(self.shared_paths)}"
+            _el(self.defs, "path", id=name, d=d)
+        return name
 
     def _hoist(self, definition: etree._Element) -> str:
-        """Move `definition` to <defs> under an id named by its content (shared if seen before)."""
+        """Copy `definition` into <defs> under an id named by its content (shared if seen before)."""
+        definition = copy.deepcopy(definition)
         definition.attrib.pop("id", None)
         for node in definition.iter():
-            self._tidy(node, style=False)
+            node.attrib.pop("class", None)
         content = etree.tostring(definition)
-        new_id = self.definition_ids.get(content)
-        if new_id is None:
-            new_id = f"k{len(self.definition_ids)}"
-            self.definition_ids[content] = new_id
-            definition.set("id", new_id)
+        name = self.definition_ids.get(content)
+        if name is None:
+            name = self.definition_ids[content] = f"k{len(self.definition_ids)}"
+            definition.set("id", name)
             self.defs.append(definition)
-        return new_id
+        return name
 
-    def _tidy(self, node: etree._Element, style: bool, renamed: dict[str, str] | None = None) -> None:
-        """Round `node`'s coordinates, point references at renamed definitions and, if `style`,
-        move its presentation attributes into a CSS class."""
+    def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
+        """Round `node`'s position, point its references at hoisted definitions, move its style to a class."""
         attrib = node.attrib
-        if "d" in attrib:
-            attrib["d"] = compact_path(attrib["d"])
+        attrib.pop("id", None)
         attrib.pop("class", None)
-        moved = []
+        style = []
         for name, value in list(attrib.items()):
             if name in POSITIONS:
                 attrib[name] = str(round(float(value)))
-            elif renamed and "url(#" in value:
-                value = attrib[name] = _REFERENCE.sub(lambda m: f"url(#{renamed.get(m.group(1), m.group(1))})", value)
-            if style and name not in POSITIONS and name not in KEPT and "url(#k" not in value:
-                moved.append((name, attrib.pop(name)))
-        if moved:
-            key = tuple(sorted(moved))
+            elif "url(#" in value and any(old in value for old in renamed):
+                attrib[name] = _REFERENCE.sub(lambda m: f"url(#{renamed.get(m.group(1), m.group(1))})", value)
+            elif name not in KEPT:
+                style.append((name, attrib.pop(name)))
+        if style:
+            key = tuple(sorted(style))
             label = self.styles.get(key)
             if label is None:
                 label = self.styles[key] = f"s{len(self.styles)}"
             attrib["class"] = label
-
-    def add(self, group: etree._Element, state: FaceState) -> dict[str, int]:
-        """Split one drawn face `group` into tracks; return {track: drawing number}."""
-        renamed: dict[str, str] = {}
-        for definition in [e for e in group.iter() if e.tag in DEFINITIONS and e.get("id")]:
-            old = definition.get("id")
-            definition.getparent().remove(definition)
-            renamed[old] = self._hoist(definition)
-        by_track: dict[str, list[etree._Element]] = {}
-        for part in group:
-            if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
-                continue
-            track = track_of(part)
-            for node in part.iter():
-                node.attrib.pop("id", None)
-                self._tidy(node, style=True, renamed=renamed)
-            by_track.setdefault(track, []).append(part)
-        numbers = {}
-        for track, parts in by_track.items():
-            if track not in self.keys:
-                self.order.append(track)
-                self.keys[track], self.parts[track] = {}, []
-            key = b"".join(etree.tostring(part) for part in parts)
-            known = self.keys[track]
-            if key not in known:
-                known[key] = len(known)
-                self.parts[track].append(parts)
-                if track == "mouth":
-                    self.shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
-            numbers[track] = known[key]
-        return numbers
 
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
@@ -350,10 +266,38 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
                    dur=clock(end - begin))
         if run is all_runs[-1]:
             show.set("fill", "freeze")
-    for number, (frame, parts) in enumerate(zip(frames, drawings, strict=True)):
-        if track == "mouth":
+    for number, frame in enumerate(frames):
+        if track == MOUTH_TRACK:
             frame.set("data-shape", shapes[number])
-        frame.extend(parts)
+        frame.extend(drawings[number])
+
+
+def _share(drawings: dict[str, list[list[int]]], tidy: list[etree._Element],
+           defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
+    """The elements of every drawing: a part drawn in one drawing only is itself; a part in
+    several is put once into `defs` as `<g id="gN">` and each drawing shows it with `<use>`."""
+    uses = Counter(part for track in drawings.values() for drawing in track for part in drawing)
+    names: dict[int, str] = {}
+    for part, count in uses.items():
+        if count > 1:
+            names[part] = f"g{len(names)}"
+            shared = _el(defs, "g", id=names[part])
+            shared.append(tidy[part])
+    return {track: [[etree.Element(f"{{{SVG}}}use", href=f"#{names[part]}") if part in names else tidy[part]
+                     for part in drawing] for drawing in track_drawings]
+            for track, track_drawings in drawings.items()}
+
+
+def on_twos(states: Sequence[FaceState], fps: int) -> list[FaceState]:
+    """`states` with the head pose held for fps // POSE_RATE frames at a time (from the first of them)."""
+    step = max(1, fps // POSE_RATE)
+    if step == 1:
+        return list(states)
+    held = []
+    for index, state in enumerate(states):
+        pose = states[index - index % step].pose
+        held.append(state if state.pose == pose else dataclasses.replace(state, pose=pose))
+    return held
 
 
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
@@ -380,23 +324,44 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     defs.extend(face_defs(face))
     figure = figure_of(face, box)
     root.append(background_layer(background, figure, defs))
-    drawings = _Drawings(defs)
+    writer = _Writer(defs)
     lifted = lift(face)
-    seen: dict[FaceState, dict[str, int]] = {}
+    drawn: dict[FaceState, tuple[int, ...]] = {}
+    frames = []
+    for state in on_twos(states, fps):
+        parts = drawn.get(state)
+        if parts is None:
+            parts = drawn[state] = writer.collect(face_group(face, pose_face(lifted, state), UID))
+        frames.append((state, parts))
+    mapping, tidy = writer.finish()
+    order: list[str] = []  # tracks in drawing order
+    numbers: dict[str, dict[tuple[int, ...], int]] = {}
+    drawings: dict[str, list[list[int]]] = {}
     keys: dict[str, list[int]] = {}
-    for state in states:
-        numbers = seen.get(state)
-        if numbers is None:
-            numbers = seen[state] = drawings.add(face_group(face, pose_face(lifted, state), UID), state)
-        for track, number in numbers.items():
-            keys.setdefault(track, []).append(number)
-    style.text = drawings.style_sheet()
+    shapes: list[str] = []  # dominant mouth symbol of each mouth drawing
+    for state, parts in frames:
+        by_track: dict[str, list[int]] = {}
+        for raw in parts:
+            by_track.setdefault(writer.raw[raw].track, []).append(mapping[raw])
+        for track, tidy_parts in by_track.items():
+            if track not in numbers:
+                order.append(track)
+                numbers[track], drawings[track], keys[track] = {}, [], []
+            key = tuple(tidy_parts)
+            number = numbers[track].get(key)
+            if number is None:
+                number = numbers[track][key] = len(drawings[track])
+                drawings[track].append(tidy_parts)
+                if track == MOUTH_TRACK:
+                    shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
+            keys[track].append(number)
+    elements = _share(drawings, tidy, defs)
+    style.text = writer.style_sheet()
     hair = _el(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
     if dressed is not None:
         root.append(dressed)
     layer = _el(root, "g", id="face")
-    for track in drawings.order:
-        _track_group(hair if track in HAIR_TRACKS else layer, track, drawings.parts[track], keys[track], fps,
-                     drawings.shapes)
+    for track in order:
+        _track_group(hair if track in HAIR_TRACKS else layer, track, elements[track], keys[track], fps, shapes)
     return etree.tostring(root, xml_declaration=True, encoding="utf-8")

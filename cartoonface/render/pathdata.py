@@ -1,0 +1,200 @@
+"""Compact SVG path data for the animation: whole pixels, relative commands, simplified polylines.
+
+render/geometry.py writes each part as absolute commands in tenths of a pixel. An
+animation repeats a part in thousands of frames, so `compact_paths` rewrites them:
+
+- every coordinate is rounded to a whole pixel of the face canvas (the canvas is
+  drawn at about its own size, so this is what a screen shows);
+- commands become relative (`m l c q z`), a repeated command letter is left out
+  and a comma is written only where the next number has no minus sign;
+- runs of straight segments (the corner-cut hair and eyebrows, Chaikin with eight
+  points per edge) keep only the points that the Douglas-Peucker rule needs to stay
+  within TOLERANCE of the full polyline. The points are chosen once per outline on
+  its first drawing and the same ones are kept in every pose, so an outline does not
+  shimmer as vertices come and go between frames.
+
+All paths with one command skeleton (the same commands, different numbers) are done
+together with numpy. Paths with other commands (H, V, S, T, A, relative ones) are
+left as they are.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+TOLERANCE = 0.5  # pixels: a dropped point lies closer than this to the simplified line
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "Z": 0}
+_LETTERS = "".join(chr(c) for c in range(65, 91)) + "".join(chr(c) for c in range(97, 123))
+_ONLY_LETTERS = {ord(c): None for c in "0123456789.,+- \t\n\r"}
+_LETTERS_TO_SPACES = {ord(c): " " for c in _LETTERS + ","}
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """How to write every path of one skeleton from its (n, 2P) absolute rounded coordinates.
+
+    `columns` (K,): the coordinate columns written; `references` (K,): the column each is
+    relative to (-1: none); `prefixes` (K,) object: command letters written before each
+    number; `after_letter` (K,): the number follows a letter (no separator); `tail`: letters
+    after the last number."""
+
+    columns: np.ndarray
+    references: np.ndarray
+    prefixes: np.ndarray
+    after_letter: np.ndarray
+    tail: str
+
+
+def _commands(skeleton: str, count: int) -> list[tuple[str, int]] | None:
+    """The skeleton, either the command letters alone ('MCCZ', each command written out) or
+    'M# #C# # ...' with '#' for numbers, as (letter, arity) commands, one per repetition; `count`
+    numbers in all. None for anything but absolute M/L/C/Q/Z or when the numbers do not fit."""
+    if "#" not in skeleton:
+        commands = [(letter, _ARITY.get(letter, -1)) for letter in skeleton]
+        if any(arity < 0 for _, arity in commands) or sum(a for _, a in commands) != count:
+            return None
+        return commands if commands and commands[0][0] == "M" else None
+    commands = []
+    for letter, marks in re.findall(r"([A-Za-z])([^A-Za-z]*)", skeleton):
+        count = marks.count("#")
+        arity = _ARITY.get(letter)
+        if arity is None or (arity == 0 and count) or (arity and (count == 0 or count % arity)):
+            return None
+        if arity == 0:
+            commands.append((letter, 0))
+            continue
+        for repeat in range(count // arity):
+            commands.append(("L" if letter == "M" and repeat else letter, arity))
+    if not commands or commands[0][0] != "M":
+        return None
+    return commands
+
+
+def simplify(points: np.ndarray) -> np.ndarray:
+    """Douglas-Peucker on a polyline `points` (n, 2): a bool mask (n,) of the points to keep
+    (the ends always) so that no dropped point is farther than TOLERANCE from the kept
+    segment that replaces it."""
+    keep = np.zeros(len(points), dtype=bool)
+    keep[[0, -1]] = True
+    stack = [(0, len(points) - 1)]
+    while stack:
+        first, last = stack.pop()
+        if last - first < 2:
+            continue
+        chord = points[last] - points[first]
+        offsets = points[first + 1 : last] - points[first]
+        # Distance to the segment (not the infinite line), so a point past either end counts in full.
+        share = np.clip(offsets @ chord / max(float(chord @ chord), 1e-12), 0.0, 1.0)
+        gaps = offsets - share[:, None] * chord
+        distance = np.hypot(gaps[:, 0], gaps[:, 1])
+        worst = int(np.argmax(distance))
+        if distance[worst] > TOLERANCE:
+            keep[first + 1 + worst] = True
+            stack += [(first, first + 1 + worst), (first + 1 + worst, last)]
+    return keep
+
+
+def _plan(commands: list[tuple[str, int]], first: np.ndarray) -> _Plan:
+    """The writing plan of `commands`, choosing the polyline points kept from `first` (2P,),
+    the rounded coordinates of the first path of this skeleton."""
+    points = first.reshape(-1, 2).astype(float)
+    # Absolute point index where each command ends, and the points it writes.
+    spans, point = [], 0
+    for letter, arity in commands:
+        spans.append(list(range(point, point + arity // 2)))
+        point += arity // 2
+    kept = [True] * len(commands)
+    index = 0
+    while index < len(commands):  # runs of linetos after some start point
+        if commands[index][0] != "L" or index == 0:
+            index += 1
+            continue
+        end = index
+        while end < len(commands) and commands[end][0] == "L":
+            end += 1
+        start_point = spans[index - 1][-1] if spans[index - 1] else None
+        if start_point is not None and end - index >= 2:
+            rows = [start_point] + [spans[k][0] for k in range(index, end)]
+            mask = simplify(points[rows])
+            for k, keep in zip(range(index, end), mask[1:].tolist(), strict=True):
+                kept[k] = keep
+        index = end
+    columns, references, prefixes, after = [], [], [], []
+    current, subpath, previous, pending = -1, -1, "", ""
+    for (letter, _), span, keep in zip(commands, spans, kept, strict=True):
+        if not keep:
+            continue
+        if letter == "Z":
+            pending += "z"
+            current, previous = subpath, "z"
+            continue
+        lower = letter.lower()
+        if lower != previous or lower == "m":
+            pending += lower
+        for position, point_index in enumerate(span):
+            for axis in (0, 1):
+                columns.append(2 * point_index + axis)
+                references.append(2 * current + axis if current >= 0 else -1)
+                prefixes.append(pending if position == 0 and axis == 0 else "")
+                after.append(bool(pending) if position == 0 and axis == 0 else False)
+                pending = "" if position == 0 and axis == 0 else pending
+        current = span[-1]
+        if letter == "M":
+            subpath = current
+        previous = lower
+    prefix_array = np.empty(len(prefixes), dtype=object)
+    prefix_array[:] = prefixes
+    return _Plan(np.array(columns, dtype=np.intp), np.array(references, dtype=np.intp), prefix_array,
+                 np.array(after, dtype=bool), pending)
+
+
+@functools.lru_cache(maxsize=8)
+def _texts(limit: int) -> tuple[np.ndarray, np.ndarray]:
+    """Number texts for -limit..limit (index value + limit): plain ('5', '-5') and with a
+    separating comma where one is needed (',5', '-5')."""
+    values = range(-limit, limit + 1)
+    plain = np.array([str(v) for v in values], dtype=object)
+    comma = np.array([str(v) if v < 0 else f",{v}" for v in values], dtype=object)
+    return plain, comma
+
+
+def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
+    """Path texts of the rows of `rounded` (n, 2P) integer absolute coordinates."""
+    values = rounded[:, plan.columns]
+    bases = np.where(plan.references >= 0, rounded[:, np.maximum(plan.references, 0)], 0)
+    relative = values - bases
+    limit = 1 << max(int(np.abs(relative).max(initial=0)).bit_length(), 10)
+    plain, comma = _texts(limit)
+    numbers = np.where(plan.after_letter, plain[relative + limit], comma[relative + limit])
+    pieces = plan.prefixes + numbers
+    return ["".join(row) + plan.tail for row in pieces.tolist()]
+
+
+def compact_paths(paths: Iterable[str]) -> dict[str, str]:
+    """Map each path data string of `paths` to its compact form (see the module docstring)."""
+    groups: dict[str, list[str]] = {}
+    for d in set(paths):
+        # Fast skeleton: the command letters, when every number is plain (no exponent).
+        letters = d.translate(_ONLY_LETTERS)
+        groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
+    compact: dict[str, str] = {}
+    for skeleton, members in groups.items():
+        members.sort()
+        if "#" in skeleton:
+            numbers = [_NUMBER.findall(d) for d in members]
+        else:
+            numbers = [d.translate(_LETTERS_TO_SPACES).replace("-", " -").split() for d in members]
+        commands = _commands(skeleton, len(numbers[0])) if len({len(row) for row in numbers}) == 1 else None
+        if commands is None:
+            compact.update((d, d) for d in members)
+            continue
+        rounded = np.rint(np.array(numbers, dtype=float)).astype(np.int64)
+        plan = _plan(commands, rounded[0])
+        compact.update(zip(members, _write(plan, rounded), strict=True))
+    return compact

@@ -1,0 +1,202 @@
+"""The animation SVG: layers, frames and <set>s tiling the timeline, merging, rounding, references."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from lxml import etree
+
+from cartoonface.errors import OptionError
+from cartoonface.face.model import load_face
+from cartoonface.face.state import FaceState, Pose
+from cartoonface.render.animation import animation_svg, clock
+from cartoonface.render.pathdata import TOLERANCE, compact_paths
+
+ROOT = Path(__file__).resolve().parent.parent
+NS = {"s": "http://www.w3.org/2000/svg"}
+S = "{http://www.w3.org/2000/svg}"
+
+
+@pytest.fixture(scope="module")
+def face():
+    return load_face(ROOT / "samples" / "faces" / "female.json")
+
+
+def talking(*mouths: tuple[str, int]) -> list[FaceState]:
+    """A still head saying `mouths`: (symbol, frames) in a row."""
+    return [FaceState(mouth=((symbol, 1.0),)) for symbol, count in mouths for _ in range(count)]
+
+
+def intervals(track: etree._Element) -> list[tuple[int, int, etree._Element]]:
+    """(begin ms, end ms, frame <g>) of every <set> in a track, sorted by begin."""
+    found = []
+    for show in track.iterfind(".//s:set", NS):
+        begin = round(float(show.get("begin")) * 1000)
+        found.append((begin, begin + round(float(show.get("dur")) * 1000), show.getparent()))
+    return sorted(found, key=lambda item: item[0])
+
+
+def content(frame: etree._Element) -> bytes:
+    """A frame's drawing without its <set>s."""
+    return b"".join(etree.tostring(child) for child in frame if child.tag != f"{S}set")
+
+
+def tracks(svg: etree._Element) -> dict[str, etree._Element]:
+    return {g.get("data-part"): g for g in svg.iterfind(".//s:g[@data-part]", NS)}
+
+
+def test_sets_tile_the_timeline_without_gap_or_overlap(face):
+    fps = 30
+    states = talking(("m", 5), ("a", 4), ("m", 3), ("o", 2), ("m", 4), ("i", 1))
+    svg = etree.fromstring(animation_svg(face, states, fps))
+    animated = {name: g for name, g in tracks(svg).items() if g.find(".//s:set", NS) is not None}
+    assert animated, "a talking face has at least one animated track"
+    end = round(len(states) * 1000 / fps)
+    for name, track in animated.items():
+        spans = intervals(track)
+        assert spans[0][0] == 0 and spans[-1][1] == end, name
+        for (_, first_end, _), (second_begin, _, _) in zip(spans, spans[1:]):
+            assert first_end == second_begin, f"{name}: gap or overlap at {first_end} ms"
+        for frame in {id(f): f for _, _, f in spans}.values():
+            assert frame.get("visibility") == "hidden"
+            assert all(s.get("attributeName") == "visibility" and s.get("to") == "visible"
+                       for s in frame.iterfind("s:set", NS))
+        freezes = track.findall(".//s:set[@fill='freeze']", NS)
+        assert len(freezes) == 1, f"{name}: only the last drawing stays"
+        assert round(float(freezes[0].get("begin")) * 1000) == spans[-1][0]
+
+
+def test_identical_frames_are_merged_and_written_once(face):
+    states = talking(("m", 5), ("a", 4), ("m", 3), ("a", 2), ("m", 4))
+    svg = etree.fromstring(animation_svg(face, states, 30))
+    mouth = next(g for g in tracks(svg).values() if g.find(".//s:g[@data-shape]", NS) is not None)
+    spans = intervals(mouth)
+    runs = [frame for _, _, frame in spans]
+    assert len(runs) == 5, "one <set> per run of equal frames"
+    assert all(a is not b for a, b in zip(runs, runs[1:])), "neighbouring runs are different drawings"
+    frames = mouth.findall("s:g", NS)
+    assert len(frames) == 2, "the rest mouth and 'a' are each written once"
+    assert len({content(f) for f in frames}) == len(frames)
+    shapes = sorted(f.get("data-shape") for f in frames)
+    assert shapes == ["a", "m"]
+    rest = next(f for f in frames if f.get("data-shape") == "m")
+    assert len(rest.findall("s:set", NS)) == 3
+
+
+def test_still_parts_stay_outside_frames(face):
+    states = talking(("m", 3), ("a", 3), ("m", 3))
+    svg = etree.fromstring(animation_svg(face, states, 30))
+    found = tracks(svg)
+    still = [name for name, g in found.items() if g.find(".//s:set", NS) is None]
+    assert {"hair", "eyes"} <= set(still)
+    for name in still:
+        assert not found[name].findall("s:g[@visibility]", NS)
+        assert len(found[name]) > 0, f"{name} is drawn"
+
+
+def test_a_moving_head_animates_the_hair_on_twos(face):
+    turn = [FaceState(pose=Pose(turn=0.5 * i)) for i in range(12)]
+    every = tracks(etree.fromstring(animation_svg(face, turn, 12)))["hair"]
+    twos = tracks(etree.fromstring(animation_svg(face, turn, 30)))["hair"]
+    assert len(every.findall("s:g", NS)) > len(twos.findall("s:g", NS)) > 1
+    assert all(end - begin >= round(2000 / 30) - 1 for begin, end, _ in intervals(twos)[:-1])
+
+
+def test_layers_references_ids_and_rounding(face):
+    states = [FaceState(pose=Pose(tilt=i % 3, turn=-i % 4), blink=(i % 5) / 4, mouth=(("a", 0.5), ("o", 0.5)))
+              for i in range(10)]
+    data = animation_svg(face, states, 24, background="studio", clothes="suit")
+    svg = etree.fromstring(data)
+    assert [g.get("id") for g in svg.iterfind("s:g", NS)] == ["background", "hair", "clothes", "face"]
+    ids = [node.get("id") for node in svg.iter() if node.get("id")]
+    assert len(ids) == len(set(ids))
+    text = data.decode()
+    for target in set(re.findall(r'url\(#([^)]+)\)', text)) | set(re.findall(r'href="#([^"]+)"', text)):
+        assert target in ids, f"dangling reference #{target}"
+    for clip in svg.iter(f"{S}clipPath"):
+        assert clip.getparent().tag == f"{S}defs", "clip paths never sit in a hidden frame"
+    for node in svg.find("s:g[@id='face']", NS).iter(f"{S}path"):
+        assert not re.search(r"\d\.\d", node.get("d")), "face coordinates are whole pixels"
+
+
+def test_user_title_is_escaped(face):
+    title = '<script>alert("x")</script> & 小白兔'
+    svg = etree.fromstring(animation_svg(face, talking(("m", 2)), 30, title=title))
+    assert svg.findtext("s:title", namespaces=NS) == title
+    assert not svg.findall(".//s:script", NS) and not svg.findall(".//script")
+
+
+def test_same_input_same_bytes_and_wide_stage(face):
+    states = talking(("m", 2), ("e", 3))
+    assert animation_svg(face, states, 30) == animation_svg(face, states, 30)
+    wide = etree.fromstring(animation_svg(face, states, 30, wide=True, background="newsroom"))
+    _, _, width, height = map(float, wide.get("viewBox").split())
+    assert width / height == pytest.approx(16 / 9)
+
+
+@pytest.mark.parametrize("option", [{"background": "moon"}, {"clothes": "cape"}])
+def test_unknown_scenery_is_refused(face, option):
+    with pytest.raises(OptionError, match="expected one of"):
+        animation_svg(face, talking(("m", 2)), 30, **option)
+
+
+@pytest.mark.parametrize("ms", [0, 1, 33, 500, 999, 1000, 61234])
+def test_clock_values_read_back(ms):
+    assert round(float(clock(ms)) * 1000) == ms
+
+
+def absolute_points(d: str) -> list[tuple[float, float]]:
+    """Every point (end and control) of a relative m/l/c/z path, in absolute coordinates."""
+    tokens = re.findall(r"[a-zA-Z]|-?\d+(?:\.\d+)?", d)
+    points, x, y, start, command, index = [], 0.0, 0.0, (0.0, 0.0), "", 0
+    while index < len(tokens):
+        if tokens[index].isalpha():
+            command = tokens[index]
+            index += 1
+            if command == "z":
+                x, y = start
+                continue
+        count = {"m": 1, "l": 1, "c": 3}[command]
+        pairs = [(x + float(tokens[index + 2 * k]), y + float(tokens[index + 2 * k + 1])) for k in range(count)]
+        index += 2 * count
+        points += pairs
+        x, y = pairs[-1]
+        if command == "m":
+            start, command = (x, y), "l"
+    return points
+
+
+def test_compact_curves_keep_every_point_to_the_pixel():
+    rng = np.random.default_rng(1)
+    numbers = rng.uniform(0, 400, size=(5, 2, 13))
+    paths = [f"M{a[0, 0]:.1f} {a[1, 0]:.1f}" + "".join(
+        f"C{a[0, k]:.1f} {a[1, k]:.1f} {a[0, k + 1]:.1f} {a[1, k + 1]:.1f} {a[0, k + 2]:.1f} {a[1, k + 2]:.1f}"
+        for k in (1, 4, 7, 10)) + "Z" for a in numbers]
+    compact = compact_paths(paths)
+    for d in paths:
+        given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))
+        assert np.array_equal(np.array(absolute_points(compact[d])), given)
+        assert len(compact[d]) < len(d)
+
+
+def test_compact_polylines_drop_only_points_near_the_line():
+    t = np.linspace(0, np.pi, 80)
+    xs, ys = 200 + 150 * np.cos(t), 200 - 60 * np.sin(t) + 0.2 * np.sin(40 * t)
+    d = f"M{xs[0]:.1f} {ys[0]:.1f}" + "".join(f"L{x:.1f} {y:.1f}" for x, y in zip(xs[1:], ys[1:])) + "Z"
+    kept = np.array(absolute_points(compact_paths([d])[d]))
+    assert 3 < len(kept) < 40
+    given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))
+    for x, y in given:  # every rounded input point lies near the kept polyline
+        a, b = kept[:-1], kept[1:]
+        ab = b - a
+        u = np.clip(((x - a[:, 0]) * ab[:, 0] + (y - a[:, 1]) * ab[:, 1]) / np.maximum((ab ** 2).sum(1), 1e-9), 0, 1)
+        nearest = a + u[:, None] * ab
+        assert np.hypot(nearest[:, 0] - x, nearest[:, 1] - y).min() <= TOLERANCE + 1e-9
+
+
+def test_other_path_commands_are_left_alone():
+    odd = ["M1 1H5V7", "m1 1l2 2", "M0 0A5 5 0 0 1 10 10"]
+    assert compact_paths(odd) == {d: d for d in odd}
