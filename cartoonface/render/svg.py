@@ -292,26 +292,18 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
     return root
 
 
-def diagram_svg(face: FaceModel, scale: float = 2.5) -> etree._Element:
+def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
     """The labelled point diagram of `face` (docs/face-model.md): the frontal drawing faded,
     every model point (black), additional point A..S (red, thesis 002 Alg. 2.1) and hair
     point (blue, numbered from 0) with its name; points at the same place share a label.
-    The drawing is `scale` times the face canvas. Returns the SVG root."""
+    Labels are placed greedily where they overlap no other label or point, with a leader
+    line when pushed away. The picture shows the head `scale` times its model size.
+    Returns the SVG root."""
     from cartoonface.face.lift import LIFTED_NAMES
     from cartoonface.face.model import POINT_NAMES
 
-    width, height = face.width * scale, face.height * scale
-    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(width), "height": number_text(height),
-                                            "viewBox": f"0 0 {number_text(face.width)} {number_text(face.height)}"},
-                         nsmap=NSMAP)
-    _el(root, "defs", {}).extend(face_defs(face))
-    _el(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
     posed = pose_face(lift(face), FaceState())
-    drawing = face_group(face, posed, "d")
-    drawing.set("opacity", "0.4")
-    root.append(drawing)
-    size = 0.055 * face.fapu.d
-    centre = posed.xy.mean(axis=0)
+    font, dot = 0.042 * face.fapu.d, 0.011 * face.fapu.d
     groups: dict[tuple[float, float], list[str]] = {}
     colour: dict[tuple[float, float], str] = {}
     named = [(n, xy, "#000000" if n in POINT_NAMES else "#c62828") for n, xy in zip(LIFTED_NAMES, posed.xy)]
@@ -320,14 +312,51 @@ def diagram_svg(face: FaceModel, scale: float = 2.5) -> etree._Element:
         key = (round(float(xy[0]), 1), round(float(xy[1]), 1))
         groups.setdefault(key, []).append(name)
         colour.setdefault(key, ink)
-    marks = _el(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(size * 1.9)})
+    x0, y0, w, h = _head_box(face)
+    x0, y0, w, h = x0 - 4 * font, y0 - 2 * font, w + 8 * font, h + 4 * font
+    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(w * scale), "height": number_text(h * scale),
+                                            "viewBox": " ".join(number_text(v) for v in (x0, y0, w, h))},
+                         nsmap=NSMAP)
+    _el(root, "defs", {}).extend(face_defs(face))
+    _el(root, "rect", {"x": number_text(x0), "y": number_text(y0), "width": "100%", "height": "100%",
+                       "fill": "#ffffff"})
+    drawing = face_group(face, posed, "d")
+    drawing.set("opacity", "0.35")
+    root.append(drawing)
+    marks = _el(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font)})
+    taken = [(x - dot, y - dot, x + dot, y + dot) for x, y in groups]
+    centre = posed.xy.mean(axis=0)
     for (x, y), names in groups.items():
-        _el(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(size * 0.55),
+        text = "/".join(names)
+        box, anchor, (tx, ty) = _place_label(text, np.array([x, y]), centre, font, taken)
+        taken.append(box)
+        if np.hypot(tx - x, ty + 0.35 * font - y) > 1.6 * font:
+            _el(marks, "line", {"x1": number_text(x), "y1": number_text(y), "x2": number_text(tx),
+                                "y2": number_text(ty - 0.35 * font), "stroke": colour[(x, y)],
+                                "stroke-width": number_text(dot * 0.25), "opacity": "0.6"})
+        _el(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(dot),
                               "fill": colour[(x, y)]})
-        away = np.array([x, y]) - centre
-        away = away / max(float(np.hypot(*away)), 1e-9)
-        text = _el(marks, "text", {"x": number_text(x + away[0] * size * 1.6),
-                                   "y": number_text(y + away[1] * size * 1.6 + size * 0.6),
-                                   "text-anchor": "start" if away[0] >= 0 else "end", "fill": colour[(x, y)]})
-        text.text = "/".join(names)
+        _el(marks, "text", {"x": number_text(tx), "y": number_text(ty), "text-anchor": anchor,
+                            "fill": colour[(x, y)]}).text = text
     return root
+
+
+def _place_label(text: str, at: np.ndarray, centre: np.ndarray, font: float,
+                 taken: list[tuple[float, float, float, float]]) -> tuple[tuple[float, float, float, float], str,
+                                                                          tuple[float, float]]:
+    """Where the label `text` of the point `at` goes: the first candidate position (directions
+    starting away from `centre`, growing distances) whose box overlaps none of `taken`.
+    Returns (box (x1, y1, x2, y2), text-anchor, baseline position)."""
+    width, height = 0.62 * font * len(text), font
+    away = np.degrees(np.arctan2(*(at - centre)[::-1]))
+    for distance in (1.0, 1.8, 2.8, 4.0, 5.5, 7.5):
+        for turn in (0, 30, -30, 60, -60, 90, -90, 135, -135, 180):
+            angle = np.radians(away + turn)
+            ux, uy = np.cos(angle), np.sin(angle)
+            cx, cy = at[0] + ux * distance * font, at[1] + uy * distance * font
+            left = cx if ux > 0.3 else cx - width if ux < -0.3 else cx - width / 2
+            box = (left, cy - height / 2, left + width, cy + height / 2)
+            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in taken):
+                anchor = "start" if ux > 0.3 else "end" if ux < -0.3 else "middle"
+                return box, anchor, (cx, cy + 0.35 * font)
+    return box, anchor, (cx, cy + 0.35 * font)
