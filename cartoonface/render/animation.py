@@ -72,7 +72,8 @@ POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
 KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
                   "offset"))
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
-WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle
+WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
+STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
 # Head poses drawn per second at most: at 30 fps the head moves "on twos" (each pose held for
 # two frames, as animators draw slow movements), lips and eyes still change on every frame.
 # Halves the frames that redraw the whole head during a tilt, turn or nod (docs/output.md).
@@ -305,16 +306,18 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
-    `wide` widens the picture to 16:9 around the face (the announcer's stage);
+    `wide` makes the picture a 16:9 stage around the face, deep enough for the shoulders
+    (the announcer's);
     `title` becomes the document's <title> (escaped like every text by lxml).
     The root is `<svg id="cf-face">`; each track is a `<g data-part="...">`;
     mouth frames carry `data-shape`, the dominant basic mouth shape they show.
     """
     width, height = float(face.width), float(face.height)
-    box_width = max(width, height * WIDE) if wide else width
-    box = ((width - box_width) / 2, 0.0, box_width, height)
+    box_height = height * STAGE_DEPTH if wide else height
+    box_width = max(width, box_height * WIDE) if wide else width
+    box = ((width - box_width) / 2, 0.0, box_width, box_height)
     root = etree.Element(f"{{{SVG}}}svg", nsmap=NSMAP)
-    for name, value in (("id", "cf-face"), ("width", f"{box_width:g}"), ("height", f"{height:g}"),
+    for name, value in (("id", "cf-face"), ("width", f"{box_width:g}"), ("height", f"{box_height:g}"),
                         ("viewBox", " ".join(f"{v:g}" for v in box)), ("data-fps", str(fps))):
         root.set(name, value)
     if title:

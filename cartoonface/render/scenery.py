@@ -119,9 +119,8 @@ def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Ele
     _el(layer, "path", d=_points((cx - neck, chin - fw * 0.3), (cx + neck, chin - fw * 0.3),
                                  (cx + neck, shoulder_y + fw * 0.1), (cx - neck, shoulder_y + fw * 0.1)),
         fill=figure.skin)
-    _el(layer, "path", d=_points((cx - neck, chin + fw * 0.08), (cx + neck, chin + fw * 0.08),
-                                 (cx + neck, chin + fw * 0.16), (cx - neck, chin + fw * 0.16)),
-        fill="#000", opacity="0.12")  # the jaw's shadow on the neck
+    # The jaw's shadow on the neck: the face covers the top half of this ellipse.
+    _el(layer, "ellipse", cx=cx, cy=chin, rx=neck, ry=fw * 0.07, fill="#000", opacity="0.12")
     body = ((cx - spread, bottom), (cx - spread, shoulder_y + fw * 0.25), (cx - neck * 2.2, shoulder_y),
             (cx + neck * 2.2, shoulder_y), (cx + spread, shoulder_y + fw * 0.25), (cx + spread, bottom))
     if name == "suit":
