@@ -143,6 +143,12 @@ def test_thesis_mode_rejects_a_pause_outside_the_recording(pause):
         find_speech_parts(noisy(samples), pause=pause)
 
 
+def test_thesis_mode_refuses_a_pause_holding_speech():
+    samples, truth = recording([8, 10], [0.7])
+    with pytest.raises(OptionError, match="not a silence"):
+        find_speech_parts(noisy(samples), pause=(truth[0].start + 0.2, truth[0].end - 0.2))
+
+
 def test_learned_pause_separates_two_clusters():
     syllable_gaps = np.full(30, 0.06)
     sentence_gaps = np.array([0.42, 0.45, 0.5])

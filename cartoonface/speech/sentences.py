@@ -59,6 +59,9 @@ CLUSTER_RATIO = 1.5
 SENTENCE_PAUSE = 0.35
 # Silence kept around each speaking part, so soft onsets and releases are not cut.
 PAD = 0.05
+# Thesis mode: a selected pause whose noise level V * c2 reaches this share of the speech peaks
+# (99th percentile of frame RMS) holds speech, not silence, and is refused.
+LOUD_PAUSE = 0.5
 # Parts shorter than this are clicks, not speech (both modes).
 MIN_PART = 0.06
 
@@ -115,6 +118,11 @@ def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -
     inside = rms[int(np.ceil(start / HOP)) : max(int(np.ceil(start / HOP)) + 1, int(end / HOP))]
     v_noise = float(inside.max()) * C2  # steps 2 and 4
     d_pause = (end - start) * C1  # step 3
+    if v_noise >= LOUD_PAUSE * np.percentile(rms, 99):
+        raise OptionError(
+            f"pause {start:g},{end:g}: not a silence (its loudest frame is as loud as the speech); "
+            "expected START,END of the quiet pause between the first two sentences"
+        )
     # Steps 5-8: silences (quieter than v_noise) of at least d_pause; the rest are speaking parts.
     # The whole recording is searched (not only from t_s), so a leading silence is cut off too.
     sounding = _runs(rms >= v_noise)
