@@ -134,7 +134,7 @@ def test_same_input_same_bytes_and_wide_stage(face):
     assert animation_svg(face, states, 30) == animation_svg(face, states, 30)
     wide = etree.fromstring(animation_svg(face, states, 30, wide=True, background="newsroom"))
     _, _, width, height = map(float, wide.get("viewBox").split())
-    assert width / height == pytest.approx(16 / 9)
+    assert width / height == pytest.approx(16 / 9, rel=1e-4)
 
 
 @pytest.mark.parametrize("option", [{"background": "moon"}, {"clothes": "cape"}])
