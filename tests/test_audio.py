@@ -73,6 +73,17 @@ def test_stereo_is_mixed_to_mono(tmp_path):
     assert np.allclose(audio.samples, left / 2, atol=1e-3)
 
 
+def test_float_wav_out_of_range_is_clipped_and_finite(tmp_path):
+    samples = np.sin(np.arange(8000) / 5) * 1.5
+    samples[100:110] = np.nan
+    samples[200] = np.inf
+    soundfile.write(tmp_path / "float.wav", samples, 8000, subtype="FLOAT")
+    audio = load_audio(tmp_path / "float.wav")
+    assert np.all(np.isfinite(audio.samples))
+    assert audio.samples.max() == 1.0 and audio.samples.min() == -1.0
+    assert np.all(audio.samples[100:110] == 0)
+
+
 def test_not_audio(tmp_path):
     path = tmp_path / "notes.wav"
     path.write_text("these are my notes, not a recording\n")

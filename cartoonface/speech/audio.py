@@ -79,6 +79,8 @@ def load_audio(path: str | os.PathLike[str]) -> Audio:
             f"{file}: the recording is longer than {MAX_SECONDS // 60} minutes; "
             "split it into parts of at most 30 minutes"
         )
+    # Float files may hold NaN or infinities (a broken encoder): read them as silence / full scale.
+    np.nan_to_num(samples, copy=False, nan=0.0, posinf=1.0, neginf=-1.0)
     np.clip(samples, -1.0, 1.0, out=samples)
     peak = float(np.max(np.abs(samples)))
     if peak < SILENT_PEAK:
