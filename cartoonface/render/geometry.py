@@ -198,7 +198,7 @@ def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
     texts = []
     part_names = ["hair"]
     hair = basis[len(names):]
-    texts.append(_polygon(rows, chaikin(hair, closed=True)) if hair_count >= 3 else "")
+    texts.append(_polygon(rows, chaikin(hair, closed=True)))
     parts = [_NOSE_OTHER_SIDE if p[0] == "nose" and nose_side == NOSE_SIDE_OTHER else p for p in PARTS]
     for name, kind, arc_names in parts:
         arcs = [np.array([rows_of[n] for n in arc_]) for arc_ in arc_names]
@@ -249,7 +249,7 @@ def face_shapes(posed: Posed) -> dict[str, str]:
 
     Takes a `cartoonface.face.pose.PosedFace` (`xy` (N, 2) image pixels in LIFTED_NAMES
     order with the contour replacement of Alg. 2.3 already applied, `hair` (H, 2),
-    `nose_side`). Returns {part: path d} for "hair" (empty if fewer than 3 hair points),
+    `nose_side`). Returns {part: path d} for "hair",
     "face", "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
     "lid_r", "mouth", "mouth_inner", "lips_line", "lower_inner"; coordinates in pixels rounded to 0.1.
     """

@@ -113,10 +113,9 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     outline = {"fill": "none", "stroke": p.outline, "stroke-linecap": "round", "stroke-linejoin": "round"}
     group = etree.Element(f"{{{SVG}}}g", {"class": "cf-face"})
     defs = _el(group, "defs", {})
-    if shapes["hair"]:
-        _el(group, "path", {"class": "hair", "d": shapes["hair"], "fill": "url(#cf-hair)",
-                            "stroke": _mix(p.hair, "#000000", 0.35), "stroke-width": number_text(HAIR_LINE * d),
-                            "stroke-linejoin": "round"})
+    _el(group, "path", {"class": "hair", "d": shapes["hair"], "fill": "url(#cf-hair)",
+                        "stroke": _mix(p.hair, "#000000", 0.35), "stroke-width": number_text(HAIR_LINE * d),
+                        "stroke-linejoin": "round"})
     skin_line = {**outline, "fill": "url(#cf-skin)", "stroke-width": number_text(OUTLINE * d)}
     for side in "lr":
         _el(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **skin_line})
@@ -248,6 +247,20 @@ def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
     return low[0] - margin, low[1] - margin, high[0] - low[0] + 2 * margin, high[1] - low[1] + 2 * margin
 
 
+def _neck(face: FaceModel, bottom: float) -> etree._Element:
+    """A plain neck under the chin down to `bottom` (the sheet's heads have no body): the
+    width of render/scenery.py's neck, its top hidden behind the jaw in every pose."""
+    contour = np.array([face.point(name) for arc in FACE_CONTOUR for name in arc])
+    chin = face.point("2.1")
+    half = 0.22 * float(np.ptp(contour[:, 0]))
+    top = float(chin[1]) - 0.6 * face.fapu.d
+    corners = ((chin[0] - half, bottom), (chin[0] - half, top), (chin[0] + half, top), (chin[0] + half, bottom))
+    d = "M" + "L".join(f"{number_text(x)} {number_text(y)}" for x, y in corners)  # open: no line at the bottom
+    return etree.Element(f"{{{SVG}}}path", {"class": "neck", "d": d, "fill": face.palette.skin,
+                                             "stroke": face.palette.outline,
+                                             "stroke-width": number_text(OUTLINE * face.fapu.d)})
+
+
 def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns: list[str],
               cell_width: float) -> etree._Element:
     """A contact sheet: a grid of heads (hair and face layers), one row per (label, states)
@@ -272,6 +285,7 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
         _el(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
                            "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
     lifted = lift(face)
+    neck = _neck(face, y0 + h)
     for i, (label, states) in enumerate(rows):
         top = top_margin + i * pitch_y
         lines = label.split("\n")
@@ -286,6 +300,7 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
                                "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
                                "fill": "#f1ede6"})
             head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
+            head.insert(2, etree.fromstring(etree.tostring(neck)))  # after the <defs> and the hair
             head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
                                   f"scale({scale:.5g})")
             root.append(head)
