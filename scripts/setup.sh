@@ -25,4 +25,7 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q -e ".[dev]"
+.venv/bin/python -m pip install -q -e ".[dev,photo]"
+# Face from a photo (docs/photo.md): mediapipe 0.10.14 ships its face models in the wheel;
+# installed without its requirements, which pin packages the photo extra replaces.
+.venv/bin/python -m pip install -q --no-deps "mediapipe==0.10.14"

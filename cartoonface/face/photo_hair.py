@@ -1,0 +1,154 @@
+"""The hair polygon and the hair and clothes colours from a photo: GrabCut on the head.
+
+GrabCut (OpenCV) separates the person from the background in a window around the
+face, seeded by the face mesh (sure foreground), a head-shaped ellipse and the body
+below the chin (probable foreground) and the window's edges (sure background). Hair
+is the foreground that is not skin-coloured; below the eyes only pixels of the hair's
+own colour count (down to below the chin, for long hair), so collars and clothes are
+left out. The hair polygon is the outer
+silhouette of hair and face, read along HAIR_POINTS rays from the middle of the face
+(thesis 002, Alg. 2.2 step 2: a polygon of 23 points drawn behind the face).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cartoonface.face.model import HAIR_POINTS
+from cartoonface.face.photo_palette import OVAL, polygon_mask
+
+# The window around the face box (its width w, height h): sideways, up, down.
+WINDOW_SIDE, WINDOW_UP, WINDOW_DOWN = 0.9, 0.8, 0.7
+# GrabCut runs on the window scaled to at most this many pixels a side.
+SEGMENT_SIDE = 200
+GRABCUT_ITERATIONS = 4
+# Lab distance (OpenCV 8-bit Lab) under which a pixel counts as skin / as the hair colour.
+SKIN_DISTANCE = 22.0
+HAIR_DISTANCE = 28.0
+# Hair below the chin is followed down to this many face heights (long hair).
+HAIR_BELOW_CHIN = 0.6
+# The rays: angles from straight down, turning through the image left, over the top,
+# to the image right (the drawing order of the sample faces' hair polygons).
+RAY_FIRST = 15.0
+# A gap of this fraction of the face width ends a ray's run through the mask.
+RAY_GAP = 0.05
+MIN_HAIR_PIXELS = 30
+
+
+@dataclass(frozen=True)
+class Head:
+    """What the segmentation found, in photo pixels.
+
+    polygon: (HAIR_POINTS, 2) the hair polygon, drawing order.
+    hair: (3,) median RGB of the hair, None when no hair was found (bald or hidden).
+    clothes: (3,) median RGB of the clothes below the chin, None when none is visible.
+    background: (3,) median RGB of the window's background.
+    """
+
+    polygon: np.ndarray
+    hair: np.ndarray | None
+    clothes: np.ndarray | None
+    background: np.ndarray
+
+
+def _lab(rgb: np.ndarray) -> np.ndarray:
+    import cv2
+
+    return cv2.cvtColor(np.ascontiguousarray(rgb, dtype=np.uint8), cv2.COLOR_RGB2LAB).astype(float)
+
+
+def _distance(lab: np.ndarray, colour: np.ndarray) -> np.ndarray:
+    """Lab distance of every pixel of `lab` (..., 3) to the RGB `colour` (3,)."""
+    ref = _lab(np.asarray(colour, dtype=np.uint8).reshape(1, 1, 3))[0, 0]
+    return np.linalg.norm(lab - ref, axis=-1)
+
+
+def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray) -> Head:
+    """The head of the face whose (478, 3) mesh is given, in the photo `rgb` (H, W, 3);
+    `skin` the face's (3,) RGB skin colour."""
+    import cv2
+
+    height, width = rgb.shape[:2]
+    (x0, y0), (x1, y1) = mesh[:, :2].min(axis=0), mesh[:, :2].max(axis=0)
+    w, h = x1 - x0, y1 - y0
+    left, right = int(max(0, x0 - WINDOW_SIDE * w)), int(min(width, x1 + WINDOW_SIDE * w))
+    top, bottom = int(max(0, y0 - WINDOW_UP * h)), int(min(height, y1 + WINDOW_DOWN * h))
+    scale = min(1.0, SEGMENT_SIDE / max(right - left, bottom - top))
+    size = (max(8, int(round((right - left) * scale))), max(8, int(round((bottom - top) * scale))))
+    image = cv2.resize(np.ascontiguousarray(rgb[top:bottom, left:right]), size, interpolation=cv2.INTER_AREA)
+    sw, sh = size
+    to_window = np.array([left, top], float)
+    oval = (mesh[list(OVAL), :2] - to_window) * scale
+    face = polygon_mask((sh, sw), oval)
+    chin_y = (y1 - top) * scale
+    cx, cy = ((x0 + x1) / 2 - left) * scale, ((y0 + y1) / 2 - top) * scale
+    ws, hs = w * scale, h * scale
+
+    mask = np.full((sh, sw), cv2.GC_PR_BGD, np.uint8)
+    head = np.zeros((sh, sw), np.uint8)
+    cv2.ellipse(head, (int(cx), int(cy - 0.15 * hs)), (int(0.8 * ws), int(0.75 * hs)), 0, 0, 360, 1, -1)
+    mask[head.astype(bool)] = cv2.GC_PR_FGD
+    body = np.zeros((sh, sw), bool)
+    body[int(chin_y):, max(0, int(cx - 0.7 * ws)):int(cx + 0.7 * ws)] = True
+    mask[body] = cv2.GC_PR_FGD
+    inner = cv2.erode(face.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    mask[inner] = cv2.GC_FGD
+    band = max(2, sw // 50)
+    above_chin = slice(0, int(chin_y))
+    if top > 0:
+        mask[:band] = cv2.GC_BGD
+    if left > 0:
+        mask[above_chin, :band] = cv2.GC_BGD
+    if right < width:
+        mask[above_chin, -band:] = cv2.GC_BGD
+    bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
+    cv2.grabCut(image, mask, None, bgd, fgd, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    person = (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
+
+    lab = _lab(image)
+    skinlike = _distance(lab, skin) < SKIN_DISTANCE
+    rows = np.arange(sh)[:, None]
+    candidates = person & ~face & ~skinlike
+    crown = candidates & (rows < chin_y - 0.45 * hs)
+    hair = np.median(image[crown], axis=0) if crown.sum() >= MIN_HAIR_PIXELS else None
+    if hair is not None:
+        hairlike = _distance(lab, hair) < HAIR_DISTANCE
+        eyes_y = (mesh[[468, 473], 1].mean() - top) * scale
+        hair_mask = candidates & ((rows < eyes_y) | (hairlike & (rows < chin_y + HAIR_BELOW_CHIN * hs)))
+        clothes_px = person & ~skinlike & ~hairlike & ~face & (rows > chin_y + 0.1 * hs)
+    else:
+        hair_mask = np.zeros_like(face)
+        clothes_px = person & ~skinlike & ~face & (rows > chin_y + 0.1 * hs)
+    clothes = np.median(image[clothes_px], axis=0) if clothes_px.sum() >= MIN_HAIR_PIXELS else None
+    outside = ~person
+    background = np.median(image[outside], axis=0) if outside.any() else np.full(3, 255.0)
+
+    silhouette = cv2.morphologyEx((hair_mask | face).astype(np.uint8), cv2.MORPH_CLOSE,
+                                  np.ones((5, 5), np.uint8)).astype(bool) | face
+    centre = (mesh[[168, 4], :2].mean(axis=0) - to_window) * scale
+    polygon = _rays(silhouette, centre, RAY_GAP * ws) / scale + to_window
+    return Head(polygon=polygon, hair=hair, clothes=clothes, background=background)
+
+
+def _rays(mask: np.ndarray, centre: np.ndarray, gap: float) -> np.ndarray:
+    """(HAIR_POINTS, 2): along each ray from `centre`, the last mask pixel before the
+    first run of more than `gap` pixels outside the mask (the centre itself if none)."""
+    sh, sw = mask.shape
+    reach = np.arange(0.0, float(np.hypot(sh, sw)), 0.5)
+    angles = np.radians(np.linspace(RAY_FIRST, 360.0 - RAY_FIRST, HAIR_POINTS))
+    points = []
+    for angle in angles:
+        direction = np.array([-np.sin(angle), np.cos(angle)])
+        xy = centre + reach[:, None] * direction
+        inside_image = (xy[:, 0] >= 0) & (xy[:, 0] <= sw - 1) & (xy[:, 1] >= 0) & (xy[:, 1] <= sh - 1)
+        xy = xy[inside_image]
+        hit = mask[np.round(xy[:, 1]).astype(int), np.round(xy[:, 0]).astype(int)]
+        last = 0
+        for i in np.nonzero(hit)[0]:
+            if (i - last) * 0.5 > gap and last > 0:
+                break
+            last = i
+        points.append(xy[last])
+    return np.array(points)
