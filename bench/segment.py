@@ -139,7 +139,7 @@ def report_run_together(name: str, paths: list[Path], text: str) -> None:
     together = Audio(np.concatenate(pieces), audios[0].rate, "run together")
     parts = find_speech_parts(together)
     counts = [len(sentence.syllables) for sentence in parse_transcript(text, name)]
-    spans, _ = reconcile(together, parts, counts, [""] * len(counts))
+    spans = reconcile(together, parts, counts)
     dip_right = sum(abs(spans[k + 1].start - extents[k + 1].start) <= TOLERANCE for k in range(len(spans) - 1))
     right, _ = analysed_right(together, text, extents)
     print(f"{name} run together (silences cut, {together.duration:.1f} s): {len(parts)} parts; boundaries within "

@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("cartoonface.speech.transcript", reason="speech/transcript.py (issue 3, transcript) not landed yet")
 
 from cartoonface.errors import TranscriptError  # noqa: E402
-from cartoonface.speech.alignment import analyse, reconcile  # noqa: E402
+from cartoonface.speech.alignment import MAX_PIECE, sentence_pieces, analyse, reconcile  # noqa: E402
 from cartoonface.speech.audio import Audio, load_audio  # noqa: E402
 from cartoonface.speech.sentences import find_speech_parts  # noqa: E402
 from cartoonface.speech.transcript import parse_transcript  # noqa: E402
@@ -22,9 +22,7 @@ def test_one_part_per_sentence_is_kept():
     samples, truth = recording([8, 12, 6], [0.7, 0.8])
     audio = noisy(samples)
     parts = find_speech_parts(audio)
-    spans, notes = reconcile(audio, parts, [8, 12, 6], ["a", "b", "c"])
-    assert spans == parts
-    assert notes == []
+    assert reconcile(audio, parts, [8, 12, 6]) == parts
 
 
 def test_two_sentences_without_a_pause_are_split_at_the_short_pause():
@@ -32,11 +30,10 @@ def test_two_sentences_without_a_pause_are_split_at_the_short_pause():
     audio = noisy(samples)
     parts = find_speech_parts(audio)
     assert len(parts) == 2  # the 0.16 s pause is too short to end a speaking part
-    spans, notes = reconcile(audio, parts, [9, 7, 10], ["a", "b", "c"])
+    spans = reconcile(audio, parts, [9, 7, 10])
     assert len(spans) == 3
     assert truth[0].end - 0.05 <= spans[0].end == spans[1].start <= truth[1].start + 0.05  # cut inside part 1
     assert spans[1].end < spans[2].start  # the pause between the parts
-    assert notes == []
 
 
 def test_a_sentence_with_a_long_inner_pause_merges_two_parts():
@@ -44,11 +41,14 @@ def test_a_sentence_with_a_long_inner_pause_merges_two_parts():
     audio = noisy(samples)
     parts = find_speech_parts(audio)
     assert len(parts) == 3
-    spans, notes = reconcile(audio, parts, [12, 10], ["first sentence", "second"])
+    spans = reconcile(audio, parts, [12, 10])
     assert len(spans) == 2
     assert spans[0].start == parts[0].start and spans[0].end == parts[1].end
     assert spans[1] == parts[2]
-    assert any("parts 1-2 merged" in note and "first sentence" in note for note in notes)
+    alignment = analyse(audio, "我们今天一起去公园散步吧。天气非常好大家都很高兴。")  # 12 and 10 syllables
+    assert [note for note in alignment.notes if "merged" in note] == [
+        "sentence 1 «我们今天一起去公园散步吧。»: speaking parts 1-2 merged (the speaker paused 1 time(s) inside it)"
+    ]
 
 
 def test_more_sentences_than_dips_still_gives_every_sentence_time():
@@ -56,10 +56,36 @@ def test_more_sentences_than_dips_still_gives_every_sentence_time():
     audio = noisy(samples)
     parts = find_speech_parts(audio)
     counts = [1, 2, 1, 3, 1, 2, 2]
-    spans, _ = reconcile(audio, parts, counts, ["x"] * len(counts))
+    spans = reconcile(audio, parts, counts)
     assert len(spans) == len(counts)
     assert all(span.end > span.start for span in spans)
     assert all(a.end <= b.start for a, b in zip(spans, spans[1:]))
+
+
+def test_long_sentences_are_cut_into_pieces_at_commas():
+    clauses = ["我们今天一起去公园散步", "天气非常好", "大家都很高兴地唱歌跳舞"] * 8
+    text = "，".join(clauses) + "。" + "短句。"
+    parsed = parse_transcript(text, "long")
+    pieces, owners = sentence_pieces(parsed)
+    assert owners[-1] == 1 and owners.count(1) == 1 and set(owners[:-1]) == {0}
+    assert all(len(piece.syllables) <= MAX_PIECE for piece in pieces)
+    assert [s for piece in pieces[:-1] for s in piece.syllables] == list(parsed[0].syllables)
+    ends = {end + 1 for end in parsed[0].clause_ends}
+    position = 0
+    for piece in pieces[:-2]:
+        position += len(piece.syllables)
+        assert position in ends  # cut at a comma
+
+
+def test_a_long_unpunctuated_sentence_is_aligned_in_pieces():
+    samples, truth = recording([150], [])
+    text = "我们今天一起去公园散步天气非常好大家都很高兴" * 7  # 154 syllables, no punctuation
+    alignment = analyse(noisy(samples), text)
+    assert len(alignment.sentences) == 1
+    syllables = alignment.sentences[0].syllables
+    assert len(syllables) == 154
+    assert all(a.start < a.end <= b.start + 1e-6 for a, b in zip(syllables, syllables[1:]))
+    assert not any("split" in note for note in alignment.notes)
 
 
 def test_empty_transcript_is_refused():

@@ -51,6 +51,9 @@ LOW_CONFIDENCE = 0.5
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
 # cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
 MAX_JOINT = 60.0
+# Longer sentences are aligned in pieces of at most this many syllables (about 15 s of speech),
+# cut at commas where possible: one alignment call over minutes of speech would take minutes.
+MAX_PIECE = 60
 _CJK = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 
 
@@ -152,23 +155,27 @@ def analyse(
         parts = (Span(0.0, round(audio.duration, 3)),)
         notes.append("no speaking part told apart from noise: the whole recording is taken as speech")
     report("segment", 1.0)
-    counts = [len(sentence.syllables) for sentence in spoken]
+    pieces, owners = sentence_pieces(spoken)
+    counts = [len(piece.syllables) for piece in pieces]
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
-    spans, reconciled = reconcile(audio, parts, counts, [sentence.text for sentence in spoken])
-    notes += reconciled
-    sentences: list[Sentence] = []
+    spans = reconcile(audio, parts, counts)
+    aligned: list[Sentence] = []
     for block in _blocks(spans):
-        report("align", len(sentences) / len(spoken))
+        report("align", len(aligned) / len(pieces))
         span = Span(spans[block[0]].start, spans[block[-1]].end)
         if len(block) > 1 and span.duration <= MAX_JOINT:
             # Sentences sharing a speaking part are aligned together: the boundary between them
             # is where the aligner puts it, not the dip the reconciling chose.
-            sentences += _aligned(audio, [spoken[k] for k in block], span)
+            aligned += _aligned(audio, [pieces[k] for k in block], span)
         else:
             for k in block:
-                sentences += _aligned(audio, [spoken[k]], spans[k])
+                aligned += _aligned(audio, [pieces[k]], spans[k])
     report("align", 1.0)
-    notes += _split_notes(sentences, spans, parts)
+    sentences = []
+    for number, sentence in enumerate(spoken):
+        syllables = tuple(s for piece, owner in zip(aligned, owners) if owner == number for s in piece.syllables)
+        sentences.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
+    notes += _merge_notes(sentences, parts) + _split_notes(aligned, owners, spans, parts)
     low = [s for sentence in sentences for s in sentence.syllables if s.confidence < LOW_CONFIDENCE]
     if low:
         notes.append(
@@ -245,16 +252,13 @@ class _Cut:
     part: int  # index of the speaking part it is in (pause: the part before it)
 
 
-def reconcile(
-    audio: Audio, parts: tuple[Span, ...], counts: list[int], texts: list[str]
-) -> tuple[tuple[Span, ...], list[str]]:
-    """Lay sentences of `counts` syllables (texts `texts`) over the speaking `parts` of `audio`.
+def reconcile(audio: Audio, parts: tuple[Span, ...], counts: list[int]) -> tuple[Span, ...]:
+    """Lay sentences of `counts` syllables over the speaking `parts` of `audio`.
 
-    Returns one Span per sentence, in order, and the notes saying which
-    parts were merged. The spans cover the parts' speech and do not overlap;
-    two consecutive spans touch (end == next start) where a part was cut
-    between them (at a dip, or an evenly spaced point), and are apart where
-    a pause between parts separates them.
+    Returns one Span per sentence, in order. The spans cover the parts'
+    speech and do not overlap; two consecutive spans touch (end == next
+    start) where a part was cut between them (at a dip, or an evenly spaced
+    point), and are apart where a pause between parts separates them.
     """
     cuts = _cuts(audio, parts, len(counts))
     speech_before = _speech_clock(parts)
@@ -265,10 +269,9 @@ def reconcile(
     at_left, at_right = speech_before(left), speech_before(right)
     rate = at_left[-1] / sum(counts)
     boundaries = _best_cuts(at_left, at_right, cost, pauses_before, np.array(counts) * rate)
-    spans = tuple(
+    return tuple(
         Span(round(float(right[a]), 3), round(float(left[b]), 3)) for a, b in zip(boundaries, boundaries[1:])
     )
-    return spans, _notes(cuts, boundaries, texts)
 
 
 def _cuts(audio: Audio, parts: tuple[Span, ...], sentences: int) -> list[_Cut]:
@@ -352,34 +355,66 @@ def _best_cuts(
     return path[::-1]
 
 
-def _notes(cuts: list[_Cut], boundaries: list[int], texts: list[str]) -> list[str]:
+def _merge_notes(sentences: list[Sentence], parts: tuple[Span, ...]) -> list[str]:
     """Say which sentences span several speaking parts (merged), for the user."""
     notes = []
-    for number, (a, b) in enumerate(zip(boundaries, boundaries[1:]), start=1):
-        merged = [cut for cut in cuts[a + 1 : b] if cut.kind == "pause"]
-        if merged:
-            first, last = cuts[a].part + (cuts[a].kind == "pause"), cuts[b].part
+    for number, sentence in enumerate(sentences, start=1):
+        inside = [i for i, part in enumerate(parts) if part.start < sentence.end and sentence.start < part.end]
+        if len(inside) > 1:
             notes.append(
-                f"sentence {number} {_quote(texts[number - 1])}: speaking parts {first + 1}-{last + 1} merged "
-                f"(the speaker paused {len(merged)} time(s) inside it)"
+                f"sentence {number} {_quote(sentence.text)}: speaking parts {inside[0] + 1}-{inside[-1] + 1} "
+                f"merged (the speaker paused {len(inside) - 1} time(s) inside it)"
             )
     return notes
 
 
-def _split_notes(sentences: list[Sentence], spans: tuple[Span, ...], parts: tuple[Span, ...]) -> list[str]:
-    """Say where a speaking part holding several sentences was split, at the aligned boundary."""
+def _split_notes(
+    pieces: list[Sentence], owners: list[int], spans: tuple[Span, ...], parts: tuple[Span, ...]
+) -> list[str]:
+    """Say where a speaking part holding several sentences was split, at the aligned boundary.
+
+    `pieces` are the aligned units, `owners` the sentence index of each (a long
+    sentence is aligned in several pieces), `spans` their reconciled stretches.
+    """
     notes = []
-    for number in range(1, len(sentences)):
-        if spans[number - 1].end < spans[number].start:
-            continue  # the sentences are separated by a pause between parts
-        time = (sentences[number - 1].end + sentences[number].start) / 2
+    for k in range(1, len(pieces)):
+        if spans[k - 1].end < spans[k].start or owners[k - 1] == owners[k]:
+            continue  # separated by a pause between parts, or pieces of one sentence
+        time = (pieces[k - 1].end + pieces[k].start) / 2
         index = min(range(len(parts)), key=lambda i: max(parts[i].start - time, time - parts[i].end, 0.0))
         part = parts[index]
         notes.append(
             f"speaking part {index + 1} ({part.start:.2f}-{part.end:.2f} s) split at {time:.2f} s, "
-            f"between sentences {number} and {number + 1} (no pause there)"
+            f"between sentences {owners[k - 1] + 1} and {owners[k] + 1} (no pause there)"
         )
     return notes
+
+
+def sentence_pieces(sentences: tuple[SentenceText, ...]) -> tuple[list[SentenceText], list[int]]:
+    """Sentences cut into pieces of at most MAX_PIECE syllables; (pieces, index of each one's sentence).
+
+    A long sentence is cut at its commas (clause ends) where it can, else evenly,
+    so that no single alignment call gets minutes of speech.
+    """
+    pieces, owners = [], []
+    for number, sentence in enumerate(sentences):
+        syllables = sentence.syllables
+        ends = sorted({end + 1 for end in sentence.clause_ends if 0 <= end + 1 < len(syllables)} | {len(syllables)})
+        cuts, start = [], 0
+        for index, end in enumerate(ends):
+            following = ends[index + 1] if index + 1 < len(ends) else None
+            if following is None or following - start > MAX_PIECE:
+                cuts.append(end)
+                start = end
+        bounds = [0]
+        for cut in cuts:
+            length = cut - bounds[-1]
+            chunks = math.ceil(length / MAX_PIECE)
+            bounds += [bounds[-1] + round(length * (k + 1) / chunks) for k in range(chunks)]
+        for a, b in zip(bounds, bounds[1:]):
+            pieces.append(SentenceText(sentence.text, syllables[a:b]))
+            owners.append(number)
+    return pieces, owners
 
 
 def _quote(text: str, limit: int = 16) -> str:
