@@ -12,6 +12,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from cartoonface.cli.photo import register_from_photo
 from cartoonface.errors import OptionError
 from cartoonface.face.model import load_face
 from cartoonface.face.mouth import MOUTH_SYMBOLS
@@ -74,6 +75,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "(red) and hair point (blue, numbered) labelled.")
     _common(diagram, "DIAGRAM.svg")
     diagram.set_defaults(func=run_diagram)
+
+    register_from_photo(actions)
 
 
 def _common(parser: argparse.ArgumentParser, out: str) -> None:
