@@ -12,8 +12,8 @@ Two modes:
   silence is needed. docs/alignment.md explains the rules and constants.
 
 Both work on the energy of 10 ms frames of the recording high-passed at
-80 Hz (so mains hum does not count as sound), which takes well under a
-second for 30 minutes of audio.
+80 Hz (damping rumble and the fundamental of mains hum), which takes about
+two seconds for 30 minutes of audio.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ C1 = 0.95
 C2 = 1.45
 
 HOP = 0.01  # seconds per energy frame
-HIGH_PASS_HZ = 80.0  # removes mains hum (50/60 Hz) from the energy
+HIGH_PASS_HZ = 80.0  # damps rumble and the 50/60 Hz fundamental of mains hum in the energy
 # Automatic mode: frames louder than floor + max(MIN_CONTRAST_DB, SHARE * (speech - floor)) are sound.
 FLOOR_PERCENTILE = 5.0
 SPEECH_PERCENTILE = 98.0
