@@ -18,7 +18,9 @@ are written as hex: cairosvg paints hsl() black (shared DEPENDENCIES.md).
 
 from __future__ import annotations
 
+import functools
 import io
+import math
 
 import numpy as np
 import resvg_py
@@ -100,6 +102,36 @@ def face_defs(face: FaceModel) -> tuple[etree._Element, ...]:
     )
 
 
+@functools.lru_cache(maxsize=16)
+def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
+    """The attributes every drawing of `face` repeats, by part (computed once per face)."""
+    p, d = face.palette, face.fapu.d
+    round_ = {"stroke-linecap": "round", "stroke-linejoin": "round"}
+    line = {"fill": "none", "stroke": p.outline, **round_}
+    skin = {**line, "fill": "url(#cf-skin)", "stroke-width": number_text(OUTLINE * d)}
+    return {
+        "hair": {"fill": "url(#cf-hair)", "stroke": _mix(p.hair, "#000000", 0.35),
+                 "stroke-width": number_text(HAIR_LINE * d), "stroke-linejoin": "round"},
+        "skin": skin,
+        "nose": {**line, "stroke": "url(#cf-nose)", "stroke-width": number_text(FEATURE * d)},
+        "brow": {"fill": p.brow, "stroke": p.brow, "stroke-width": number_text(0.006 * d), "stroke-linejoin": "round"},
+        "cheek_ry": {"ry": number_text(CHEEK[1] * d)},
+        "white": {"fill": p.eye_white},
+        "eye_line": {**line, "stroke-width": number_text(OUTLINE * d * 0.8)},
+        "lid": {**line, "stroke-width": number_text(LID * d)},
+        "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
+        "opening": {"fill": p.mouth},
+        "tongue": {"stroke": _mix(p.lip, p.mouth, 0.3), "stroke-width": number_text(2 * TONGUE * d)},
+        "teeth": {"stroke": "#ffffff", "stroke-width": number_text(2 * TEETH * d)},
+        "lips_line": {"fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25), "stroke-width": number_text(FEATURE * d * 0.8)},
+    }
+
+
+# Rows of posed.xy read by the cheeks and the eyes: the eye outlines of "l" and "r", then the
+# mouth corners 8.4 and 8.3.
+_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
+
+
 def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`.
 
@@ -107,91 +139,81 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     "-{uid}"), then the parts "hair", "ear-l", "ear-r", "face", "cheeks", "nose",
     "brow-l", "brow-r", "eye-l", "eye-r", "mouth". Fills use face_defs' gradients.
     """
-    d = face.fapu.d
-    p = face.palette
+    style = _styles(face)
     shapes = face_shapes(posed)
-    outline = {"fill": "none", "stroke": p.outline, "stroke-linecap": "round", "stroke-linejoin": "round"}
+    points = posed.xy[_ROWS].tolist()
     group = etree.Element(f"{{{SVG}}}g", {"class": "cf-face"})
     defs = _el(group, "defs", {})
-    _el(group, "path", {"class": "hair", "d": shapes["hair"], "fill": "url(#cf-hair)",
-                        "stroke": _mix(p.hair, "#000000", 0.35), "stroke-width": number_text(HAIR_LINE * d),
-                        "stroke-linejoin": "round"})
-    skin_line = {**outline, "fill": "url(#cf-skin)", "stroke-width": number_text(OUTLINE * d)}
+    _el(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
     for side in "lr":
-        _el(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **skin_line})
-    _el(group, "path", {"class": "face", "d": shapes["face"], **skin_line})
-    _cheeks(group, posed, d)
-    _el(group, "path", {"class": "nose", "d": shapes["nose"], **outline,
-                        "stroke": "url(#cf-nose)", "stroke-width": number_text(FEATURE * d)})
+        _el(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
+    _el(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
+    _cheeks(group, points, face.fapu.d, style)
+    _el(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
     for side in "lr":
-        _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], "fill": p.brow,
-                            "stroke": p.brow, "stroke-width": number_text(0.006 * d), "stroke-linejoin": "round"})
-    for side, eyeball in zip("lr", _eyeballs(posed)):
-        _eye(group, defs, shapes, side, eyeball, face, uid)
-    _mouth(group, defs, shapes, face, uid)
+        _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
+    for side, eyeball in zip("lr", _eyeballs(posed, points)):
+        _eye(group, defs, shapes, side, eyeball, face, uid, style)
+    _mouth(group, defs, shapes, uid, style)
     return group
 
 
-def _cheeks(group: etree._Element, posed: PosedFace, d: float) -> None:
-    """Blush under each eye, between the eye's lower lid and the mouth corner on its side."""
+def _cheeks(group: etree._Element, points: list[list[float]], d: float, style: dict[str, dict[str, str]]) -> None:
+    """Blush under each eye, between the eye's lower lid and the mouth corner on its side.
+    `points`: the posed rows _ROWS as [x, y] lists."""
     cheeks = _el(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
-    for corners, mouth_corner in ((("3.12", "3.8", "3.4"), "8.4"), (("3.7", "3.11", "3.3"), "8.3")):
-        outer, inner, lower = (posed.xy[LIFTED_INDEX[n]] for n in corners)
-        width = np.hypot(*(outer - inner)) / (0.46 * d)  # foreshortening: narrower when turned away
-        centre = 0.55 * outer + 0.45 * inner
-        cy = 0.5 * lower[1] + 0.5 * posed.xy[LIFTED_INDEX[mouth_corner]][1] - 0.08 * d
-        _el(cheeks, "ellipse", {"cx": number_text(centre[0]), "cy": number_text(cy),
-                                "rx": number_text(CHEEK[0] * d * min(width, 1.2)), "ry": number_text(CHEEK[1] * d)})
+    for first, mouth_corner in ((0, points[8]), (4, points[9])):
+        (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
+        width = math.hypot(ox - ix, oy - iy) / (0.46 * d)  # foreshortening: narrower when turned away
+        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - 0.08 * d
+        _el(cheeks, "ellipse", {"cx": number_text(0.55 * ox + 0.45 * ix), "cy": number_text(cy),
+                                "rx": number_text(CHEEK[0] * d * min(width, 1.2)), **style["cheek_ry"]})
 
 
-def _eyeballs(posed: PosedFace) -> tuple[tuple[np.ndarray, float], tuple[np.ndarray, float]]:
-    """(pupil centre (2,), iris radius) for the eye drawn "l" and "r", each pupil paired with
-    the eye whose outline centre is nearest (PosedFace gives them in its own order)."""
-    centres = [posed.xy[[LIFTED_INDEX[n] for n in EYES[s]]].mean(axis=0) for s in "lr"]
-    pupils = np.asarray(posed.pupils, dtype=float)
-    first = int(np.argmin([np.hypot(*(pupil - centres[0])) for pupil in pupils]))
-    order = (first, 1 - first)
-    return tuple((pupils[i], float(posed.iris_r[i])) for i in order)  # type: ignore[return-value]
+def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
+    """(x, y, iris radius) for the eye drawn "l" and "r", each pupil paired with the eye whose
+    outline centre (from `points`, the rows _ROWS) is nearest: PosedFace has its own order."""
+    (x0, y0), (x1, y1) = posed.pupils.tolist()
+    cx = sum(p[0] for p in points[:4]) / 4
+    cy = sum(p[1] for p in points[:4]) / 4
+    r0, r1 = (float(r) for r in posed.iris_r)
+    if math.hypot(x0 - cx, y0 - cy) <= math.hypot(x1 - cx, y1 - cy):
+        return (x0, y0, r0), (x1, y1, r1)
+    return (x1, y1, r1), (x0, y0, r0)
 
 
 def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], side: str,
-         eyeball: tuple[np.ndarray, float], face: FaceModel, uid: str) -> None:
+         eyeball: tuple[float, float, float], face: FaceModel, uid: str, style: dict[str, dict[str, str]]) -> None:
     """Append eye `side`: white, clipped iris + pupil + highlight, outline, upper lid."""
-    p, d = face.palette, face.fapu.d
+    outline = shapes[f"eye_{side}"]
     clip_id = f"cf-eye-{side}-{uid}"
-    clip = _el(defs, "clipPath", {"id": clip_id})
-    _el(clip, "path", {"d": shapes[f"eye_{side}"]})
+    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
     eye = _el(group, "g", {"class": f"eye-{side}"})
-    _el(eye, "path", {"d": shapes[f"eye_{side}"], "fill": p.eye_white})
+    _el(eye, "path", {"d": outline, **style["white"]})
     ball = _el(eye, "g", {"clip-path": f"url(#{clip_id})"})
-    (x, y), r = eyeball
+    x, y, r = eyeball
     cx, cy = number_text(x), number_text(y)
     _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
-    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": p.pupil})
+    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
     _el(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
                          "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": "0.9"})
-    line = {"fill": "none", "stroke": p.outline, "stroke-linecap": "round", "stroke-linejoin": "round"}
-    _el(eye, "path", {"d": shapes[f"eye_{side}"], **line, "stroke-width": number_text(OUTLINE * d * 0.8)})
-    _el(eye, "path", {"d": shapes[f"lid_{side}"], **line, "stroke-width": number_text(LID * d)})
+    _el(eye, "path", {"d": outline, **style["eye_line"]})
+    _el(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
 
 
-def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], face: FaceModel, uid: str) -> None:
+def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
+           style: dict[str, dict[str, str]]) -> None:
     """Append the mouth: lips, the opening with the upper teeth and the tongue clipped to it,
     the line where the lips meet."""
-    p, d = face.palette, face.fapu.d
     clip_id = f"cf-mouth-{uid}"
-    clip = _el(defs, "clipPath", {"id": clip_id})
-    _el(clip, "path", {"d": shapes["mouth_inner"]})
+    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": shapes["mouth_inner"]})
     mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
-    _el(mouth, "path", {"d": shapes["mouth"], "fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4),
-                        "stroke-width": number_text(0.012 * d)})
-    _el(mouth, "path", {"d": shapes["mouth_inner"], "fill": p.mouth})
+    _el(mouth, "path", {"d": shapes["mouth"], **style["lips"]})
+    _el(mouth, "path", {"d": shapes["mouth_inner"], **style["opening"]})
     inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})", "fill": "none"})
-    _el(inside, "path", {"d": shapes["lower_inner"], "stroke": _mix(p.lip, p.mouth, 0.3),
-                         "stroke-width": number_text(2 * TONGUE * d)})
-    _el(inside, "path", {"d": shapes["lips_line"], "stroke": "#ffffff", "stroke-width": number_text(2 * TEETH * d)})
-    _el(mouth, "path", {"d": shapes["lips_line"], "fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25),
-                        "stroke-width": number_text(FEATURE * d * 0.8)})
+    _el(inside, "path", {"d": shapes["lower_inner"], **style["tongue"]})
+    _el(inside, "path", {"d": shapes["lips_line"], **style["teeth"]})
+    _el(mouth, "path", {"d": shapes["lips_line"], **style["lips_line"]})
 
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
