@@ -253,8 +253,11 @@ def load_run(work: Path, sentences: list) -> None:
         for job_id, error in failed.items():
             print(f"load: failed {job_id}: {error}")
         if len(times):
+            inside = [json.loads((server.instance / "jobs" / ids[i] / "status.json").read_text())["result"]["seconds"]
+                      for i in done]
             print(f"load: time to done p50 {np.percentile(times, 50):.1f} s, p95 {np.percentile(times, 95):.1f} s, "
-                  f"all done after {wall:.1f} s ({wall / len(times):.1f} s per job)")
+                  f"all done after {wall:.1f} s ({wall / len(times):.1f} s per job); "
+                  f"pipeline.generate inside a job: median {np.median(inside):.1f} s")
     finally:
         server.stop()
 

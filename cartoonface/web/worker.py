@@ -1,4 +1,5 @@
-"""Run one stored job in its own process: `python -m cartoonface.web.worker JOB_FOLDER PARENT_PID`.
+"""Run one stored job in its own process: forked by the runner (`forked_main`), or by hand
+as `python -m cartoonface.web.worker JOB_FOLDER PARENT_PID`.
 
 The job runs the same library call as `cartoonface generate`
 (`cartoonface.pipeline.generate`), writes its progress to status.json as it
@@ -6,7 +7,8 @@ goes, zips the generated folder for download and ends with status done, or
 failed with the user message of an InputError. Any other exception is a bug:
 its traceback goes to stderr (the job's worker.log) and the user sees a short
 internal-error message. When the server that started it is gone, the worker
-stops at the next progress report; the restarted server marks the job failed.
+(the parent it started with) stops at the next progress report; the restarted
+server marks the job failed.
 """
 
 from __future__ import annotations
@@ -118,6 +120,16 @@ def main(argv: list[str]) -> int:
                                           "the server log has the details."))
         return 1
     return 0
+
+
+def forked_main(folder: str) -> None:
+    """Entry point in a process forked by the runner: output goes to the job's worker.log,
+    the parent at start counts as the server (the forkserver, which exits with the server)."""
+    log = os.open(Path(folder) / "worker.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.dup2(log, 1)
+    os.dup2(log, 2)
+    os.close(log)
+    sys.exit(main([folder, str(os.getppid())]))
 
 
 if __name__ == "__main__":

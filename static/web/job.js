@@ -1,6 +1,6 @@
 /* Job page: poll the job's status (JSON) twice a second, move the progress bar,
  * and reload the page when the job is done or failed (the server then renders
- * the result or the error). */
+ * the result or the error); stop when the job is gone. */
 (function () {
   "use strict";
   var box = document.getElementById("job");
@@ -21,10 +21,17 @@
   function poll() {
     fetch(url, { cache: "no-store", credentials: "same-origin" })
       .then(function (response) {
+        if (response.status === 404) return { state: "gone" };
         if (!response.ok) throw new Error("status " + response.status);
         return response.json();
       })
       .then(function (status) {
+        if (status.state === "gone") {
+          var error = document.getElementById("job-error");
+          error.textContent = "This job no longer exists (removed by the retention limit).";
+          error.hidden = false;
+          return;
+        }
         show(status);
         if (status.state === "done" || status.state === "failed") {
           window.setTimeout(function () { window.location.reload(); }, 400);
