@@ -41,6 +41,7 @@ NSMAP = {None: SVG}
 # face of any size is drawn alike. Our own choice, tuned by eye on the sample faces.
 OUTLINE = 0.022   # face, ears, eye outline
 LID = 0.045       # upper lid (lash line)
+LID_SHADOW = 0.09  # width of the lid's shadow on the eyeball (half of it falls inside the eye)
 FEATURE = 0.02    # nose, the line between the lips
 HAIR_LINE = 0.018
 TEETH = 0.07      # height of the visible upper teeth
@@ -119,6 +120,9 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
         "white": {"fill": p.eye_white},
         "eye_line": {**line, "stroke-width": number_text(OUTLINE * d * 0.8)},
         "lid": {**line, "stroke-width": number_text(LID * d)},
+        # the upper lid's shadow on the eyeball, inside the eye clip
+        "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": "0.18",
+                       "stroke-width": number_text(LID_SHADOW * d)},
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
         "opening": {"fill": p.mouth},
         "tongue": {"stroke": _mix(p.lip, p.mouth, 0.3), "stroke-width": number_text(2 * TONGUE * d)},
@@ -184,7 +188,8 @@ def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float,
 
 def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], side: str,
          eyeball: tuple[float, float, float], face: FaceModel, uid: str, style: dict[str, dict[str, str]]) -> None:
-    """Append eye `side`: white, clipped iris + pupil + highlight, outline, upper lid."""
+    """Append eye `side`: white, clipped iris + pupil + the lid's shadow + highlight, outline,
+    upper lid."""
     outline = shapes[f"eye_{side}"]
     clip_id = f"cf-eye-{side}-{uid}"
     _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
@@ -195,6 +200,7 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
     cx, cy = number_text(x), number_text(y)
     _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
     _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
+    _el(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
     _el(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
                          "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": "0.9"})
     _el(eye, "path", {"d": outline, **style["eye_line"]})
