@@ -129,6 +129,9 @@ def test_mirrored_photo_gives_the_mirrored_model(original):
     photo[:, 0] = 512.0 - photo[:, 0]
     assert np.median(np.hypot(*(flipped.points[MIRROR] - photo).T)) < 1.5
     assert flipped.turn == pytest.approx(-original.turn, abs=3)
+    # the hair polygon runs the other way round: ray k mirrors ray 22 - k
+    hair = np.column_stack([400.0 - original.face.hair[:, 0], original.face.hair[:, 1]])
+    assert np.median(np.hypot(*(flipped.face.hair[::-1] - hair).T)) < 0.08 * d
 
 
 def test_scaled_photo_gives_the_same_model(original):
@@ -145,6 +148,7 @@ def test_rotated_photo_is_levelled(original):
     d = original.face.fapu.d
     error = np.hypot(*(rotated.face.points - original.face.points).T)
     assert np.median(error) < 0.05 * d
+    assert np.median(np.hypot(*(rotated.face.hair - original.face.hair).T)) < 0.08 * d
     # the detected photo points follow the turned face
     a = np.radians(10)
     rel = original.points - 256

@@ -217,7 +217,7 @@ def face_from_photo(photo: Photo, name: str = "photo") -> PhotoFace:
     skin = colours["skin"]
     if skin is None:
         raise InputError(f"{source}: the face shows too little skin to sample its colour; expected a clear portrait")
-    head = segment_head(photo.rgb, mesh, skin)
+    head = segment_head(photo.rgb, mesh, skin, roll)
     hair_level = _rotate2d(head.polygon, eyes[:2], -roll)
     hair_depth = float(np.mean(level[[234, 454], 2]))
     hair_xyz = np.column_stack([hair_level, np.full(len(hair_level), hair_depth)])

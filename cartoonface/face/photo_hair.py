@@ -65,9 +65,10 @@ def _distance(lab: np.ndarray, colour: np.ndarray) -> np.ndarray:
     return np.linalg.norm(lab - ref, axis=-1)
 
 
-def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray) -> Head:
+def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: float) -> Head:
     """The head of the face whose (478, 3) mesh is given, in the photo `rgb` (H, W, 3);
-    `skin` the face's (3,) RGB skin colour."""
+    `skin` the face's (3,) RGB skin colour; `roll` the head's lean in degrees (positive
+    clockwise on screen), so the rays keep their places on the head."""
     import cv2
 
     height, width = rgb.shape[:2]
@@ -128,16 +129,17 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray) -> Head:
     silhouette = cv2.morphologyEx((hair_mask | face).astype(np.uint8), cv2.MORPH_CLOSE,
                                   np.ones((5, 5), np.uint8)).astype(bool) | face
     centre = (mesh[[168, 4], :2].mean(axis=0) - to_window) * scale
-    polygon = _rays(silhouette, centre, RAY_GAP * ws) / scale + to_window
+    polygon = _rays(silhouette, centre, RAY_GAP * ws, roll) / scale + to_window
     return Head(polygon=polygon, hair=hair, clothes=clothes, background=background)
 
 
-def _rays(mask: np.ndarray, centre: np.ndarray, gap: float) -> np.ndarray:
-    """(HAIR_POINTS, 2): along each ray from `centre`, the last mask pixel before the
-    first run of more than `gap` pixels outside the mask (the centre itself if none)."""
+def _rays(mask: np.ndarray, centre: np.ndarray, gap: float, roll: float) -> np.ndarray:
+    """(HAIR_POINTS, 2): along each ray from `centre` (turned by `roll` degrees with the
+    head), the last mask pixel before the first run of more than `gap` pixels outside
+    the mask (the centre itself if none)."""
     sh, sw = mask.shape
     reach = np.arange(0.0, float(np.hypot(sh, sw)), 0.5)
-    angles = np.radians(np.linspace(RAY_FIRST, 360.0 - RAY_FIRST, HAIR_POINTS))
+    angles = np.radians(np.linspace(RAY_FIRST, 360.0 - RAY_FIRST, HAIR_POINTS) + roll)
     points = []
     for angle in angles:
         direction = np.array([-np.sin(angle), np.cos(angle)])
