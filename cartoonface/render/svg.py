@@ -45,6 +45,7 @@ LID_SHADOW = 0.09  # width of the lid's shadow on the eyeball (half of it falls 
 FEATURE = 0.02    # nose, the line between the lips
 HAIR_LINE = 0.018
 TEETH = 0.07      # height of the visible upper teeth
+TEETH_OF_WIDTH = 0.12  # ... at most this fraction of the opening's width
 TONGUE = 0.1      # height of the tongue at the bottom of an open mouth
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
@@ -126,14 +127,14 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
         "opening": {"fill": p.mouth},
         "tongue": {"stroke": _mix(p.lip, p.mouth, 0.3), "stroke-width": number_text(2 * TONGUE * d)},
-        "teeth": {"stroke": "#ffffff", "stroke-width": number_text(2 * TEETH * d)},
+        "teeth": {"stroke": "#ffffff"},
         "lips_line": {"fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25), "stroke-width": number_text(FEATURE * d * 0.8)},
     }
 
 
-# Rows of posed.xy read by the cheeks and the eyes: the eye outlines of "l" and "r", then the
-# mouth corners 8.4 and 8.3.
-_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
+# Rows of posed.xy read by the cheeks, the eyes and the teeth: the eye outlines of "l" and "r",
+# the mouth corners 8.4 and 8.3, the corners R and S of the opening.
+_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3", "R", "S")]
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
@@ -158,7 +159,8 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
         _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
     for side, eyeball in zip("lr", _eyeballs(posed, points)):
         _eye(group, defs, shapes, side, eyeball, face, uid, style)
-    _mouth(group, defs, shapes, uid, style)
+    (rx, ry), (sx, sy) = points[10:12]
+    _mouth(group, defs, shapes, uid, style, face.fapu.d, math.hypot(rx - sx, ry - sy))
     return group
 
 
@@ -208,9 +210,10 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
 
 
 def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
-           style: dict[str, dict[str, str]]) -> None:
+           style: dict[str, dict[str, str]], d: float, width: float) -> None:
     """Append the mouth: lips, the opening with the upper teeth and the tongue clipped to it,
-    the line where the lips meet."""
+    the line where the lips meet. `d` is the FAPU d, `width` the opening's width (R to S),
+    both in pixels: a narrow, rounded opening (o, u) shows less of the teeth."""
     clip_id = f"cf-mouth-{uid}"
     _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": shapes["mouth_inner"]})
     mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
@@ -218,7 +221,8 @@ def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], 
     _el(mouth, "path", {"d": shapes["mouth_inner"], **style["opening"]})
     inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})", "fill": "none"})
     _el(inside, "path", {"d": shapes["lower_inner"], **style["tongue"]})
-    _el(inside, "path", {"d": shapes["lips_line"], **style["teeth"]})
+    teeth = min(TEETH * d, TEETH_OF_WIDTH * width)
+    _el(inside, "path", {"d": shapes["lips_line"], **style["teeth"], "stroke-width": number_text(2 * teeth)})
     _el(mouth, "path", {"d": shapes["lips_line"], **style["lips_line"]})
 
 
