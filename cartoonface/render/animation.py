@@ -16,9 +16,11 @@ We keep that form and make it small:
   written once with one `<set>` per time it is shown;
 - a track whose drawing never changes is written once, outside any frame;
 - coordinates are whole pixels in relative path commands (render/pathdata.py);
-- an outline drawn twice in one part (the eye's white, its outline and its
-  clip path) is defined once and drawn with `<use>`; so is a part shown in
-  several drawings of its track (the face outline under different mouths);
+- a part shown in several drawings of its track (the face outline under
+  different mouths) is defined once and drawn with `<use>`. (Outlines drawn
+  twice inside one part, such as the eye's white, outline and clip, stay
+  copies: `<use>` saved 6 % of the bytes but each one is a shadow tree the
+  browser builds, and the page took 25 % longer to be ready.)
 - repeated presentation attributes become a handful of CSS classes;
 - the head pose is held for two frames at 30 fps (POSE_RATE).
 
@@ -32,8 +34,8 @@ own plays silently; the pages drive its clock from the audio (static/cartoonface
 
 from __future__ import annotations
 
-import copy
 import dataclasses
+import html
 import re
 from collections import Counter
 from collections.abc import Sequence
@@ -79,6 +81,7 @@ STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders sh
 # Halves the frames that redraw the whole head during a tilt, turn or nod (docs/output.md).
 POSE_RATE = 15
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
+_PATH_DATA = re.compile(rb' d="([^"]*)"')
 
 
 @dataclass(frozen=True)
@@ -130,13 +133,14 @@ def track_of(part: etree._Element) -> str:
     return TRACK_OF.get(name[0], name[0]) if name else "face"
 
 
-@dataclass
+@dataclass(frozen=True)
 class _RawPart:
-    """A part as face_group drew it, with the per-state definitions it references."""
+    """A part as face_group drew it (serialized: a drawing of every state would not fit in
+    memory as lxml trees), with the per-state definitions it references."""
 
     track: str
-    element: etree._Element
-    definitions: list[etree._Element]
+    element: bytes
+    definitions: tuple[bytes, ...]
 
 
 class _Writer:
@@ -147,7 +151,6 @@ class _Writer:
         self.raw_ids: dict[bytes, int] = {}
         self.raw: list[_RawPart] = []
         self.definition_ids: dict[bytes, str] = {}
-        self.shared_paths: dict[str, str] = {}
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
 
     def collect(self, group: etree._Element) -> tuple[int, ...]:
@@ -158,20 +161,21 @@ class _Writer:
             if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
                 continue
             raw = etree.tostring(part)
-            used = [node for name, node in definitions.items() if f"#{name})".encode() in raw]
-            key = raw + b"".join(etree.tostring(node) for node in used)
+            used = tuple(etree.tostring(node) for name, node in definitions.items() if f"#{name})".encode() in raw)
+            key = raw + b"".join(used)
             number = self.raw_ids.get(key)
             if number is None:
                 number = self.raw_ids[key] = len(self.raw)
-                self.raw.append(_RawPart(track_of(part), part, used))
+                self.raw.append(_RawPart(track_of(part), raw, used))
             numbers.append(number)
         return tuple(numbers)
 
     def finish(self) -> tuple[list[int], list[etree._Element]]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
         and the tidy drawings."""
-        compact = compact_paths(node.get("d") for part in self.raw
-                                for top in (part.element, *part.definitions) for node in top.iter() if node.get("d"))
+        compact = compact_paths(html.unescape(d.decode()) for part in self.raw
+                                for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
+        self.raw_ids.clear()
         tidy_ids: dict[bytes, int] = {}
         tidy: list[etree._Element] = []
         mapping = []
@@ -186,35 +190,23 @@ class _Writer:
         return mapping, tidy
 
     def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> etree._Element:
-        """The part with compact paths, shared outlines as <use>, definitions hoisted, style as classes."""
-        tops = (part.element, *part.definitions)
+        """The part with compact paths, definitions hoisted, style as classes."""
+        element = etree.fromstring(part.element)
+        definitions = [etree.fromstring(raw) for raw in part.definitions]
+        tops = (element, *definitions)
         paths = [node for top in tops for node in top.iter() if node.get("d")]
         for node in paths:
             node.set("d", compact[node.get("d")])
-        counts = Counter(node.get("d") for node in paths)
-        for node in paths:
-            if counts[node.get("d")] > 1:
-                d = node.attrib.pop("d")
-                node.tag = f"{{{SVG}}}use"
-                node.set("href", f"#{self._shared_path(d)}")
         renamed = {}
-        for definition in part.definitions:
-            renamed[definition.get("id")] = self._hoist(definition)
-        for node in part.element.iter():
+        for definition in definitions:
+            old = definition.get("id")
+            renamed[old] = self._hoist(definition)
+        for node in element.iter():
             self._tidy_node(node, renamed)
-        return part.element
-
-    def _shared_path(self, d: str) -> str:
-        """The id of a `<path d="d">` in <defs> (made on first use)."""
-        name = self.shared_paths.get(d)
-        if name is None:
-            name = self.shared_paths[d] = f"p{len(self.shared_paths)}"
-            _el(self.defs, "path", id=name, d=d)
-        return name
+        return element
 
     def _hoist(self, definition: etree._Element) -> str:
-        """Copy `definition` into <defs> under an id named by its content (shared if seen before)."""
-        definition = copy.deepcopy(definition)
+        """Move `definition` into <defs> under an id named by its content (shared if seen before)."""
         definition.attrib.pop("id", None)
         for node in definition.iter():
             node.attrib.pop("class", None)
