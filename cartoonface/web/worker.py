@@ -7,19 +7,20 @@ goes, zips the generated folder for download and ends with status done, or
 failed with the user message of an InputError. Any other exception is a bug:
 its traceback goes to stderr (the job's worker.log) and the user sees a short
 internal-error message. When the server that started it is gone, the worker
-(the parent it started with) stops at the next progress report; the restarted
-server marks the job failed.
+stops at the next progress report; the restarted server marks the job failed.
 """
 
 from __future__ import annotations
 
 import io
 import json
+import multiprocessing
 import os
 import sys
 import time
 import traceback
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 from cartoonface.errors import InputError
@@ -68,13 +69,14 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
     return message
 
 
-def run_job(folder: Path, parent_pid: int) -> None:
-    """Generate the job stored in `folder`, writing status.json as it goes."""
+def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
+    """Generate the job stored in `folder`, writing status.json as it goes; stop
+    (Orphaned) at a progress report when `server_alive()` is False."""
     spec = read_spec(folder)
     last = {"stage": "", "time": 0.0}
 
     def progress(stage: str, fraction: float) -> None:
-        if os.getppid() != parent_pid:
+        if not server_alive():
             raise Orphaned(stage)
         now = time.monotonic()
         if stage == last["stage"] and now - last["time"] < PROGRESS_INTERVAL:
@@ -104,11 +106,11 @@ def run_job(folder: Path, parent_pid: int) -> None:
     write_status(folder, Status(state=DONE, stage="pages", fraction=1.0, updated=time.time(), result=summary))
 
 
-def main(argv: list[str]) -> int:
-    """Entry point: argv is [JOB_FOLDER, PARENT_PID]; exit 0 once the status is final."""
-    folder, parent_pid = Path(argv[0]), int(argv[1])
+def main(folder: Path, server_alive: Callable[[], bool]) -> int:
+    """Run the job in `folder`; return the exit code: 0 once the status is final,
+    3 when the server went away, 1 after an internal error (traceback on stderr)."""
     try:
-        run_job(folder, parent_pid)
+        run_job(folder, server_alive)
     except Orphaned:
         print("worker: the server went away; stopping", file=sys.stderr)
         return 3
@@ -123,14 +125,18 @@ def main(argv: list[str]) -> int:
 
 
 def forked_main(folder: str) -> None:
-    """Entry point in a process forked by the runner: output goes to the job's worker.log,
-    the parent at start counts as the server (the forkserver, which exits with the server)."""
+    """Entry point in a process the runner started through the forkserver: output goes to
+    the job's worker.log; the server is alive while multiprocessing's parent sentinel is
+    open (the forkserver itself outlives a killed server while its children run)."""
     log = os.open(Path(folder) / "worker.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     os.dup2(log, 1)
     os.dup2(log, 2)
     os.close(log)
-    sys.exit(main([folder, str(os.getppid())]))
+    server = multiprocessing.parent_process()
+    sys.exit(main(Path(folder), server.is_alive))
 
 
 if __name__ == "__main__":
-    raise SystemExit(main(sys.argv[1:]))
+    # By hand: python -m cartoonface.web.worker JOB_FOLDER PARENT_PID (alive while it is our parent).
+    parent_pid = int(sys.argv[2])
+    raise SystemExit(main(Path(sys.argv[1]), lambda: os.getppid() == parent_pid))
