@@ -152,3 +152,12 @@ def test_help_describes_the_options(capsys: pytest.CaptureFixture[str]) -> None:
     text = capsys.readouterr().out
     for option in ("--tilt", "--turn", "--roll", "--blink", "--smile", "--brow", "--mouth", "--png"):
         assert option in text
+
+
+def test_output_that_is_a_folder_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "taken.svg"
+    out.mkdir()
+    assert main(["face", "render", str(FEMALE), "-o", str(out), "--png"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "folder" in err[0]
+    assert out.is_dir() and not out.with_suffix(".png").exists()

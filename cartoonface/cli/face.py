@@ -121,9 +121,16 @@ def _write(root: etree._Element, args: argparse.Namespace, palette: bool = False
         raise OptionError(f"-o {args.output}: expected a file name ending in .svg")
     data = svg_bytes(root)
     png = svg_to_png(data, palette) if args.png else None
-    written = [write_bytes_atomic(args.output, data)]
-    if png is not None:
-        written.append(write_bytes_atomic(args.output.with_suffix(".png"), png))
+    outputs = [(args.output, data)] + ([(args.output.with_suffix(".png"), png)] if png is not None else [])
+    for path, _ in outputs:
+        if path.is_dir():
+            raise OptionError(f"-o {args.output}: {path} is a folder; expected a file name")
+    written = []
+    for path, content in outputs:
+        try:
+            written.append(write_bytes_atomic(path, content))
+        except OSError as exc:
+            raise OptionError(f"-o {args.output}: cannot write {path}: {exc.strerror}") from None
     print(" ".join(str(path) for path in written))
     return 0
 
