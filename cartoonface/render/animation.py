@@ -73,6 +73,12 @@ DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", 
 POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
 KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
                   "offset"))
+# Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
+# with no other attribute can be dissolved into its children. Not opacity, which applies to
+# the group as a whole.
+INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-width", "stroke-linecap",
+                       "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
+                       "stroke-dashoffset", "color"))
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
@@ -170,27 +176,28 @@ class _Writer:
             numbers.append(number)
         return tuple(numbers)
 
-    def finish(self) -> tuple[list[int], list[etree._Element]]:
+    def finish(self) -> tuple[list[int], list[list[etree._Element]]]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
-        and the tidy drawings."""
+        and the tidy drawings (each a list of elements)."""
         compact = compact_paths(html.unescape(d.decode()) for part in self.raw
                                 for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
         tidy_ids: dict[bytes, int] = {}
-        tidy: list[etree._Element] = []
+        tidy: list[list[etree._Element]] = []
         mapping = []
         for part in self.raw:
-            element = self._tidy_part(part, compact)
-            key = etree.tostring(element)
+            elements = self._tidy_part(part, compact)
+            key = b"".join(etree.tostring(element) for element in elements)
             number = tidy_ids.get(key)
             if number is None:
                 number = tidy_ids[key] = len(tidy)
-                tidy.append(element)
+                tidy.append(elements)
             mapping.append(number)
         return mapping, tidy
 
-    def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> etree._Element:
-        """The part with compact paths, definitions hoisted, style as classes."""
+    def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> list[etree._Element]:
+        """The part with compact paths, definitions hoisted, groups that only pass on style
+        dissolved, style as classes: its elements, in drawing order."""
         element = etree.fromstring(part.element)
         definitions = [etree.fromstring(raw) for raw in part.definitions]
         tops = (element, *definitions)
@@ -201,9 +208,11 @@ class _Writer:
         for definition in definitions:
             old = definition.get("id")
             renamed[old] = self._hoist(definition)
-        for node in element.iter():
-            self._tidy_node(node, renamed)
-        return element
+        elements = _dissolve(element)
+        for top in elements:
+            for node in top.iter():
+                self._tidy_node(node, renamed)
+        return elements
 
     def _hoist(self, definition: etree._Element) -> str:
         """Move `definition` into <defs> under an id named by its content (shared if seen before)."""
@@ -243,6 +252,27 @@ class _Writer:
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
 
 
+def _dissolve(element: etree._Element) -> list[etree._Element]:
+    """Replace every `<g>` in `element` whose attributes are all INHERITED style by its children,
+    each child taking the style it does not set itself; returns `element`, or its children if
+    `element` itself dissolved. Fewer elements for the browser, fewer bytes per frame."""
+    groups = [node for node in element.iter(f"{{{SVG}}}g")
+              if all(name in INHERITED or name == "class" for name in node.attrib)]
+    for group in reversed(groups):  # innermost first
+        style = {name: value for name, value in group.attrib.items() if name != "class"}
+        for child in group:
+            for name, value in style.items():
+                if name not in child.attrib:
+                    child.set(name, value)
+        parent = group.getparent()
+        if parent is not None:
+            index = parent.index(group)
+            parent[index : index + 1] = list(group)
+    if groups and groups[0] is element:
+        return list(element)
+    return [element]
+
+
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
                  keys: Sequence[int], fps: int, shapes: Sequence[str]) -> None:
     """Write one track into `parent`: its drawing as is if it never changes, else one
@@ -265,7 +295,7 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
         frame.extend(drawings[number])
 
 
-def _share(drawings: dict[str, list[list[int]]], tidy: list[etree._Element],
+def _share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
            defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
     """The elements of every drawing: a part drawn in one drawing only is itself; a part in
     several is put once into `defs` as `<g id="gN">` and each drawing shows it with `<use>`."""
@@ -274,10 +304,11 @@ def _share(drawings: dict[str, list[list[int]]], tidy: list[etree._Element],
     for part, count in uses.items():
         if count > 1:
             names[part] = f"g{len(names)}"
-            shared = _el(defs, "g", id=names[part])
-            shared.append(tidy[part])
-    return {track: [[etree.Element(f"{{{SVG}}}use", href=f"#{names[part]}") if part in names else tidy[part]
-                     for part in drawing] for drawing in track_drawings]
+            _el(defs, "g", id=names[part]).extend(tidy[part])
+    return {track: [[element for part in drawing
+                     for element in ([etree.Element(f"{{{SVG}}}use", href=f"#{names[part]}")] if part in names
+                                     else tidy[part])]
+                     for drawing in track_drawings]
             for track, track_drawings in drawings.items()}
 
 
