@@ -31,7 +31,7 @@ from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
-from cartoonface.render.geometry import FACE_CONTOUR, face_shapes, number_text
+from cartoonface.render.geometry import face_shapes, number_text
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 
 SVG = "http://www.w3.org/2000/svg"
@@ -237,10 +237,10 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
                                             "viewBox": f"0 0 {width:g} {height:g}"}, nsmap=NSMAP)
     defs = _el(root, "defs", {})
     defs.extend(face_defs(face))
-    contour = np.array([face.point(name) for arc in FACE_CONTOUR for name in arc])
     chin = face.point("2.1")
+    # the face width as render/animation.py measures it, so stills and animations match
     figure = Figure(box=(0.0, 0.0, width, height), chin_x=float(chin[0]), chin_y=float(chin[1]),
-                    face_width=float(np.ptp(contour[:, 0])), skin=face.palette.skin)
+                    face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
     root.append(background_layer(background, figure, defs))
     group = face_group(face, pose_face(lift(face), state), "0")
     hair = _el(root, "g", {"id": "hair"})
@@ -282,9 +282,8 @@ def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
 def _neck(face: FaceModel, bottom: float) -> etree._Element:
     """A plain neck under the chin down to `bottom` (the sheet's heads have no body): the
     width of render/scenery.py's neck, its top hidden behind the jaw in every pose."""
-    contour = np.array([face.point(name) for arc in FACE_CONTOUR for name in arc])
     chin = face.point("2.1")
-    half = 0.22 * float(np.ptp(contour[:, 0]))
+    half = 0.22 * float(np.ptp(face.points[:, 0]))
     top = float(chin[1]) - 0.6 * face.fapu.d
     corners = ((chin[0] - half, bottom), (chin[0] - half, top), (chin[0] + half, top), (chin[0] + half, bottom))
     d = "M" + "L".join(f"{number_text(x)} {number_text(y)}" for x, y in corners)  # open: no line at the bottom
