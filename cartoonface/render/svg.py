@@ -92,8 +92,10 @@ def face_defs(face: FaceModel) -> tuple[etree._Element, ...]:
         _gradient("radial", "cf-skin", ((0, _mix(p.skin, "#ffffff", 0.1), 1), (0.62, p.skin, 1),
                                         (1, _mix(p.skin, p.skin_shadow, 0.7), 1)),
                   cx=".5", cy=".42", r=".62", fy=".36"),
-        _gradient("linear", "cf-hair", ((0, _mix(p.hair, "#ffffff", 0.18), 1), (0.3, p.hair, 1),
-                                        (1, _mix(p.hair, "#000000", 0.25), 1)), x2="0", y2="1"),
+        # hair: a sheen on the crown, darker towards the ends
+        _gradient("radial", "cf-hair", ((0, _mix(p.hair, "#ffffff", 0.22), 1), (0.4, p.hair, 1),
+                                        (1, _mix(p.hair, "#000000", 0.3), 1)),
+                  cx=".5", cy=".12", r=".9", fy=".04"),
         _gradient("radial", "cf-iris", ((0, _mix(p.iris, "#ffffff", 0.3), 1), (0.6, p.iris, 1),
                                         (1, _mix(p.iris, "#000000", 0.45), 1)), fy=".62"),
         _gradient("linear", "cf-lip", ((0, _mix(p.lip, "#000000", 0.08), 1), (0.45, p.lip, 1),
