@@ -35,6 +35,8 @@ RAY_FIRST = 15.0
 # A gap of this fraction of the face width ends a ray's run through the mask.
 RAY_GAP = 0.05
 MIN_HAIR_PIXELS = 30
+# Where a ray finds no hair beyond the face, its point goes this fraction of the way out.
+INSIDE_FACE = 0.8
 
 
 @dataclass(frozen=True)
@@ -118,6 +120,10 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
         hairlike = _distance(lab, hair) < HAIR_DISTANCE
         eyes_y = (mesh[[468, 473], 1].mean() - top) * scale
         hair_mask = candidates & ((rows < eyes_y) | (hairlike & (rows < chin_y + HAIR_BELOW_CHIN * hs)))
+        # keep the hair that hangs together with the hair on the crown
+        count, labels = cv2.connectedComponents(hair_mask.astype(np.uint8), connectivity=8)
+        keep = np.unique(labels[crown & hair_mask])
+        hair_mask = np.isin(labels, keep[keep > 0])
         clothes_px = person & ~skinlike & ~hairlike & ~face & (rows > chin_y + 0.1 * hs)
     else:
         hair_mask = np.zeros_like(face)
@@ -129,7 +135,12 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     silhouette = cv2.morphologyEx((hair_mask | face).astype(np.uint8), cv2.MORPH_CLOSE,
                                   np.ones((5, 5), np.uint8)).astype(bool) | face
     centre = (mesh[[168, 4], :2].mean(axis=0) - to_window) * scale
-    polygon = _rays(silhouette, centre, RAY_GAP * ws, roll) / scale + to_window
+    ends = _rays(silhouette, centre, RAY_GAP * ws, roll)
+    # A ray that ends on the face, not on hair, is pulled inside the face so the
+    # polygon stays hidden behind the drawn contour (which is smoother than the photo's).
+    on_hair = ~face[np.round(ends[:, 1]).astype(int), np.round(ends[:, 0]).astype(int)]
+    ends = np.where(on_hair[:, None], ends, centre + INSIDE_FACE * (ends - centre))
+    polygon = ends / scale + to_window
     return Head(polygon=polygon, hair=hair, clothes=clothes, background=background)
 
 
