@@ -147,3 +147,17 @@ def test_nose_bridge_is_drawn_on_the_side_the_pose_shows(posed_sample) -> None:
         bridge = "9.7" if posed.nose_side == 1 else "9.6"
         np.testing.assert_allclose(start, posed.p(bridge), atol=0.051)
     assert {p.nose_side for p in posed_sample.values()} == {-1, 1}
+
+
+@pytest.mark.parametrize("count", [3, 23, 40])
+def test_hair_of_any_size_is_corner_cut(posed_sample, count: int) -> None:
+    import dataclasses
+
+    from cartoonface.render.geometry import CHAIKIN_ROUNDS, face_shapes
+
+    angles = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    hair = np.column_stack([200 + 120 * np.cos(angles), 200 + 150 * np.sin(angles)])
+    posed = dataclasses.replace(posed_sample[12], hair=hair)
+    outline = anchors(face_shapes(posed)["hair"])
+    assert len(outline) == count * 2**CHAIKIN_ROUNDS
+    assert (Delaunay(hair).find_simplex(outline, tol=0.06) >= 0).all()
