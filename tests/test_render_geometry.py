@@ -161,3 +161,18 @@ def test_hair_of_any_size_is_corner_cut(posed_sample, count: int) -> None:
     outline = anchors(face_shapes(posed)["hair"])
     assert len(outline) == count * 2**CHAIKIN_ROUNDS
     assert (Delaunay(hair).find_simplex(outline, tol=0.06) >= 0).all()
+
+
+def test_neutral_pose_draws_the_model_points() -> None:
+    from cartoonface.face.lift import lift
+    from cartoonface.face.model import load_face
+    from cartoonface.face.pose import pose_face
+    from cartoonface.face.state import FaceState
+    from cartoonface.render.geometry import face_shapes
+    from tests.conftest import ROOT
+
+    face = load_face(ROOT / "samples" / "faces" / "male.json")
+    shapes = face_shapes(pose_face(lift(face), FaceState()))
+    for part, names in (("eye_l", ("3.12", "3.2", "3.8", "3.4", "3.12")), ("eye_r", ("3.7", "3.1", "3.11", "3.3", "3.7")),
+                        ("mouth", ("8.1", "8.9", "8.4", "8.2", "8.3", "8.10", "8.1"))):
+        np.testing.assert_allclose(anchors(shapes[part]), [face.point(n) for n in names], atol=0.051)
