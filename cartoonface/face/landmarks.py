@@ -89,6 +89,7 @@ class Landmarker:
         os.environ.setdefault("GLOG_minloglevel", "2")
         try:
             with _quiet():
+                import cv2  # noqa: F401  (the crops, GrabCut and masks need it too)
                 from mediapipe.python.solutions import face_detection, face_mesh
         except ImportError as exc:
             raise PhotoExtraMissing(
