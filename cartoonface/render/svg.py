@@ -47,6 +47,7 @@ HAIR_LINE = 0.018
 TEETH = 0.07      # height of the visible upper teeth
 TEETH_OF_WIDTH = 0.12  # ... at most this fraction of the opening's width
 TONGUE = 0.1      # height of the tongue at the bottom of an open mouth
+GLOSS = 0.14      # half-width of the gloss on the lower lip / width of the mouth opening
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
 CHEEK = (0.2, 0.12)  # blush ellipse radii / d
@@ -128,15 +129,16 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
                        "stroke-width": number_text(LID_SHADOW * d)},
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
         "opening": {"fill": p.mouth},
+        "gloss": {"fill": "#ffffff", "opacity": "0.22", "stroke": "none"},
         "tongue": {"stroke": _mix(p.lip, p.mouth, 0.3), "stroke-width": number_text(2 * TONGUE * d)},
         "teeth": {"stroke": "#ffffff"},
         "lips_line": {"fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25), "stroke-width": number_text(FEATURE * d * 0.8)},
     }
 
 
-# Rows of posed.xy read by the cheeks, the eyes and the teeth: the eye outlines of "l" and "r",
-# the mouth corners 8.4 and 8.3, the corners R and S of the opening.
-_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3", "R", "S")]
+# Rows of posed.xy read by the cheeks, the eyes and the mouth: the eye outlines of "l" and "r",
+# the mouth corners 8.4 and 8.3, the corners R and S of the opening, the lower lip 2.3 and 8.2.
+_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3", "R", "S", "2.3", "8.2")]
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
@@ -161,8 +163,7 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
         _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
     for side, eyeball in zip("lr", _eyeballs(posed, points)):
         _eye(group, defs, shapes, side, eyeball, face, uid, style)
-    (rx, ry), (sx, sy) = points[10:12]
-    _mouth(group, defs, shapes, uid, style, face.fapu.d, math.hypot(rx - sx, ry - sy))
+    _mouth(group, defs, shapes, uid, style, face.fapu.d, points[10:14])
     return group
 
 
@@ -212,10 +213,13 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
 
 
 def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
-           style: dict[str, dict[str, str]], d: float, width: float) -> None:
+           style: dict[str, dict[str, str]], d: float, points: list[list[float]]) -> None:
     """Append the mouth: lips, the opening with the upper teeth and the tongue clipped to it,
-    the line where the lips meet. `d` is the FAPU d, `width` the opening's width (R to S),
-    both in pixels: a narrow, rounded opening (o, u) shows less of the teeth."""
+    the line where the lips meet, a gloss on the lower lip. `d` is the FAPU d in pixels,
+    `points` the posed R, S, 2.3, 8.2 as [x, y]: a narrow, rounded opening (o, u) shows
+    less of the teeth."""
+    (rx, ry), (sx, sy), (ix, iy), (ox, oy) = points
+    width = math.hypot(rx - sx, ry - sy)
     clip_id = f"cf-mouth-{uid}"
     _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": shapes["mouth_inner"]})
     mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
@@ -226,6 +230,9 @@ def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], 
     teeth = min(TEETH * d, TEETH_OF_WIDTH * width)
     _el(inside, "path", {"d": shapes["lips_line"], **style["teeth"], "stroke-width": number_text(2 * teeth)})
     _el(mouth, "path", {"d": shapes["lips_line"], **style["lips_line"]})
+    _el(mouth, "ellipse", {"cx": number_text(0.45 * ix + 0.55 * ox), "cy": number_text(0.45 * iy + 0.55 * oy),
+                           "rx": number_text(GLOSS * width), "ry": number_text(0.22 * math.hypot(ox - ix, oy - iy)),
+                           **style["gloss"]})
 
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
