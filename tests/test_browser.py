@@ -152,3 +152,30 @@ def test_phone_layout_fits_the_screen(browser, site):
     phone.close()
     assert widths["page"] <= 375
     assert 250 <= widths["face"] <= 375
+
+
+def test_tab_switch_pauses_the_face_and_catches_up(page):
+    page.evaluate("document.getElementById('cf-audio').play()")
+    page.wait_for_timeout(500)
+    hide = """hidden => { Object.defineProperty(document, 'hidden', {configurable: true, get: () => hidden});
+                          document.dispatchEvent(new Event('visibilitychange')); }"""
+    page.evaluate(hide, True)
+    hidden_at = page.evaluate(CLOCKS)
+    page.wait_for_timeout(700)
+    assert page.evaluate("document.getElementById('cf-face').animationsPaused()"), "a hidden page runs no animation"
+    assert page.evaluate(CLOCKS)["audio"] > hidden_at["audio"] + 0.4, "the audio plays on"
+    page.evaluate(hide, False)
+    assert not page.evaluate("document.getElementById('cf-face').animationsPaused()")
+    back = page.evaluate(CLOCKS)
+    assert abs(back["svg"] - back["audio"]) <= 0.5 / FPS
+
+
+def test_standalone_animation_plays_on_its_own(browser, site):
+    alone = browser.new_page()
+    alone.goto((site / "animation.svg").as_uri(), wait_until="load")
+    alone.wait_for_timeout(1200)
+    shown = alone.evaluate("""() => ({time: document.documentElement.getCurrentTime(),
+        visible: [...document.querySelectorAll('g[data-shape]')].filter(g => getComputedStyle(g).visibility === 'visible').length})""")
+    alone.close()
+    assert shown["time"] > 1.0
+    assert shown["visible"] == 1
