@@ -189,7 +189,7 @@ def generate(
     states = sample_frames(build_timeline(alignment, actions), options.fps)
     report("svg")
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
-                        wide=options.page == "announcer")
+                        wide=options.page == "announcer", title=options.title)
     report("pages")
     with atomic_directory(target) as folder:
         sources = copy_audio(audio, folder)
