@@ -284,7 +284,7 @@ def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
     turned, tilted or rolled by 15 degrees."""
     points = np.concatenate([face.points, face.hair])
     low, high = points.min(axis=0), points.max(axis=0)
-    margin = 0.45 * face.fapu.d
+    margin = 0.55 * face.fapu.d
     return low[0] - margin, low[1] - margin, high[0] - low[0] + 2 * margin, high[1] - low[1] + 2 * margin
 
 
