@@ -1,7 +1,8 @@
 """Face landmarks from a photo: MediaPipe's face detector and 478-point face mesh.
 
 The models ship inside the pinned `mediapipe` wheel (the optional `photo` extra,
-docs/photo.md); nothing is downloaded. The full-range detector finds every face;
+docs/photo.md); nothing is downloaded. The full-range detector finds every face (the
+short-range one is asked when it finds none);
 the largest one is cropped, scaled to MESH_SIDE pixels and given to the face mesh
 (with iris refinement), and its points are mapped back to the photo.
 """
@@ -96,7 +97,10 @@ class Landmarker:
                 f"reading a photo needs the photo extra ({exc.name or exc}): "
                 "pip install 'cartoonface[photo]' and see scripts/setup.sh") from None
         with _quiet():
-            self._detector = face_detection.FaceDetection(model_selection=1, min_detection_confidence=0.5)
+            # full range first (small faces in a wide photo), then short range (close-ups
+            # it misses): both models ship in the wheel
+            self._detectors = (face_detection.FaceDetection(model_selection=1, min_detection_confidence=0.5),
+                               face_detection.FaceDetection(model_selection=0, min_detection_confidence=0.5))
             self._mesh = face_mesh.FaceMesh(static_image_mode=True, max_num_faces=1, refine_landmarks=True,
                                             min_detection_confidence=0.3)
         self._lock = threading.Lock()
@@ -105,7 +109,11 @@ class Landmarker:
         """Landmarks of the largest face in `rgb` ((H, W, 3) uint8), or None when there is none."""
         height, width = rgb.shape[:2]
         with self._lock, _quiet():
-            found = self._detector.process(np.ascontiguousarray(rgb)).detections or []
+            found = []
+            for detector in self._detectors:
+                found = detector.process(np.ascontiguousarray(rgb)).detections or []
+                if found:
+                    break
             boxes = []
             for detection in found:
                 rel = detection.location_data.relative_bounding_box
