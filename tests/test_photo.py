@@ -258,3 +258,26 @@ def test_cli_writes_face_preview_and_overlay(tmp_path):
         assert image.size == (512, 512)
     bad = run_cli("face", "from-photo", photo, "-o", tmp_path / "face.txt")
     assert bad.returncode == 2 and "ending in .json" in bad.stderr
+
+
+def test_turned_head_is_warned_and_turned_back(original):
+    from dataclasses import replace
+
+    from cartoonface.face.landmarks import landmarker
+    from cartoonface.face.photo import face_from_landmarks
+
+    photo = photo_from_image(astronaut(), "turned")
+    found = landmarker().find(photo.rgb)
+    # turn the mesh 25 degrees about the vertical axis through the eyes (nose to the image right)
+    mesh = found.points.copy()
+    centre = (mesh[468] + mesh[473]) / 2
+    a = np.radians(25)
+    rel = mesh - centre
+    mesh[:, 0] = centre[0] + np.cos(a) * rel[:, 0] - np.sin(a) * rel[:, 2]
+    mesh[:, 2] = centre[2] + np.sin(a) * rel[:, 0] + np.cos(a) * rel[:, 2]
+    turned = face_from_landmarks(photo, replace(found, points=mesh))
+    assert turned.turn - original.turn == pytest.approx(25, abs=3)
+    assert any("turned 2" in note for note in turned.warnings)
+    assert not any("turned" in note for note in original.warnings)
+    d = original.face.fapu.d
+    assert np.median(np.hypot(*(turned.face.points - original.face.points).T)) < 0.05 * d

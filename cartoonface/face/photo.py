@@ -21,7 +21,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageOps
 
 from cartoonface.errors import FaceModelError, InputError
-from cartoonface.face.landmarks import landmarker
+from cartoonface.face.landmarks import Landmarks, landmarker
 from cartoonface.face.landmarks_map import free_fapu, model_points
 from cartoonface.face.model import POINT_INDEX, FaceModel, face_from_dict
 from cartoonface.face.photo_hair import segment_head
@@ -185,10 +185,16 @@ def face_from_photo(photo: Photo, name: str = "photo") -> PhotoFace:
     InputError naming the photo when no face is found or the face is narrower than
     MIN_FACE_PX pixels of the file; PhotoExtraMissing without the photo extra.
     """
-    source = photo.source
     found = landmarker().find(photo.rgb)
     if found is None:
-        raise InputError(f"{source}: no face found in the photo; expected a frontal portrait")
+        raise InputError(f"{photo.source}: no face found in the photo; expected a frontal portrait")
+    return face_from_landmarks(photo, found, name)
+
+
+def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> PhotoFace:
+    """The cartoon face of the face whose landmarks `found` were read from `photo`
+    (face_from_photo without the detection step)."""
+    source = photo.source
     mesh = found.points
     face_width = float(np.ptp(mesh[:, 0])) / photo.scale
     if face_width < MIN_FACE_PX:
