@@ -494,6 +494,21 @@ def test_a_job_the_pipeline_refuses_shows_its_error(app, client, speech):
     assert client.get(f"/jobs/{job.id}/site/index.html").status_code == 404
 
 
+def test_a_waiting_job_shows_its_place_and_progress(app, client, speech):
+    job = create_job(Path(app.instance_path), spec(XSS), stored_inputs(speech))  # stored, never queued
+    status = client.get(f"/jobs/{job.id}/status").get_json()
+    assert (status["state"], status["percent"], status["stage_label"]) == (QUEUED, 0, "Waiting for a free worker")
+    page = client.get(f"/jobs/{job.id}").get_data(as_text=True)
+    assert '<progress id="progress" max="100" value="0">' in page
+    assert f'data-status-url="/jobs/{job.id}/status"' in page
+    assert "/static/web/job.js" in page
+    assert XSS not in page
+    write_status(job.folder, Status(state=RUNNING, stage="frames", fraction=0.42))
+    status = client.get(f"/jobs/{job.id}/status").get_json()
+    assert (status["percent"], status["stage_label"]) == (42, "Drawing the frames")
+    assert client.get("/static/web/job.js").status_code == 200
+
+
 def test_restart_keeps_finished_jobs_and_fails_interrupted_ones(tmp_path, speech, sample_name):
     first = make_app(tmp_path)
     client = first.test_client()

@@ -50,11 +50,6 @@ class Runner:
             raise RuntimeError("the job runner is closed")
         self._queue.put(folder)
 
-    def pending(self) -> int:
-        """Jobs waiting or running now."""
-        with self._lock:
-            return self._queue.qsize() + len(self._running)
-
     def close(self, timeout: float = 5.0) -> None:
         """Stop: drop waiting jobs (they stay queued on disk until the next start marks them),
         terminate running ones (marked failed, STOPPED) and join the threads."""

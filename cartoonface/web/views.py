@@ -24,13 +24,14 @@ from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.inputs import MAX_TITLE, PAGES, Limits, check_submission, form_values
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
-from cartoonface.web.store import DONE, ID_PATTERN, Job, create_job, load_job
+from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job
 from cartoonface.web.worker import SITE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
 
+QUEUED_LABEL = "Waiting for a free worker"
 STAGES = {
-    "": "Waiting for a free worker",
+    "": "Starting",
     "decode": "Reading the recording",
     "segment": "Finding the sentences",
     "align": "Timing the syllables",
@@ -88,6 +89,13 @@ def state() -> WebState:
     return current_app.extensions["cartoonface"]
 
 
+def stage_label(status: Status) -> str:
+    """What the job is doing, for people: waiting, or the pipeline stage it is in."""
+    if status.state == QUEUED:
+        return QUEUED_LABEL
+    return STAGES.get(status.stage, status.stage)
+
+
 def stored_job(job_id: str) -> Job:
     """The job `job_id` or a 404."""
     job = load_job(state().settings.instance, job_id)
@@ -113,7 +121,7 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     return render_template(
         "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES,
         max_title=MAX_TITLE, upload_mb=limits.upload_bytes >> 20, csrf=csrf_token(),
-        csrf_field=CSRF_FIELD, jobs=recent_jobs(), stages=STAGES,
+        csrf_field=CSRF_FIELD, jobs=recent_jobs(),
     ), status
 
 
@@ -146,14 +154,14 @@ def submit() -> Response | tuple[str, int]:
 @bp.get("/jobs/<jobid:job_id>")
 def job_page(job_id: str) -> str:
     job = stored_job(job_id)
-    return render_template("web/job.html", job=job, status=job.status, stages=STAGES,
+    return render_template("web/job.html", job=job, status=job.status, stage=stage_label(job.status),
                            pages=PAGES, done=job.status.state == DONE)
 
 
 @bp.get("/jobs/<jobid:job_id>/status")
 def job_status(job_id: str) -> Response:
     status = stored_job(job_id).status
-    response = jsonify(state=status.state, stage=status.stage, stage_label=STAGES.get(status.stage, status.stage),
+    response = jsonify(state=status.state, stage=status.stage, stage_label=stage_label(status),
                        percent=status.percent, error=status.error)
     response.headers["Cache-Control"] = "no-store"
     return response
