@@ -24,8 +24,8 @@ from cartoonface.errors import FaceModelError, InputError
 from cartoonface.face.landmarks import Landmarks, landmarker
 from cartoonface.face.landmarks_map import free_fapu, model_points
 from cartoonface.face.model import POINT_INDEX, FaceModel, face_from_dict
-from cartoonface.face.photo_hair import segment_head
-from cartoonface.face.photo_palette import face_colours, hex_colour, mix, palette_values
+from cartoonface.face.photo_hair import Head, segment_head
+from cartoonface.face.photo_palette import BLACK, face_colours, hex_colour, mix, palette_values
 
 # A face narrower than this (in the photo's own pixels) is refused: too few pixels
 # for the eyes and mouth to be placed.
@@ -48,6 +48,11 @@ SMILE_LIFT = 0.06
 TURN_PAIRS = ((33, 263), (133, 362), (234, 454), (93, 323), (61, 291), (129, 358))
 # Smallest eye opening kept, in d (closed eyes are opened this far).
 MIN_EYE_OPENING = 0.08
+# Stand-ins for colours a photo does not show (RGB), and the RGB distance under which
+# the hair is taken for the background.
+BROWN_IRIS = np.array([91.0, 58.0, 41.0])
+LIP_RED = np.array([200.0, 80.0, 90.0])
+SAME_COLOUR = 30.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,6 +184,26 @@ def _neutral_mouth(points: np.ndarray, d: float) -> tuple[np.ndarray, list[str]]
     return p, notes
 
 
+def _palette(colours: dict[str, np.ndarray | None], head: Head, skin: np.ndarray) -> tuple[dict[str, str], list[str]]:
+    """The face's palette (hex colours by name) from the sampled face colours and the head
+    segmentation, with a stand-in (and a warning) for what could not be sampled: hair that
+    is missing or looks like the background takes the eyebrow colour."""
+    notes = []
+    brow = colours["brow"] if colours["brow"] is not None else mix(skin, BLACK, 0.6)
+    hair = head.hair
+    if hair is not None and np.linalg.norm(hair - head.background) < SAME_COLOUR:
+        notes.append("the hair cannot be told from the background; the hair takes the eyebrow colour")
+        hair = None
+    elif hair is None:
+        notes.append("no hair found around the face; the hair takes the eyebrow colour")
+    iris = colours["iris"]
+    if iris is None:
+        notes.append("the irises are hidden; the model uses a brown iris")
+        iris = BROWN_IRIS
+    lip = colours["lip"] if colours["lip"] is not None else mix(skin, LIP_RED, 0.5)
+    return palette_values(skin, brow if hair is None else hair, brow, iris, lip), notes
+
+
 def face_from_photo(photo: Photo, name: str = "photo") -> PhotoFace:
     """The cartoon face of the largest face in `photo`.
 
@@ -228,8 +253,9 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     hair_depth = float(np.mean(level[[234, 454], 2]))
     hair_xyz = np.column_stack([hair_level, np.full(len(hair_level), hair_depth)])
 
-    frontal = _unturn(named, level[[468, 473]].mean(axis=0), turn)
-    hair_frontal = _unturn(hair_xyz, level[[468, 473]].mean(axis=0), turn)
+    axis = level[[468, 473]].mean(axis=0)
+    frontal = _unturn(named, axis, turn)
+    hair_frontal = _unturn(hair_xyz, axis, turn)
     d = float(np.hypot(*(frontal[POINT_INDEX["3.5"]] - frontal[POINT_INDEX["3.6"]])))
     frontal, mouth_notes = _neutral_mouth(frontal, d)
     notes.extend(mouth_notes)
@@ -240,17 +266,8 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     hair = (hair_frontal - centre) * k + EYES_AT
     hair = np.clip(hair, [0, 0], [CANVAS[0], CANVAS[1]])
 
-    hair_colour = head.hair
-    if hair_colour is None:
-        notes.append("no hair found around the face; the hair takes the eyebrow colour")
-    brow = colours["brow"] if colours["brow"] is not None else (hair_colour if hair_colour is not None else mix(skin, np.zeros(3), 0.6))
-    if hair_colour is None:
-        hair_colour = brow
-    iris = colours["iris"]
-    if iris is None:
-        notes.append("the irises are hidden; the model uses a brown iris")
-        iris = np.array([91.0, 58.0, 41.0])
-    lip = colours["lip"] if colours["lip"] is not None else mix(skin, np.array([200.0, 80.0, 90.0]), 0.5)
+    palette, colour_notes = _palette(colours, head, skin)
+    notes.extend(colour_notes)
 
     fapu = {key: value * k for key, value in free_fapu(level).items()}
     obj = {
@@ -258,7 +275,7 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
         "points": {n: [float(x), float(y)] for n, (x, y) in zip(POINT_INDEX, points)},
         "hair": [[float(x), float(y)] for x, y in hair],
         "fapu": fapu,
-        "palette": palette_values(skin, hair_colour, brow, iris, lip),
+        "palette": palette,
     }
     try:
         face = face_from_dict(obj, source)
