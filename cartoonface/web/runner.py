@@ -14,9 +14,8 @@ import queue
 import threading
 import time
 from collections.abc import Callable
-from pathlib import Path
-
 from multiprocessing.process import BaseProcess
+from pathlib import Path
 
 from cartoonface.web.store import FAILED, FINAL_STATES, Status, read_status, write_status
 from cartoonface.web.worker import forked_main
@@ -101,6 +100,6 @@ class Runner:
         if status.state not in FINAL_STATES:
             reason = STOPPED if closed else (
                 f"Internal error: the worker process ended unexpectedly (exit code {code}); "
-                "the server log has the details.")
+                "the job's worker.log on the server has the details.")
             write_status(folder, Status(state=FAILED, stage=status.stage, fraction=status.fraction,
                                         error=reason, updated=time.time()))

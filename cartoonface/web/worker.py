@@ -119,7 +119,7 @@ def main(folder: Path, server_alive: Callable[[], bool]) -> int:
         stage = json.loads((folder / "status.json").read_text(encoding="utf-8")).get("stage", "")
         write_status(folder, Status(state=FAILED, stage=stage, updated=time.time(),
                                     error=f"Internal error while generating (stage {stage or 'start'}); "
-                                          "the server log has the details."))
+                                          "the job's worker.log on the server has the details."))
         return 1
     return 0
 
