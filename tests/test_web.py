@@ -19,7 +19,6 @@ from flask.testing import FlaskClient
 from markupsafe import escape
 
 from cartoonface.errors import OptionError
-from cartoonface.pipeline import Options, generate
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import create_app
 from cartoonface.web.runner import STOPPED, Runner
@@ -203,13 +202,14 @@ def test_zip_download_is_the_folder_generate_writes(app, client, done_job, tmp_p
     tops = {name.split("/", 1)[0] for name in names}
     assert len(tops) == 1
     top = tops.pop()
-    # The same call the CLI makes, on the job's own inputs, writes the same files byte for byte.
+    # `cartoonface generate` on the job's own inputs and choices writes the same files byte for byte.
     job = load_job(Path(app.instance_path), job_id_of(url))
     spec = job.spec
     out = tmp_path / "cli"
-    generate(job.folder / "face.json", job.folder / str(spec["audio_file"]), job.folder / "transcript.txt", out,
-             Options(page=str(spec["page"]), title=str(spec["title"]), background=str(spec["background"]),
-                     clothes=str(spec["clothes"])))
+    done = run_cli("generate", "--face", job.folder / "face.json", "--audio", job.folder / str(spec["audio_file"]),
+                   "--transcript", job.folder / "transcript.txt", "-o", out, "--page", spec["page"],
+                   "--title", spec["title"], "--background", spec["background"], "--clothes", spec["clothes"])
+    assert done.returncode == 0, done.stderr
     expected = {path.relative_to(out).as_posix(): path.read_bytes() for path in out.rglob("*") if path.is_file()}
     got = {name[len(top) + 1:]: archive.read(name) for name in names if not name.endswith("/")}
     assert set(got) == set(expected)
