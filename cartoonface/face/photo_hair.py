@@ -37,6 +37,8 @@ RAY_GAP = 0.05
 MIN_HAIR_PIXELS = 30
 # Where a ray finds no hair beyond the face, its point goes this fraction of the way out.
 INSIDE_FACE = 0.8
+# Hair reaches at most this many face widths beyond the face oval along a ray.
+MAX_HAIR = 0.6
 
 
 @dataclass(frozen=True)
@@ -135,33 +137,44 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     silhouette = cv2.morphologyEx((hair_mask | face).astype(np.uint8), cv2.MORPH_CLOSE,
                                   np.ones((5, 5), np.uint8)).astype(bool) | face
     centre = (mesh[[168, 4], :2].mean(axis=0) - to_window) * scale
-    ends = _rays(silhouette, centre, RAY_GAP * ws, roll)
-    # A ray that ends on the face, not on hair, is pulled inside the face so the
-    # polygon stays hidden behind the drawn contour (which is smoother than the photo's).
-    on_hair = ~face[np.round(ends[:, 1]).astype(int), np.round(ends[:, 0]).astype(int)]
-    ends = np.where(on_hair[:, None], ends, centre + INSIDE_FACE * (ends - centre))
-    polygon = ends / scale + to_window
+    directions = _directions(roll)
+    face_reach = _reach(face, centre, directions, RAY_GAP * ws)
+    reach = _reach(silhouette, centre, directions, RAY_GAP * ws)
+    # Hair reaches at most MAX_HAIR face widths beyond the face (a busy background or a
+    # neighbour's hair must not pull it away), and one ray may not spike past both of
+    # its neighbours. A ray that finds no hair beyond the face ends inside the face, so
+    # the polygon stays hidden behind the drawn contour (smoother than the photo's).
+    reach = np.minimum(reach, face_reach + MAX_HAIR * ws)
+    padded = np.concatenate([reach[:1], reach, reach[-1:]])
+    reach = np.median(np.stack([padded[:-2], padded[1:-1], padded[2:]]), axis=0)
+    reach = np.where(reach > face_reach + 0.02 * ws, reach, INSIDE_FACE * face_reach)
+    polygon = (centre + reach[:, None] * directions) / scale + to_window
     return Head(polygon=polygon, hair=hair, clothes=clothes, background=background)
 
 
-def _rays(mask: np.ndarray, centre: np.ndarray, gap: float, roll: float) -> np.ndarray:
-    """(HAIR_POINTS, 2): along each ray from `centre` (turned by `roll` degrees with the
-    head), the last mask pixel before the first run of more than `gap` pixels outside
-    the mask (the centre itself if none)."""
-    sh, sw = mask.shape
-    reach = np.arange(0.0, float(np.hypot(sh, sw)), 0.5)
+def _directions(roll: float) -> np.ndarray:
+    """(HAIR_POINTS, 2) unit ray directions in drawing order, turned by `roll` degrees
+    (positive clockwise on screen) with the head."""
     angles = np.radians(np.linspace(RAY_FIRST, 360.0 - RAY_FIRST, HAIR_POINTS) + roll)
-    points = []
-    for angle in angles:
-        direction = np.array([-np.sin(angle), np.cos(angle)])
-        xy = centre + reach[:, None] * direction
-        inside_image = (xy[:, 0] >= 0) & (xy[:, 0] <= sw - 1) & (xy[:, 1] >= 0) & (xy[:, 1] <= sh - 1)
-        xy = xy[inside_image]
-        hit = mask[np.round(xy[:, 1]).astype(int), np.round(xy[:, 0]).astype(int)]
+    return np.column_stack([-np.sin(angles), np.cos(angles)])
+
+
+def _reach(mask: np.ndarray, centre: np.ndarray, directions: np.ndarray, gap: float) -> np.ndarray:
+    """(R,) how far each ray from `centre` along `directions` (R, 2) runs through the
+    mask: to its last mask pixel before the first run of more than `gap` pixels outside
+    it, or the edge of the mask (pixels)."""
+    sh, sw = mask.shape
+    steps = np.arange(0.0, float(np.hypot(sh, sw)), 0.5)
+    out = []
+    for direction in directions:
+        xy = centre + steps[:, None] * direction
+        inside = (xy[:, 0] >= 0) & (xy[:, 0] <= sw - 1) & (xy[:, 1] >= 0) & (xy[:, 1] <= sh - 1)
+        xy = xy[inside]
+        hit = np.nonzero(mask[np.round(xy[:, 1]).astype(int), np.round(xy[:, 0]).astype(int)])[0]
         last = 0
-        for i in np.nonzero(hit)[0]:
-            if (i - last) * 0.5 > gap and last > 0:
+        for i in hit:
+            if last > 0 and (i - last) * 0.5 > gap:
                 break
             last = i
-        points.append(xy[last])
-    return np.array(points)
+        out.append(steps[last])
+    return np.array(out)
