@@ -39,11 +39,14 @@ CANVAS = (400.0, 480.0)
 MODEL_D = 100.0
 EYES_AT = np.array([200.0, 200.0])
 # Neutrality thresholds (ours): turn / roll beyond 15 degrees (the pose range of
-# thesis 2.4.3), a lip gap over 8 % of the mouth width, corners raised over 6 %.
+# thesis 002, 2.4.3), a lip gap over 8 % of the mouth width, corners raised over 6 %.
 MAX_TURN = 15.0
 MAX_ROLL = 15.0
 OPEN_MOUTH = 0.08
 SMILE_LIFT = 0.06
+# A smile moves the corners out by 1.0 UpperLipH and up by 1.5 (the smile expression,
+# docs/face-model.md section 9): undoing a lift moves each corner in by 1/1.5 of it.
+SMILE_SIDEWAYS = 1.0 / 1.5
 # Symmetric mesh points (image left, image right) whose depth difference gives the turn.
 TURN_PAIRS = ((33, 263), (133, 362), (234, 454), (93, 323), (61, 291), (129, 358))
 # Smallest eye opening kept, in d (closed eyes are opened this far).
@@ -172,8 +175,9 @@ def _neutral_mouth(points: np.ndarray, d: float) -> tuple[np.ndarray, list[str]]
     lift = line - (at("8.3")[1] + at("8.4")[1]) / 2
     if lift > SMILE_LIFT * width:
         notes.append(f"the face smiles (mouth corners {lift / d:.2f} d above the lips); the model lowers them")
-        p[POINT_INDEX["8.3"]] += [-0.3 * lift, line - at("8.3")[1]]
-        p[POINT_INDEX["8.4"]] += [0.3 * lift, line - at("8.4")[1]]
+        inward = SMILE_SIDEWAYS * lift
+        p[POINT_INDEX["8.3"]] += [-inward, line - at("8.3")[1]]
+        p[POINT_INDEX["8.4"]] += [inward, line - at("8.4")[1]]
     for upper, lower in (("3.2", "3.4"), ("3.1", "3.3")):
         opening = at(lower)[1] - at(upper)[1]
         if opening < MIN_EYE_OPENING * d:
