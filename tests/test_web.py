@@ -15,12 +15,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 from flask.testing import FlaskClient
 from markupsafe import escape
 
 from cartoonface.errors import OptionError
+from cartoonface.face.model import face_from_dict
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import create_app
+from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.runner import STOPPED, Runner
 from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
@@ -145,7 +148,7 @@ def job_id_of(url: str) -> str:
 def test_home_page_offers_the_form_with_samples_and_a_csrf_token(client, sample_name):
     page = client.get("/").get_data(as_text=True)
     assert f'<option value="{sample_name}"' in page
-    for name in ("face_file", "audio", "transcript", "transcript_file", "title", "background", "clothes"):
+    for name in ("face_file", "photo", "audio", "transcript", "transcript_file", "title", "background", "clothes"):
         assert f'name="{name}"' in page
     assert 'value="audiobook"' in page and 'value="announcer"' in page
     assert len(csrf(client)) >= 32
@@ -360,7 +363,7 @@ def test_recording_over_the_size_limit_is_refused_in_the_form(client, speech, sa
 
 
 def test_request_far_over_the_limit_gets_413_with_a_message(client, speech, sample_name):
-    huge = b"RIFF" + bytes(3 << 20)
+    huge = b"RIFF" + bytes(24 << 20)  # over 1 MB recording + 20 MB photo + the rest
     response = post(client, form(client, speech, sample_name, audio=(io.BytesIO(huge), "huge.wav")))
     assert response.status_code == 413
     assert "The upload is too large" in response.get_data(as_text=True)
@@ -423,6 +426,51 @@ def test_uploaded_face_model_is_used_instead_of_the_sample(app, client, speech, 
     job = load_job(Path(app.instance_path), job_id_of(response.headers["Location"]))
     assert (job.folder / "face.json").read_bytes() == upload
     assert job.spec["face_label"] == "mine.json"
+
+
+PHOTO = ROOT / "docs" / "photo-astronaut.png"
+
+
+def png_bytes(width: int, height: int, colour: tuple[int, int, int]) -> bytes:
+    """A plain PNG of one colour (no face in it)."""
+    buffer = io.BytesIO()
+    Image.new("RGB", (width, height), colour).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def test_a_photo_becomes_the_face_model_with_its_notes(app, client, speech, sample_name):
+    response = post(client, form(client, speech, sample_name, photo=(io.BytesIO(PHOTO.read_bytes()), "me.png")))
+    assert response.status_code == 303, response.get_data(as_text=True)
+    job = load_job(Path(app.instance_path), job_id_of(response.headers["Location"]))
+    model = face_from_dict(json.loads((job.folder / "face.json").read_text(encoding="utf-8")), "face.json")
+    assert model.points.shape[1] == 2
+    assert job.spec["face_label"] == "me.png"
+    page = client.get(f"/jobs/{job.id}").get_data(as_text=True)
+    for note in job.spec["face_notes"]:
+        assert note.startswith("me.png: ")
+        assert str(escape(note)) in page
+    assert wait_done(client, f"/jobs/{job.id}")[-1]["state"] == DONE
+
+
+@pytest.mark.parametrize("content, name, expected", [
+    (b"just text, not an image" * 10, "me.jpg", "me.jpg: not a photo this app reads (by its content)"),
+    (b"\xff\xd8\xff\xe0" + bytes(300), "broken.jpg", "broken.jpg: "),
+    (png_bytes(320, 320, (200, 180, 160)), "wall.png", "wall.png: "),
+])
+def test_unusable_photos_are_reported_in_the_form(client, speech, sample_name, content, name, expected):
+    page = errors_of(post(client, form(client, speech, sample_name, photo=(io.BytesIO(content), name))))
+    assert re.search(r'id="photo-error"[^>]*>' + re.escape(str(escape(expected))), page)
+    assert "/tmp" not in page and "photo.jpg" not in page and "photo.png" not in page
+
+
+def test_photo_size_and_either_model_or_photo(client, speech, sample_name):
+    big = b"\xff\xd8\xff" + bytes(MAX_PHOTO_BYTES)
+    page = errors_of(post(client, form(client, speech, sample_name, photo=(io.BytesIO(big), "huge.jpg"))))
+    assert "huge.jpg: a photo must be at most 20 MB" in page
+    face = sorted(SAMPLES.glob("*.json"))[0].read_bytes()
+    page = errors_of(post(client, form(client, speech, sample_name, photo=(io.BytesIO(PHOTO.read_bytes()), "me.png"),
+                                       face_file=(io.BytesIO(face), "face.json"))))
+    assert "Give either a face model (JSON) or a photo, not both." in page
 
 
 @pytest.mark.parametrize("field, value, message", [

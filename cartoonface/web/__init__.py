@@ -17,7 +17,7 @@ from flask import Flask, Request, Response
 
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
-from cartoonface.web.inputs import MAX_FACE_BYTES, Limits
+from cartoonface.web.inputs import MAX_FACE_BYTES, MAX_PHOTO_BYTES, Limits
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import add_headers
 from cartoonface.web.store import apply_retention, fail_interrupted
@@ -63,8 +63,9 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     settings.instance.mkdir(parents=True, exist_ok=True)
     if not app.config.get("SECRET_KEY"):
         app.config["SECRET_KEY"] = secret_key(settings.instance)
-    # A request may hold the recording, a face model and a transcript file.
-    app.config["MAX_CONTENT_LENGTH"] = settings.upload_bytes + MAX_FACE_BYTES + 4 * settings.transcript_chars + 65536
+    # A request may hold the recording, a face model, a photo and a transcript file.
+    app.config["MAX_CONTENT_LENGTH"] = (settings.upload_bytes + MAX_FACE_BYTES + MAX_PHOTO_BYTES
+                                        + 4 * settings.transcript_chars + 65536)
     app.config.update(SESSION_COOKIE_HTTPONLY=True, SESSION_COOKIE_SAMESITE="Lax")
 
     sweep_lock = threading.Lock()

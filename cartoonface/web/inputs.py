@@ -2,7 +2,8 @@
 
 `check_submission(form, files, limits)` returns a `Submission` (the inputs as
 bytes under names chosen here, plus the request as plain values) or a dict of
-field -> message for the form. File types are decided from the bytes (magic
+field -> message for the form. A photo becomes a face model here
+(face/photo.py), so a photo without a usable face is a message in the form. File types are decided from the bytes (magic
 numbers), never from the file name; the user's file name is only ever shown
 (escaped), never used in a path.
 """
@@ -18,13 +19,15 @@ from pathlib import Path
 from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
-from cartoonface.face.model import face_from_dict
+from cartoonface.face.model import face_from_dict, face_to_dict
+from cartoonface.face.photo import face_from_photo, load_photo
 from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.transcript import parse_transcript
 
 PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
+MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 SHOWN_NAME_CHARS = 80
 
 
@@ -65,6 +68,17 @@ def sniff_audio(head: bytes) -> str | None:
     return None
 
 
+def sniff_image(head: bytes) -> str | None:
+    """The image format the first bytes of a file announce ("jpg", "png", "webp"), or None."""
+    if head[:3] == b"\xff\xd8\xff":
+        return "jpg"
+    if head[:8] == b"\x89PNG\r\n\x1a\n":
+        return "png"
+    if len(head) >= 12 and head[:4] == b"RIFF" and head[8:12] == b"WEBP":
+        return "webp"
+    return None
+
+
 def shown_name(upload: FileStorage, fallback: str) -> str:
     """The user's file name for messages only: last path part, at most SHOWN_NAME_CHARS."""
     name = (upload.filename or "").replace("\\", "/").rsplit("/", 1)[-1].strip()
@@ -90,35 +104,66 @@ def form_values(form: MultiDict[str, str]) -> dict[str, str]:
                                                  "transcript")}
 
 
+def check_photo(upload: FileStorage, data: bytes, too_big: bool,
+                errors: dict[str, str]) -> tuple[bytes | None, str, tuple[str, ...]]:
+    """A face model made from a photo: (face JSON bytes, label, warnings about the photo)."""
+    name = shown_name(upload, "photo")
+    if too_big:
+        errors["photo"] = f"{name}: a photo must be at most {MAX_PHOTO_BYTES >> 20} MB."
+        return None, name, ()
+    ext = sniff_image(data[:12])
+    if ext is None:
+        errors["photo"] = f"{name}: not a photo this app reads (by its content); expected JPEG, PNG or WebP."
+        return None, name, ()
+    with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
+        path = Path(tmp) / f"photo.{ext}"
+        path.write_bytes(data)
+        try:
+            made = face_from_photo(load_photo(path), "photo")
+        except InputError as exc:
+            errors["photo"] = str(exc).replace(str(path), name)
+            return None, name, ()
+    face = json.dumps(face_to_dict(made.face), ensure_ascii=False).encode("utf-8")
+    return face, name, tuple(f"{name}: {warning}" for warning in made.warnings)
+
+
 def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
-               errors: dict[str, str]) -> tuple[bytes | None, str]:
-    """The face model JSON (bytes) and its label: an upload wins over the sample chosen."""
+               errors: dict[str, str]) -> tuple[bytes | None, str, tuple[str, ...]]:
+    """The face model JSON (bytes), its label and notes about it: an uploaded face model
+    or a photo (not both) wins over the sample chosen."""
     upload = files.get("face_file")
     data, too_big = read_upload(upload, MAX_FACE_BYTES)
+    photo = files.get("photo")
+    photo_data, photo_too_big = read_upload(photo, MAX_PHOTO_BYTES)
+    if data is not None and photo_data is not None:
+        errors["photo"] = "Give either a face model (JSON) or a photo, not both."
+        return None, "", ()
+    if photo_data is not None:
+        return check_photo(photo, photo_data, photo_too_big, errors)
     if data is not None:
         name = shown_name(upload, "face model")
         if too_big:
             errors["face_file"] = f"{name}: a face model must be at most {MAX_FACE_BYTES >> 10} kB of JSON."
-            return None, name
+            return None, name, ()
         try:
             obj = json.loads(data.decode("utf-8-sig"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             errors["face_file"] = f"{name}: not a face model: expected UTF-8 JSON ({exc})."
-            return None, name
+            return None, name, ()
         except RecursionError:
             errors["face_file"] = f"{name}: not a face model: the JSON is nested too deeply."
-            return None, name
+            return None, name, ()
         try:
             face_from_dict(obj, name)
         except InputError as exc:
             errors["face_file"] = str(exc)
-            return None, name
-        return data, name
+            return None, name, ()
+        return data, name, ()
     sample = _text(form, "face_sample")
     if sample not in limits.samples:
-        errors["face_sample"] = "Choose one of the sample faces or upload a face model (JSON)."
-        return None, sample
-    return limits.samples[sample].read_bytes(), sample
+        errors["face_sample"] = "Choose one of the sample faces, or upload a face model (JSON) or a photo."
+        return None, sample, ()
+    return limits.samples[sample].read_bytes(), sample, ()
 
 
 def check_audio(files: MultiDict[str, FileStorage], limits: Limits,
@@ -205,7 +250,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
-    face, face_label = check_face(form, files, limits, errors)
+    face, face_label, face_notes = check_face(form, files, limits, errors)
     transcript = check_transcript(form, files, limits, errors)
     audio, ext, audio_label, duration = check_audio(files, limits, errors)
     if errors or face is None or audio is None or transcript is None:
@@ -216,6 +261,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "background": background,
         "clothes": clothes,
         "face_label": face_label,
+        "face_notes": list(face_notes),
         "audio_label": audio_label,
         "audio_file": f"audio.{ext}",
         "duration": duration,

@@ -21,7 +21,7 @@ from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
 
 from cartoonface.web.config import PACKAGE, Settings
-from cartoonface.web.inputs import MAX_TITLE, PAGES, Limits, check_submission, form_values
+from cartoonface.web.inputs import MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, check_submission, form_values
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job
@@ -120,7 +120,7 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     shown = {**defaults, **{key: value for key, value in values.items() if value}}
     return render_template(
         "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES,
-        max_title=MAX_TITLE, upload_mb=limits.upload_bytes >> 20, csrf=csrf_token(),
+        max_title=MAX_TITLE, upload_mb=limits.upload_bytes >> 20, photo_mb=MAX_PHOTO_BYTES >> 20, csrf=csrf_token(),
         csrf_field=CSRF_FIELD, jobs=recent_jobs(),
     ), status
 
@@ -190,8 +190,9 @@ def download(job_id: str) -> Response:
 @bp.app_errorhandler(RequestEntityTooLarge)
 def too_large(error: RequestEntityTooLarge) -> tuple[str, int]:
     limit = state().limits.upload_bytes >> 20
-    return render_form({}, {"form": f"The upload is too large: the limit is {limit} MB for the recording "
-                                    "and a few MB for the rest. Please choose the files again."}, 413)
+    return render_form({}, {"form": f"The upload is too large: the limit is {limit} MB for the recording, "
+                                    f"{MAX_PHOTO_BYTES >> 20} MB for a photo and a few MB for the rest. "
+                                    "Please choose the files again."}, 413)
 
 
 @bp.app_errorhandler(HTTPException)
