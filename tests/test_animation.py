@@ -13,7 +13,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg, clock
-from cartoonface.render.pathdata import TOLERANCE, compact_paths
+from cartoonface.render.pathdata import MIRROR, TOLERANCE, compact_paths
 
 ROOT = Path(__file__).resolve().parent.parent
 NS = {"s": "http://www.w3.org/2000/svg"}
@@ -149,7 +149,8 @@ def test_clock_values_read_back(ms):
 
 
 def absolute_points(d: str) -> list[tuple[float, float]]:
-    """Every point (end and control) of a relative m/l/c/z path, in absolute coordinates."""
+    """Every point (end and control) of a relative m/l/c/s/z path, in absolute coordinates
+    (the mirrored first control point of an `s` included)."""
     tokens = re.findall(r"[a-zA-Z]|-?\d+(?:\.\d+)?", d)
     points, x, y, start, command, index = [], 0.0, 0.0, (0.0, 0.0), "", 0
     while index < len(tokens):
@@ -159,8 +160,11 @@ def absolute_points(d: str) -> list[tuple[float, float]]:
             if command == "z":
                 x, y = start
                 continue
-        count = {"m": 1, "l": 1, "c": 3}[command]
+        count = {"m": 1, "l": 1, "c": 3, "s": 2}[command]
         pairs = [(x + float(tokens[index + 2 * k]), y + float(tokens[index + 2 * k + 1])) for k in range(count)]
+        if command == "s":
+            (px, py) = points[-2]
+            pairs.insert(0, (2 * x - px, 2 * y - py))
         index += 2 * count
         points += pairs
         x, y = pairs[-1]
@@ -200,3 +204,21 @@ def test_compact_polylines_drop_only_points_near_the_line():
 def test_other_path_commands_are_left_alone():
     odd = ["M1 1H5V7", "m1 1l2 2", "M0 0A5 5 0 0 1 10 10"]
     assert compact_paths(odd) == {d: d for d in odd}
+
+
+def test_smooth_joins_drop_the_mirrored_control_point():
+    rng = np.random.default_rng(2)
+    paths = []
+    for _ in range(4):  # Catmull-Rom-like: each join's control points mirror around it
+        knots = rng.uniform(50, 350, size=(5, 2))
+        tangents = rng.uniform(-30, 30, size=(5, 2))
+        d = f"M{knots[0, 0]:.1f} {knots[0, 1]:.1f}"
+        for k in range(4):
+            c1, c2 = knots[k] + tangents[k], knots[k + 1] - tangents[k + 1]
+            d += f"C{c1[0]:.1f} {c1[1]:.1f} {c2[0]:.1f} {c2[1]:.1f} {knots[k + 1, 0]:.1f} {knots[k + 1, 1]:.1f}"
+        paths.append(d)
+    compact = compact_paths(paths)
+    for d in paths:
+        assert "s" in compact[d]
+        given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))
+        assert np.abs(np.array(absolute_points(compact[d])) - given).max() <= MIRROR

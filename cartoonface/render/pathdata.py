@@ -5,8 +5,10 @@ animation repeats a part in thousands of frames, so `compact_paths` rewrites the
 
 - every coordinate is rounded to a whole pixel of the face canvas (the canvas is
   drawn at about its own size, so this is what a screen shows);
-- commands become relative (`m l c q z`), a repeated command letter is left out
-  and a comma is written only where the next number has no minus sign;
+- commands become relative (`m l c s q z`), a repeated command letter is left out
+  and a comma is written only where the next number has no minus sign; a cubic
+  whose first control point mirrors the previous one (geometry's smooth joins)
+  is written as `s` without it;
 - runs of straight segments (the corner-cut hair and eyebrows, Chaikin with eight
   points per edge) keep only the points that the Douglas-Peucker rule needs to stay
   within TOLERANCE of the full polyline. The points are chosen once per outline on
@@ -28,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 TOLERANCE = 0.5  # pixels: a dropped point lies closer than this to the simplified line
+MIRROR = 2  # pixels: a first control point this close to the mirrored one is left out (`s`)
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 _ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "Z": 0}
 _LETTERS = "".join(chr(c) for c in range(65, 91)) + "".join(chr(c) for c in range(97, 123))
@@ -100,15 +103,32 @@ def simplify(points: np.ndarray) -> np.ndarray:
     return keep
 
 
-def _plan(commands: list[tuple[str, int]], first: np.ndarray) -> _Plan:
-    """The writing plan of `commands`, choosing the polyline points kept from `first` (2P,),
-    the rounded coordinates of the first path of this skeleton."""
+def _smooth(commands: list[tuple[str, int]], spans: list[list[int]], kept: list[bool],
+            rounded: np.ndarray) -> np.ndarray:
+    """(n, len(commands)) bool: which cubics of each path in `rounded` (n, 2P) may be written
+    as `s` (first control point left out, taken as the mirror of the previous one's second):
+    those following a kept cubic whose first control point is within MIRROR px of that mirror.
+    Geometry's Catmull-Rom joins are smooth by construction (the rounding of three points
+    moves the mirror by up to 2 px), its corners are not; a control point moved by 2 px moves
+    the curve by less than 0.9 px."""
+    xy = rounded.reshape(len(rounded), -1, 2)
+    smooth = np.zeros((len(rounded), len(commands)), dtype=bool)
+    previous = None
+    for index, ((letter, _), span, keep) in enumerate(zip(commands, spans, kept, strict=True)):
+        if not keep:
+            continue
+        if letter == "C" and previous is not None:
+            _, second, end = spans[previous]
+            mirror = 2 * xy[:, end] - xy[:, second]
+            smooth[:, index] = np.all(np.abs(xy[:, span[0]] - mirror) <= MIRROR, axis=1)
+        previous = index if letter == "C" else None
+    return smooth
+
+
+def _kept(commands: list[tuple[str, int]], spans: list[list[int]], first: np.ndarray) -> list[bool]:
+    """Which commands stay: every one but the linetos that Douglas-Peucker drops on `first`
+    (2P,), the rounded coordinates of one path of the skeleton."""
     points = first.reshape(-1, 2).astype(float)
-    # Absolute point index where each command ends, and the points it writes.
-    spans, point = [], 0
-    for letter, arity in commands:
-        spans.append(list(range(point, point + arity // 2)))
-        point += arity // 2
     kept = [True] * len(commands)
     index = 0
     while index < len(commands):  # runs of linetos after some start point
@@ -125,16 +145,32 @@ def _plan(commands: list[tuple[str, int]], first: np.ndarray) -> _Plan:
             for k, keep in zip(range(index, end), mask[1:].tolist(), strict=True):
                 kept[k] = keep
         index = end
+    return kept
+
+
+def _spans(commands: list[tuple[str, int]]) -> list[list[int]]:
+    """The point indices each command writes (its control points, then its end point)."""
+    spans, point = [], 0
+    for _, arity in commands:
+        spans.append(list(range(point, point + arity // 2)))
+        point += arity // 2
+    return spans
+
+
+def _plan(commands: list[tuple[str, int]], spans: list[list[int]], kept: list[bool],
+          smooth: tuple[bool, ...]) -> _Plan:
+    """The writing plan of `commands` keeping the `kept` ones, cubics marked `smooth` as `s`."""
     columns, references, prefixes, after = [], [], [], []
     current, subpath, previous, pending = -1, -1, "", ""
-    for (letter, _), span, keep in zip(commands, spans, kept, strict=True):
+    for (letter, _), span, keep, mirrored in zip(commands, spans, kept, smooth, strict=True):
         if not keep:
             continue
         if letter == "Z":
             pending += "z"
             current, previous = subpath, "z"
             continue
-        lower = letter.lower()
+        lower = "s" if mirrored else letter.lower()
+        span = span[1:] if mirrored else span
         if lower != previous or lower == "m":
             pending += lower
         for position, point_index in enumerate(span):
@@ -195,6 +231,12 @@ def compact_paths(paths: Iterable[str]) -> dict[str, str]:
             compact.update((d, d) for d in members)
             continue
         rounded = np.rint(np.array(numbers, dtype=float)).astype(np.int64)
-        plan = _plan(commands, rounded[0])
-        compact.update(zip(members, _write(plan, rounded), strict=True))
+        spans = _spans(commands)
+        kept = _kept(commands, spans, rounded[0])
+        smooth = _smooth(commands, spans, kept, rounded)
+        patterns, which = np.unique(smooth, axis=0, return_inverse=True)
+        for number, pattern in enumerate(patterns):
+            rows = np.flatnonzero(which.reshape(-1) == number)
+            plan = _plan(commands, spans, kept, tuple(pattern.tolist()))
+            compact.update(zip([members[i] for i in rows], _write(plan, rounded[rows]), strict=True))
     return compact
