@@ -179,7 +179,7 @@ class _Writer:
     def finish(self) -> tuple[list[int], list[list[etree._Element]]]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
         and the tidy drawings (each a list of elements)."""
-        compact = compact_paths(html.unescape(d.decode()) for part in self.raw
+        compact = compact_paths(_text(d) for part in self.raw
                                 for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
         tidy_ids: dict[bytes, int] = {}
@@ -250,6 +250,12 @@ class _Writer:
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
+
+
+def _text(value: bytes) -> str:
+    """An attribute value as serialized by lxml, back to its text."""
+    text = value.decode()
+    return html.unescape(text) if "&" in text else text
 
 
 def _dissolve(element: etree._Element) -> list[etree._Element]:
