@@ -9,7 +9,7 @@
    round) and started again on the same instance: no finished job lost, every
    interrupted job failed with a reason.
 3. Fuzz: 600 malformed or random requests (bad ids, traversal, wrong types,
-   truncated files, huge fields, broken multipart, wrong methods); counts the
+   truncated files and photos, huge fields, broken multipart, wrong methods); counts the
    answers by status class; 5xx must be 0.
 
 All traffic goes to 127.0.0.1 only.
@@ -322,7 +322,7 @@ def restart_run(work: Path, sentences: list) -> None:
         server.stop()
 
 
-def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face: bytes) -> list:
+def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face: bytes, photo: bytes) -> list:
     """FUZZ_REQUESTS (method, path, body, headers) built from `rng`."""
 
     def junk(n: int) -> bytes:
@@ -359,6 +359,10 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
                                           "application/json"),
                                          ("f.json", b"[" * 5000, "application/json"),
                                          ("f.json", b"1e999999", "application/json")]),
+        "photo": lambda: rng.choice([("p.jpg", b"\xff\xd8\xff" + junk(rng.randrange(0, 3000)), "image/jpeg"),
+                                     ("p.png", photo[: rng.randrange(0, len(photo))], "image/png"),
+                                     ("p.webp", b"RIFF" + junk(4) + b"WEBP" + junk(800), "image/webp"),
+                                     ("p.png", junk(2000), "image/png")]),
         "transcript_file": lambda: ("t.txt", rng.choice([junk(300), "好".encode() * 30000, b"\xff\xfe" + junk(40)]),
                                     "text/plain"),
     }
@@ -444,7 +448,8 @@ def fuzz_run(work: Path, sentences: list) -> None:
         token = re.search(rb'name="csrf_token" value="([^"]+)"', page).group(1).decode()
         wav, _text = recording(sentences, 0, 3.0)
         face = (ROOT / "samples" / "faces" / f"{SAMPLE_FACE}.json").read_bytes()
-        requests = fuzz_requests(random.Random(20261121), token, cookie, wav, face)
+        photo = (ROOT / "docs" / "photo-astronaut.png").read_bytes()
+        requests = fuzz_requests(random.Random(20261121), token, cookie, wav, face, photo)
         counts: dict[str, int] = {}
         fives = []
         began = time.monotonic()
