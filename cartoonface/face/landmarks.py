@@ -105,24 +105,30 @@ class Landmarker:
                                             min_detection_confidence=0.3)
         self._lock = threading.Lock()
 
-    def find(self, rgb: np.ndarray) -> Landmarks | None:
-        """Landmarks of the largest face in `rgb` ((H, W, 3) uint8), or None when there is none."""
+    def boxes(self, rgb: np.ndarray) -> list[tuple[float, float, float, float]]:
+        """Every face box (x0, y0, x1, y1) in `rgb` ((H, W, 3) uint8) photo pixels: the
+        full-range detector's, or the short-range detector's when the first finds none."""
         height, width = rgb.shape[:2]
         with self._lock, _quiet():
-            found = []
             for detector in self._detectors:
                 found = detector.process(np.ascontiguousarray(rgb)).detections or []
                 if found:
                     break
-            boxes = []
-            for detection in found:
-                rel = detection.location_data.relative_bounding_box
-                boxes.append((rel.xmin * width, rel.ymin * height,
-                              (rel.xmin + rel.width) * width, (rel.ymin + rel.height) * height))
-            if not boxes:
-                return None
-            box = max(boxes, key=lambda b: (b[2] - b[0]) * (b[3] - b[1]))
-            crop, origin, scale = _crop(rgb, box)
+        boxes = []
+        for detection in found:
+            rel = detection.location_data.relative_bounding_box
+            boxes.append((rel.xmin * width, rel.ymin * height,
+                          (rel.xmin + rel.width) * width, (rel.ymin + rel.height) * height))
+        return boxes
+
+    def find(self, rgb: np.ndarray) -> Landmarks | None:
+        """Landmarks of the largest face in `rgb` ((H, W, 3) uint8), or None when there is none."""
+        boxes = self.boxes(rgb)
+        if not boxes:
+            return None
+        box = max(boxes, key=lambda b: (b[2] - b[0]) * (b[3] - b[1]))
+        crop, origin, scale = _crop(rgb, box)
+        with self._lock, _quiet():
             result = self._mesh.process(crop).multi_face_landmarks
         if not result:
             return None
