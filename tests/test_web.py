@@ -682,3 +682,17 @@ def test_serve_refuses_bad_settings_with_exit_2(tmp_path):
     assert done.returncode == 2
     assert "CARTOONFACE_WORKERS" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_serve_reports_a_port_it_cannot_use(tmp_path):
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        done = run_cli("serve", "--instance", tmp_path, "--port", port, timeout=60)
+    assert done.returncode == 2
+    assert f"--port {port}: cannot listen there" in done.stderr
+    assert "Traceback" not in done.stderr
+    done = run_cli("serve", "--port", "70000")
+    assert done.returncode == 2
+    assert "expected a port number from 1 to 65535" in done.stderr

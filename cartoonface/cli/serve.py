@@ -7,9 +7,22 @@ import signal
 import sys
 from pathlib import Path
 
+from cartoonface.errors import OptionError
+
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5000
 THREADS = 8  # waitress request threads; jobs run in the app's own worker pool
+
+
+def port_number(text: str) -> int:
+    """argparse type: a TCP port 1..65535."""
+    try:
+        port = int(text)
+    except ValueError:
+        port = 0
+    if not 1 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a port number from 1 to 65535")
+    return port
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -19,7 +32,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Run the cartoonface web app with waitress. Settings: docs/web.md "
                     "(CARTOONFACE_* environment variables or <instance>/config.py).")
     parser.add_argument("--host", default=DEFAULT_HOST, help=f"address to listen on (default {DEFAULT_HOST})")
-    parser.add_argument("--port", type=int, default=DEFAULT_PORT, help=f"port (default {DEFAULT_PORT})")
+    parser.add_argument("--port", type=port_number, default=DEFAULT_PORT, help=f"port (default {DEFAULT_PORT})")
     parser.add_argument("--instance", type=Path, default=None,
                         help="instance folder holding jobs and settings (default: $CARTOONFACE_INSTANCE_PATH "
                              "or instance/ beside the package)")
@@ -32,17 +45,25 @@ def stop(signum: int, frame: object) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Build the app and serve it until interrupted; the worker pool is closed on the way out."""
+    """Build the app and serve it until interrupted; the worker pool is closed on the way out.
+    OptionError when the address cannot be listened on (in use, unknown host)."""
     import waitress
 
     from cartoonface.web import create_app
 
     app = create_app({"INSTANCE_PATH": str(args.instance)} if args.instance else None)
+    runner = app.extensions["cartoonface"].runner
+    try:
+        server = waitress.create_server(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface")
+    except (OSError, ValueError) as exc:  # in use, not ours; waitress says ValueError for an unknown host
+        runner.close()
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise OptionError(f"--host {args.host} --port {args.port}: cannot listen there ({reason})") from None
     print(f"cartoonface: serving on http://{args.host}:{args.port}/ (instance {app.instance_path})",
           file=sys.stderr, flush=True)
     signal.signal(signal.SIGTERM, stop)
     try:
-        waitress.serve(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface")
+        server.run()
     finally:
-        app.extensions["cartoonface"].runner.close()
+        runner.close()
     return 0
