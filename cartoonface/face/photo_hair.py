@@ -116,14 +116,14 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     skinlike = _distance(lab, skin) < SKIN_DISTANCE
     rows = np.arange(sh)[:, None]
     candidates = person & ~face & ~skinlike
-    crown = candidates & (rows < chin_y - 0.45 * hs)
+    eyes_y = (mesh[[468, 473], 1].mean() - top) * scale
+    crown = candidates & (rows < eyes_y)
     hair = np.median(image[crown], axis=0) if crown.sum() >= MIN_HAIR_PIXELS else None
     if hair is not None:
         hairlike = _distance(lab, hair) < HAIR_DISTANCE
-        eyes_y = (mesh[[468, 473], 1].mean() - top) * scale
         hair_mask = candidates & ((rows < eyes_y) | (hairlike & (rows < chin_y + HAIR_BELOW_CHIN * hs)))
         # keep the hair that hangs together with the hair on the crown
-        count, labels = cv2.connectedComponents(hair_mask.astype(np.uint8), connectivity=8)
+        _, labels = cv2.connectedComponents(hair_mask.astype(np.uint8), connectivity=8)
         keep = np.unique(labels[crown & hair_mask])
         hair_mask = np.isin(labels, keep[keep > 0])
         clothes_px = person & ~skinlike & ~hairlike & ~face & (rows > chin_y + 0.1 * hs)
