@@ -280,3 +280,14 @@ def test_turned_head_is_warned_and_turned_back(original):
     assert not any("turned" in note for note in original.warnings)
     d = original.face.fapu.d
     assert np.median(np.hypot(*(turned.face.points - original.face.points).T)) < 0.05 * d
+
+
+def test_missing_photo_extra_is_a_clear_error(monkeypatch):
+    import sys
+
+    from cartoonface.face.landmarks import Landmarker, PhotoExtraMissing
+
+    monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)
+    with pytest.raises(PhotoExtraMissing, match=r"needs the photo extra .*cartoonface\[photo\]"):
+        Landmarker()
+    assert issubclass(PhotoExtraMissing, InputError)
