@@ -72,7 +72,7 @@ DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", 
 # attribute but KEPT ones and references to per-state definitions is style: a CSS class.
 POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
 KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
-                  "offset"))
+                  "offset", "id"))
 # Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
 # with no other attribute can be dissolved into its children. Not opacity, which applies to
 # the group as a whole.
@@ -230,16 +230,24 @@ class _Writer:
     def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
         """Round `node`'s position, point its references at hoisted definitions, move its style to a class."""
         attrib = node.attrib
-        attrib.pop("id", None)
         attrib.pop("class", None)
         style = []
-        for name, value in list(attrib.items()):
+        for name, value in attrib.items():
             if name in POSITIONS:
                 attrib[name] = str(round(float(value)))
-            elif "url(#" in value and any(old in value for old in renamed):
-                attrib[name] = _REFERENCE.sub(lambda m: f"url(#{renamed.get(m.group(1), m.group(1))})", value)
+            elif "url(#" in value and renamed:
+                target = value[5:-1] if value.startswith("url(#") and value.endswith(")") else None
+                if target in renamed:
+                    attrib[name] = f"url(#{renamed[target]})"
+                elif target is None:
+                    attrib[name] = _REFERENCE.sub(lambda m: f"url(#{renamed.get(m.group(1), m.group(1))})", value)
+                elif name not in KEPT:
+                    style.append((name, value))
             elif name not in KEPT:
-                style.append((name, attrib.pop(name)))
+                style.append((name, value))
+        for name, _ in style:
+            del attrib[name]
+        attrib.pop("id", None)
         if style:
             key = tuple(sorted(style))
             label = self.styles.get(key)
