@@ -285,8 +285,9 @@ def test_turned_head_is_warned_and_turned_back(original):
 def test_missing_photo_extra_is_a_clear_error(monkeypatch):
     import sys
 
-    from cartoonface.face.landmarks import Landmarker, PhotoExtraMissing
+    from cartoonface.face.landmarks import Landmarker, PhotoExtraMissing, landmarker
 
+    landmarker()  # mediapipe fully imported first, so hiding one module leaves no half import behind
     monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)
     with pytest.raises(PhotoExtraMissing, match=r"needs the photo extra .*cartoonface\[photo\]"):
         Landmarker()
