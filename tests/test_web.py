@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import re
 import socket
-import os
 import subprocess
 import sys
 import time
@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from PIL import Image
 from flask.testing import FlaskClient
 from markupsafe import escape
+from PIL import Image
 
 from cartoonface.errors import OptionError
 from cartoonface.face.model import face_from_dict
