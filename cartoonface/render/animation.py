@@ -39,7 +39,7 @@ import html
 import re
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from lxml import etree
@@ -266,6 +266,39 @@ def _text(value: bytes) -> str:
     return html.unescape(text) if "&" in text else text
 
 
+@dataclass
+class _Track:
+    """One track being filled: its distinct drawings (tidy part numbers), the drawing number of
+    every frame, and the dominant mouth symbol of each drawing (mouth track only)."""
+
+    drawings: list[list[int]] = field(default_factory=list)
+    keys: list[int] = field(default_factory=list)
+    shapes: list[str] = field(default_factory=list)
+
+
+def _tracks(frames: Sequence[tuple[FaceState, tuple[int, ...]]], raw_tracks: Sequence[str],
+            mapping: Sequence[int]) -> dict[str, _Track]:
+    """Group each frame's raw parts (track names `raw_tracks`, tidy numbers `mapping`) into
+    tracks, in drawing order; equal drawings of a track get one number."""
+    tracks: dict[str, _Track] = {}
+    numbers: dict[str, dict[tuple[int, ...], int]] = {}
+    for state, parts in frames:
+        by_track: dict[str, list[int]] = {}
+        for raw in parts:
+            by_track.setdefault(raw_tracks[raw], []).append(mapping[raw])
+        for name, tidy_parts in by_track.items():
+            track = tracks.setdefault(name, _Track())
+            known = numbers.setdefault(name, {})
+            number = known.get(tuple(tidy_parts))
+            if number is None:
+                number = known[tuple(tidy_parts)] = len(track.drawings)
+                track.drawings.append(tidy_parts)
+                if name == MOUTH_TRACK:
+                    track.shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
+            track.keys.append(number)
+    return tracks
+
+
 def _dissolve(element: etree._Element) -> list[etree._Element]:
     """Replace every `<g>` in `element` whose attributes are all INHERITED style by its children,
     each child taking the style it does not set itself; returns `element`, or its children if
@@ -374,34 +407,14 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
             parts = drawn[state] = writer.collect(face_group(face, pose_face(lifted, state), UID))
         frames.append((state, parts))
     mapping, tidy = writer.finish()
-    order: list[str] = []  # tracks in drawing order
-    numbers: dict[str, dict[tuple[int, ...], int]] = {}
-    drawings: dict[str, list[list[int]]] = {}
-    keys: dict[str, list[int]] = {}
-    shapes: list[str] = []  # dominant mouth symbol of each mouth drawing
-    for state, parts in frames:
-        by_track: dict[str, list[int]] = {}
-        for raw in parts:
-            by_track.setdefault(writer.raw[raw].track, []).append(mapping[raw])
-        for track, tidy_parts in by_track.items():
-            if track not in numbers:
-                order.append(track)
-                numbers[track], drawings[track], keys[track] = {}, [], []
-            key = tuple(tidy_parts)
-            number = numbers[track].get(key)
-            if number is None:
-                number = numbers[track][key] = len(drawings[track])
-                drawings[track].append(tidy_parts)
-                if track == MOUTH_TRACK:
-                    shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
-            keys[track].append(number)
-    elements = _share(drawings, tidy, defs)
+    tracks = _tracks(frames, [part.track for part in writer.raw], mapping)
+    elements = _share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
     style.text = writer.style_sheet()
     hair = _el(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
     if dressed is not None:
         root.append(dressed)
     layer = _el(root, "g", id="face")
-    for track in order:
-        _track_group(hair if track in HAIR_TRACKS else layer, track, elements[track], keys[track], fps, shapes)
+    for name, track in tracks.items():
+        _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
     return etree.tostring(root, xml_declaration=True, encoding="utf-8")
