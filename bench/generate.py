@@ -100,8 +100,10 @@ def page_ready(index: Path) -> tuple[list[float], float]:
         page.goto(index.as_uri(), wait_until="load")
         page.evaluate("document.getElementById('cf-audio').play()")
         page.wait_for_timeout(2000)
-        gap = page.evaluate("Math.abs(document.getElementById('cf-face').getCurrentTime()"
-                            " - document.getElementById('cf-audio').currentTime)")
+        # Read in an animation frame callback, after the page script's own (see tests/test_browser.py).
+        gap = page.evaluate("new Promise(done => requestAnimationFrame(() => done(Math.abs("
+                            "document.getElementById('cf-face').getCurrentTime()"
+                            " - document.getElementById('cf-audio').currentTime))))")
         browser.close()
     return loads, gap
 
