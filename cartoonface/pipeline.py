@@ -108,15 +108,17 @@ def read_transcript(path: str | os.PathLike[str]) -> str:
 def edited_alignment(path: str | os.PathLike[str], duration: float) -> Alignment:
     """Read an edited TextGrid at `path` for audio of `duration` seconds.
 
+    UTF-8 or, as Praat saves a TextGrid holding Chinese, UTF-16 with a byte order mark.
     Raises AlignmentError when it cannot be read or when speech in it ends after
     the audio does; its duration becomes the audio's.
     """
     try:
-        text = Path(path).read_text(encoding="utf-8-sig")
+        data = Path(path).read_bytes()
+        text = data.decode("utf-16" if data[:2] in (b"\xff\xfe", b"\xfe\xff") else "utf-8-sig")
     except FileNotFoundError:
         raise AlignmentError(f"{path}: no such TextGrid file") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise AlignmentError(f"{path}: cannot read the TextGrid as UTF-8 text ({exc})") from None
+        raise AlignmentError(f"{path}: cannot read the TextGrid as UTF-8 or UTF-16 text ({exc})") from None
     alignment = read_textgrid(text, str(path))
     last = max((s.end for s in alignment.sentences), default=0.0)
     if last > duration + ALIGNMENT_SLACK:

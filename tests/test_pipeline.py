@@ -89,12 +89,12 @@ def test_edited_actions_and_alignment_are_used(inputs, made, tmp_path):
     actions["actions"] = [{"kind": "turn", "start": 0.5, "duration": 0.6, "amplitude": 12.0}]
     edited = tmp_path / "actions.json"
     edited.write_text(json.dumps(actions), encoding="utf-8")
-    grid = tmp_path / "edited.TextGrid"
-    shutil.copy(result.out_dir / "alignment.TextGrid", grid)
+    grid = tmp_path / "edited.TextGrid"  # saved by Praat: UTF-16 with a byte order mark
+    grid.write_text((result.out_dir / "alignment.TextGrid").read_text(encoding="utf-8"), encoding="utf-16")
     redone = generate(FACE, speech, transcript, tmp_path / "redone", Options(actions=edited, alignment=grid))
     written = json.loads((redone.out_dir / "actions.json").read_text(encoding="utf-8"))["actions"]
     assert [(a["kind"], a["start"], a["amplitude"]) for a in written] == [("turn", 0.5, 12.0)]
-    given = read_textgrid(grid.read_text(encoding="utf-8"), "given")
+    given = read_textgrid(grid.read_text(encoding="utf-16"), "given")
     used = read_textgrid((redone.out_dir / "alignment.TextGrid").read_text(encoding="utf-8"), "used")
     syllables = [[(y.text, y.start, y.end) for s in a.sentences for y in s.syllables] for a in (given, used)]
     assert [t for t, _, _ in syllables[0]] == [t for t, _, _ in syllables[1]]
