@@ -52,6 +52,11 @@ class Submission:
     files: Mapping[str, bytes]
 
 
+def megabytes(size: int) -> str:
+    """A byte count in MB (2**20 bytes) for messages: '200', '0.5'."""
+    return f"{size / 2**20:.3g}"
+
+
 def sniff_audio(head: bytes) -> str | None:
     """The audio container that the first bytes of a file announce, as a file
     extension ("wav", "flac", "ogg", "mp3", "m4a"), or None when none matches."""
@@ -109,7 +114,7 @@ def check_photo(upload: FileStorage, data: bytes, too_big: bool,
     """A face model made from a photo: (face JSON bytes, label, warnings about the photo)."""
     name = shown_name(upload, "photo")
     if too_big:
-        errors["photo"] = f"{name}: a photo must be at most {MAX_PHOTO_BYTES >> 20} MB."
+        errors["photo"] = f"{name}: a photo must be at most {megabytes(MAX_PHOTO_BYTES)} MB."
         return None, name, ()
     ext = sniff_image(data[:12])
     if ext is None:
@@ -176,7 +181,7 @@ def check_audio(files: MultiDict[str, FileStorage], limits: Limits,
         return None, "", "", 0.0
     name = shown_name(upload, "recording")
     if too_big:
-        errors["audio"] = f"{name}: the recording is larger than {limits.upload_bytes >> 20} MB."
+        errors["audio"] = f"{name}: the recording is larger than {megabytes(limits.upload_bytes)} MB."
         return None, "", name, 0.0
     ext = sniff_audio(data[:16])
     if ext is None:

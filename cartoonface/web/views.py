@@ -21,7 +21,8 @@ from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
 
 from cartoonface.web.config import PACKAGE, Settings
-from cartoonface.web.inputs import MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, check_submission, form_values
+from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, check_submission, form_values,
+                                    megabytes)
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job
@@ -120,7 +121,8 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     shown = {**defaults, **{key: value for key, value in values.items() if value}}
     return render_template(
         "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES,
-        max_title=MAX_TITLE, upload_mb=limits.upload_bytes >> 20, photo_mb=MAX_PHOTO_BYTES >> 20, csrf=csrf_token(),
+        max_title=MAX_TITLE, upload_mb=megabytes(limits.upload_bytes), photo_mb=megabytes(MAX_PHOTO_BYTES),
+        csrf=csrf_token(),
         csrf_field=CSRF_FIELD, jobs=recent_jobs(),
     ), status
 
@@ -133,11 +135,13 @@ def when(epoch: float) -> str:
 
 @bp.get("/")
 def index() -> tuple[str, int]:
+    """The empty form and this browser's recent jobs."""
     return render_form({}, {})
 
 
 @bp.post("/jobs")
 def submit() -> Response | tuple[str, int]:
+    """Check the form; store and queue the job and 303 to its page, or the form again (400)."""
     values = form_values(request.form)
     if not csrf_ok(request.form.get(CSRF_FIELD)):
         return render_form(values, {"form": "This form has expired or did not come from this page. "
@@ -153,6 +157,7 @@ def submit() -> Response | tuple[str, int]:
 
 @bp.get("/jobs/<jobid:job_id>")
 def job_page(job_id: str) -> str:
+    """The job's progress, its error, or its player and download link."""
     job = stored_job(job_id)
     return render_template("web/job.html", job=job, status=job.status, stage=stage_label(job.status),
                            pages=PAGES, done=job.status.state == DONE)
@@ -160,6 +165,7 @@ def job_page(job_id: str) -> str:
 
 @bp.get("/jobs/<jobid:job_id>/status")
 def job_status(job_id: str) -> Response:
+    """The job's progress as JSON (state, stage, stage_label, percent, error), not cached."""
     status = stored_job(job_id).status
     response = jsonify(state=status.state, stage=status.stage, stage_label=stage_label(status),
                        percent=status.percent, error=status.error)
@@ -169,6 +175,7 @@ def job_status(job_id: str) -> Response:
 
 @bp.get("/jobs/<jobid:job_id>/site/<path:name>")
 def site_file(job_id: str, name: str) -> Response:
+    """A file of the generated folder with its media type, sandboxed (404 until the job is done)."""
     job = stored_job(job_id)
     if job.status.state != DONE:
         abort(404, description="This job has no result (yet).")
@@ -180,6 +187,7 @@ def site_file(job_id: str, name: str) -> Response:
 
 @bp.get("/jobs/<jobid:job_id>/download")
 def download(job_id: str) -> Response:
+    """The generated folder as a zip attachment with a safe name (404 until the job is done)."""
     job = stored_job(job_id)
     if job.status.state != DONE or not (job.folder / ZIP_NAME).is_file():
         abort(404, description="This job has no result to download (yet).")
@@ -189,20 +197,23 @@ def download(job_id: str) -> Response:
 
 @bp.app_errorhandler(RequestEntityTooLarge)
 def too_large(error: RequestEntityTooLarge) -> tuple[str, int]:
-    limit = state().limits.upload_bytes >> 20
+    """A request over MAX_CONTENT_LENGTH: the empty form with the limits (413)."""
+    limit = megabytes(state().limits.upload_bytes)
     return render_form({}, {"form": f"The upload is too large: the limit is {limit} MB for the recording, "
-                                    f"{MAX_PHOTO_BYTES >> 20} MB for a photo and a few MB for the rest. "
+                                    f"{megabytes(MAX_PHOTO_BYTES)} MB for a photo and a few MB for the rest. "
                                     "Please choose the files again."}, 413)
 
 
 @bp.app_errorhandler(HTTPException)
 def http_error(error: HTTPException) -> tuple[str, int]:
+    """Any other 4xx/5xx from routing or Werkzeug as a small page."""
     return render_template("web/error.html", code=error.code, name=error.name,
                            description=error.description), error.code or 500
 
 
 @bp.app_errorhandler(Exception)
 def internal_error(error: Exception) -> tuple[str, int]:
+    """A bug: logged with its traceback, a 500 page without details."""
     current_app.logger.exception("unhandled error on %s %s", request.method, request.path)
     return render_template("web/error.html", code=500, name="Internal error",
                            description="Something went wrong on the server; the log has the details."), 500
