@@ -8,7 +8,7 @@
 2. Restart: jobs running, the server stopped (SIGTERM, then SIGKILL in a second
    round) and started again on the same instance: no finished job lost, every
    interrupted job failed with a reason.
-3. Fuzz: 600 malformed or random requests (bad ids, traversal, wrong types,
+3. Fuzz: 600 malformed or random requests (bad ids, traversal, wrong types, bad Host headers,
    truncated files and photos, huge fields, broken multipart, wrong methods); counts the
    answers by status class; 5xx must be 0.
 
@@ -370,6 +370,8 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
     while len(requests) < FUZZ_REQUESTS:
         kind = rng.randrange(6)
         headers = {"Cookie": cookie}
+        if rng.random() < 0.05:  # a foreign or broken Host header (DNS rebinding, garbage)
+            headers["Host"] = rng.choice(["rebound.example", "", "127.0.0.1:99999", "".join(chr(rng.randrange(33, 127)) for _ in range(20))])
         if kind == 0:
             requests.append(("GET", f"/jobs/{rng.choice(ids)}{rng.choice(subpaths)}", None, headers))
         elif kind == 1:

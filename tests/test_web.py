@@ -246,6 +246,20 @@ def test_security_headers_on_every_answer(client, path):
     assert "script-src 'self'" in csp and "unsafe-inline" not in csp
 
 
+def test_untrusted_host_headers_are_refused_when_hosts_are_set(tmp_path):
+    app = make_app(tmp_path, TRUSTED_HOSTS=["127.0.0.1", "localhost"])
+    try:
+        client = app.test_client()
+        refused = client.get("/", headers={"Host": "rebound.example:5000"})
+        assert refused.status_code == 400
+        assert refused.mimetype == "text/plain"
+        assert refused.headers["X-Content-Type-Options"] == "nosniff"
+        assert client.get("/", headers={"Host": "127.0.0.1:5000"}).status_code == 200
+        assert client.get("/", headers={"Host": "localhost:5000"}).status_code == 200
+    finally:
+        app.extensions["cartoonface"].runner.close()
+
+
 def test_app_never_runs_in_debug_mode(tmp_path):
     app = make_app(tmp_path, DEBUG=True)
     try:

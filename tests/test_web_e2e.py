@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import http.client
 import os
 import socket
 import subprocess
@@ -163,3 +164,14 @@ def test_corrupt_recording_is_reported_in_the_form(server, inputs, browser):
     assert page.input_value("#title") == TITLE
     assert page.is_checked("input[name=page][value=announcer]")
     context.close()
+
+
+def test_served_on_loopback_only_loopback_host_names_are_accepted(server):
+    port = int(server.rsplit(":", 1)[1])
+    answers = {}
+    for host in ("rebound.example", f"127.0.0.1:{port}", f"localhost:{port}"):
+        connection = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+        connection.request("GET", "/", headers={"Host": host})
+        answers[host] = connection.getresponse().status
+        connection.close()
+    assert answers == {"rebound.example": 400, f"127.0.0.1:{port}": 200, f"localhost:{port}": 200}

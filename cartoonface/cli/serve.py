@@ -12,6 +12,9 @@ from cartoonface.errors import OptionError
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5000
 THREADS = 8  # waitress request threads; jobs run in the app's own worker pool
+# Host headers accepted when listening on IPv4 loopback (unless TRUSTED_HOSTS is set): a web
+# page that rebinds its own domain name to 127.0.0.1 then cannot drive the app.
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost")
 
 
 def port_number(text: str) -> int:
@@ -52,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
     from cartoonface.web import create_app
 
     app = create_app({"INSTANCE_PATH": str(args.instance)} if args.instance else None)
+    if args.host in LOOPBACK_HOSTS and app.config.get("TRUSTED_HOSTS") is None:
+        app.config["TRUSTED_HOSTS"] = list(LOOPBACK_HOSTS)
     runner = app.extensions["cartoonface"].runner
     try:
         server = waitress.create_server(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface")
