@@ -116,8 +116,18 @@ def test_layers_references_ids_and_rounding(face):
     text = data.decode()
     for target in set(re.findall(r'url\(#([^)]+)\)', text)) | set(re.findall(r'href="#([^"]+)"', text)):
         assert target in ids, f"dangling reference #{target}"
-    for clip in svg.iter(f"{S}clipPath"):
-        assert clip.getparent().tag == f"{S}defs", "clip paths never sit in a hidden frame"
+    def holder(node):  # the frame or shared definition a node is drawn with
+        while node is not None and not (node.get("visibility") == "hidden" or node.getparent().tag == f"{S}defs"
+                                        or node.get("data-part")):
+            node = node.getparent()
+        return node
+
+    clips = {clip.get("id"): clip for clip in svg.iter(f"{S}clipPath")}
+    users = [node for node in svg.iter() if node.get("clip-path")]
+    assert users, "the eyes and the mouth are clipped"
+    for node in users:
+        clip = clips[node.get("clip-path")[5:-1]]
+        assert holder(clip) is holder(node), "a clip path shows (is not hidden) whenever its user does"
     for node in svg.find("s:g[@id='face']", NS).iter(f"{S}path"):
         assert not re.search(r"\d\.\d", node.get("d")), "face coordinates are whole pixels"
 

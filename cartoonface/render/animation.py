@@ -1,7 +1,11 @@
 """The talking-face animation as one SVG document (thesis 002, ch. 6).
 
 Spatial domain (6.3.1): four layers, background, hair, clothes and face, drawn
-in that order; gradients and clip paths live once in `<defs>`.
+in that order; the face's gradients live once in `<defs>`. A part's clip path
+(the eye outline clipping the eyeball, the mouth opening clipping the teeth)
+is written just before the part, inside the same frame: its children inherit
+the frame's visibility, so the clip is whole exactly while the part is shown,
+and gzip finds the clip's outline next to the same outline drawn by the part.
 
 Temporal domain (6.3.2): the thesis shows each frame as
 `<g visibility="hidden"><set attributeName="visibility" to="visible" begin=".." dur=".."/>...</g>`.
@@ -64,8 +68,8 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "c
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
-# Elements that only define something referenced by id: hoisted out of the frames into <defs>
-# (inside a hidden frame a clip path's children would inherit visibility="hidden" and clip everything).
+# Elements that only define something referenced by id: a part's own ones (per state, from
+# face_group) go with the part, renamed so each distinct part drawing has its own.
 DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
                                                   "pattern", "filter", "marker", "symbol"))
 # Attributes that place an element (rounded to whole pixels, kept on it). Every other
@@ -156,7 +160,6 @@ class _Writer:
         self.defs = defs
         self.raw_ids: dict[bytes, int] = {}
         self.raw: list[_RawPart] = []
-        self.definition_ids: dict[bytes, str] = {}
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
 
     def collect(self, group: etree._Element) -> tuple[int, ...]:
@@ -191,13 +194,13 @@ class _Writer:
             number = tidy_ids.get(key)
             if number is None:
                 number = tidy_ids[key] = len(tidy)
-                tidy.append(elements)
+                tidy.append(_own_ids(elements, f"k{number}"))
             mapping.append(number)
         return mapping, tidy
 
     def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> list[etree._Element]:
-        """The part with compact paths, definitions hoisted, groups that only pass on style
-        dissolved, style as classes: its elements, in drawing order."""
+        """The part with compact paths, groups that only pass on style dissolved, style as
+        classes: its definitions (ids "c0", "c1", ...), then its elements in drawing order."""
         element = etree.fromstring(part.element)
         definitions = [etree.fromstring(raw) for raw in part.definitions]
         tops = (element, *definitions)
@@ -205,27 +208,16 @@ class _Writer:
         for node in paths:
             node.set("d", compact[node.get("d")])
         renamed = {}
-        for definition in definitions:
-            old = definition.get("id")
-            renamed[old] = self._hoist(definition)
+        for number, definition in enumerate(definitions):
+            renamed[definition.get("id")] = f"c{number}"
+            definition.set("id", f"c{number}")
+            for node in definition.iter():
+                node.attrib.pop("class", None)
         elements = _dissolve(element)
         for top in elements:
             for node in top.iter():
                 self._tidy_node(node, renamed)
-        return elements
-
-    def _hoist(self, definition: etree._Element) -> str:
-        """Move `definition` into <defs> under an id named by its content (shared if seen before)."""
-        definition.attrib.pop("id", None)
-        for node in definition.iter():
-            node.attrib.pop("class", None)
-        content = etree.tostring(definition)
-        name = self.definition_ids.get(content)
-        if name is None:
-            name = self.definition_ids[content] = f"k{len(self.definition_ids)}"
-            definition.set("id", name)
-            self.defs.append(definition)
-        return name
+        return [*definitions, *elements]
 
     def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
         """Round `node`'s position, point its references at hoisted definitions, move its style to a class."""
@@ -258,6 +250,19 @@ class _Writer:
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
+
+
+def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
+    """`elements` with their local definition ids ("c0", ...) made unique by `prefix`, and the
+    references to them."""
+    for top in elements:
+        for node in top.iter():
+            for name, value in node.attrib.items():
+                if name == "id":
+                    node.set(name, prefix + value)
+                elif value.startswith("url(#c"):
+                    node.set(name, f"url(#{prefix}{value[5:]}")
+    return elements
 
 
 def _text(value: bytes) -> str:
