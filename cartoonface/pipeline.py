@@ -130,7 +130,8 @@ def edited_alignment(path: str | os.PathLike[str], duration: float) -> Alignment
 
 
 def check_out_dir(out_dir: Path) -> None:
-    """Refuse an output path that is a file, or a folder with other content than a previous output."""
+    """Refuse an output path that is a file, a folder with other content than a previous output,
+    or one that cannot be made (its nearest existing ancestor is a file or not writable)."""
     if out_dir.exists() and not out_dir.is_dir():
         raise OptionError(f"{out_dir}: exists and is not a folder; expected a folder for the pages")
     if out_dir.is_dir() and any(out_dir.iterdir()) and not (out_dir / "animation.svg").is_file():
@@ -138,6 +139,11 @@ def check_out_dir(out_dir: Path) -> None:
             f"{out_dir}: the folder holds other files; choose a new or empty folder "
             "(a previous cartoonface output is replaced)"
         )
+    ancestor = out_dir.absolute().parent
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir() or not os.access(ancestor, os.W_OK | os.X_OK):
+        raise OptionError(f"{out_dir}: cannot write the output folder ({ancestor} is not a writable folder)")
 
 
 def generate(
@@ -193,12 +199,16 @@ def generate(
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                         wide=options.page == "announcer", title=options.title)
     report("pages")
-    with atomic_directory(target) as folder:
-        sources = copy_audio(audio, folder)
-        html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
-                         fps=options.fps, links=options.links)
-        write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment), actions=actions_to_json(actions))
-        size = folder_size(folder)
+    try:
+        with atomic_directory(target) as folder:
+            sources = copy_audio(audio, folder)
+            html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
+                             fps=options.fps, links=options.links)
+            write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
+                       actions=actions_to_json(actions))
+            size = folder_size(folder)
+    except OSError as exc:  # the place given for the output cannot be written (permissions, full disk, ...)
+        raise OptionError(f"{target}: cannot write the output folder ({exc.strerror or exc})") from None
     if progress is not None:
         progress("pages", 1.0)
     return Result(out_dir=target, duration=duration, frames=len(states), size=size,

@@ -92,3 +92,13 @@ def test_bad_input_exits_2_with_one_line_and_no_folder(case, inputs, tmp_path):
     assert "Traceback" not in done.stderr
     assert not out.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]
+
+
+def test_unwritable_output_is_a_one_line_error(inputs, tmp_path):
+    speech, transcript = inputs
+    blocker = tmp_path / "notes.txt"  # a file where a folder would have to be made
+    blocker.write_text("keep", encoding="utf-8")
+    done = run_cli(*generate_args(speech, transcript, blocker / "site"))
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr and "cannot write the output folder" in done.stderr
+    assert blocker.read_text(encoding="utf-8") == "keep"
