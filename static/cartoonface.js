@@ -80,11 +80,12 @@
     }
   }
 
-  audio.addEventListener("waiting", function () { waiting = true; follow(); });
-  ["playing", "canplay"].forEach(function (name) {
-    audio.addEventListener(name, function () { waiting = false; follow(); });
+  // Between "play" and "playing" (and while buffering) the audio clock stands still: so does the face.
+  ["play", "waiting"].forEach(function (name) {
+    audio.addEventListener(name, function () { waiting = true; follow(); });
   });
-  ["play", "pause", "seeking", "seeked", "ratechange", "ended", "timeupdate", "loadedmetadata"].forEach(function (name) {
+  audio.addEventListener("playing", function () { waiting = false; follow(); });
+  ["pause", "seeking", "seeked", "ratechange", "ended", "timeupdate", "loadedmetadata"].forEach(function (name) {
     audio.addEventListener(name, name === "timeupdate" ? function () { if (!running()) sync(false); } : follow);
   });
   document.addEventListener("visibilitychange", follow);
