@@ -5,8 +5,10 @@
  * through play, pause, seeking, playback-rate changes and tab switches:
  * - at rate 1 the SVG runs on its own (unpauseAnimations) and is put back
  *   (setCurrentTime) whenever it drifts more than half a frame from the audio;
- * - at any other rate, or while the audio waits for data, the SVG stays
- *   paused and is moved to the audio time on every animation frame.
+ * - at any other rate the SVG stays paused and is moved to the audio time
+ *   on every animation frame;
+ * - while the audio waits for data (from "play" to "playing", buffering) or
+ *   is paused, or the tab is hidden, the SVG stays paused at the audio time.
  * It also highlights the sentence being spoken ([data-start], [data-end] in
  * seconds), writes it into [data-caption], seeks when a sentence is clicked,
  * and lets Space toggle play.
