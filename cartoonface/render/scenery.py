@@ -146,6 +146,7 @@ def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Ele
             stroke="#3b82f6", stroke_width=fw * 0.012, fill="none")
     else:  # sweater: round neck, ribbed collar
         _el(layer, "path", d=_points(*body), fill=_gradient(defs, "cl-sweater", ((0, "#16a34a"), (1, "#14532d"))))
-        _el(layer, "ellipse", cx=cx, cy=shoulder_y, rx=neck * 1.35, ry=fw * 0.1, fill="none", stroke="#166534",
-            stroke_width=fw * 0.05)
+        left, right, dip = cx - neck * 1.3, cx + neck * 1.3, shoulder_y + fw * 0.12
+        _el(layer, "path", d=f"M{_num(left)},{_num(shoulder_y)}Q{_num(cx)},{_num(dip)} {_num(right)},{_num(shoulder_y)}",
+            fill="none", stroke="#166534", stroke_width=fw * 0.05, stroke_linecap="round")  # ribbed collar
     return layer
