@@ -26,8 +26,6 @@ pytestmark = [
 ROOT = Path(__file__).resolve().parent.parent
 FPS = 30
 TEXT = "小猫在花园里玩。它看见了一只蝴蝶。"
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
 # What the page is asked, in one evaluation so both clocks are read at the same moment.
 CLOCKS = """() => ({audio: document.getElementById('cf-audio').currentTime,
                     svg: document.getElementById('cf-face').getCurrentTime()})"""
@@ -49,17 +47,6 @@ def site(tmp_path_factory) -> Path:
     generate(ROOT / "samples" / "faces" / "female.json", speech, TEXT, folder / "site",
              Options(title="小猫 <test>", fps=FPS, seed=3))
     return folder / "site"
-
-
-@pytest.fixture(scope="session")
-def browser():
-    """Headless Debian chromium driven by Playwright (never a downloaded browser)."""
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as play:
-        launched = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
-        yield launched
-        launched.close()
 
 
 @pytest.fixture

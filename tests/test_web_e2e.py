@@ -18,9 +18,6 @@ from tests.conftest import ROOT
 
 pytestmark = pytest.mark.browser
 
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--no-first-run"]
 SPOKEN = "ni3 hao3, shi4 jie4. jin1 tian1 tian1 qi4 hen3 hao3."
 TRANSCRIPT = "你好，世界。今天天气很好。"
 TITLE = "<script>window.pwned=1</script>早安"
@@ -72,15 +69,6 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     transcript.write_text(TRANSCRIPT, encoding="utf-8")
     return {"face": sorted((ROOT / "samples" / "faces").glob("*.json"))[0], "wav": wav, "corrupt": corrupt,
             "transcript": transcript}
-
-
-@pytest.fixture(scope="module")
-def browser():
-    playwright_api = pytest.importorskip("playwright.sync_api")
-    with playwright_api.sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
-        yield browser
-        browser.close()
 
 
 def fill_form(page, base: str, inputs: dict[str, Path], wav: Path) -> None:
