@@ -13,6 +13,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from cartoonface.errors import InputError
+
 
 def _umask() -> int:
     """Return the process umask without changing it for longer than a moment."""
@@ -69,3 +71,21 @@ def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def read_user_text(path: str | os.PathLike[str], error: type[InputError], what: str) -> str:
+    """Return the UTF-8 text (a BOM allowed) of the user's file at `path`.
+
+    Any failure raises `error` with a message naming the file and `what` it should be
+    (e.g. "transcript file"), so the user knows which input to fix.
+    """
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise error(f"{path}: no such {what}") from None
+    except IsADirectoryError:
+        raise error(f"{path}: is a folder; expected a {what}") from None
+    except UnicodeDecodeError:
+        raise error(f"{path}: not UTF-8 text; expected a {what} saved as UTF-8") from None
+    except OSError as exc:
+        raise error(f"{path}: cannot read the {what} ({exc.strerror})") from None

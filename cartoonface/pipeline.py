@@ -23,13 +23,13 @@ from cartoonface.animate.frames import FPS_RANGE, sample_frames
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
 from cartoonface.face.model import FaceModel, load_face
-from cartoonface.files import atomic_directory
+from cartoonface.files import atomic_directory, read_user_text
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.pages import PAGES, check_links, copy_audio, folder_size, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.alignment import Alignment, analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.speech.textgrid import read_textgrid, write_textgrid
+from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 
 # Share of the whole job done when each stage starts (measured on the sample book:
 # alignment and drawing take most of the time).
@@ -91,20 +91,6 @@ def check_options(options: Options) -> None:
     check_links(options.links)
 
 
-def read_transcript(path: str | os.PathLike[str]) -> str:
-    """The text of the transcript file at `path` (UTF-8, a BOM allowed); TranscriptError if unreadable."""
-    try:
-        return Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise TranscriptError(f"{path}: no such transcript file") from None
-    except IsADirectoryError:
-        raise TranscriptError(f"{path}: is a folder; expected a UTF-8 text file") from None
-    except UnicodeDecodeError:
-        raise TranscriptError(f"{path}: not UTF-8 text; save the transcript as UTF-8") from None
-    except OSError as exc:
-        raise TranscriptError(f"{path}: cannot read the transcript ({exc.strerror})") from None
-
-
 def edited_alignment(path: str | os.PathLike[str], duration: float) -> Alignment:
     """Read an edited TextGrid at `path` for audio of `duration` seconds.
 
@@ -112,14 +98,7 @@ def edited_alignment(path: str | os.PathLike[str], duration: float) -> Alignment
     Raises AlignmentError when it cannot be read or when speech in it ends after
     the audio does; its duration becomes the audio's.
     """
-    try:
-        data = Path(path).read_bytes()
-        text = data.decode("utf-16" if data[:2] in (b"\xff\xfe", b"\xfe\xff") else "utf-8-sig")
-    except FileNotFoundError:
-        raise AlignmentError(f"{path}: no such TextGrid file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise AlignmentError(f"{path}: cannot read the TextGrid as UTF-8 or UTF-16 text ({exc})") from None
-    alignment = read_textgrid(text, str(path))
+    alignment = load_textgrid(path)
     last = max((s.end for s in alignment.sentences), default=0.0)
     if last > duration + ALIGNMENT_SLACK:
         raise AlignmentError(
@@ -177,7 +156,7 @@ def generate(
     target = Path(out_dir)
     check_out_dir(target)
     model = face if isinstance(face, FaceModel) else load_face(face)
-    text = transcript if isinstance(transcript, str) else read_transcript(transcript)
+    text = transcript if isinstance(transcript, str) else read_user_text(transcript, TranscriptError, "transcript file")
     report("decode")
     recording = load_audio(audio)
     duration = recording.duration

@@ -103,7 +103,7 @@ def test_bad_documents(text, words):
 
 
 def test_missing_file_is_an_input_error(tmp_path):
-    with pytest.raises(InputError, match="not found"):
+    with pytest.raises(InputError, match="no such actions file"):
         load_actions(tmp_path / "nope.json", DURATION)
 
 

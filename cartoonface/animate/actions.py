@@ -21,7 +21,7 @@ from pathlib import Path
 
 from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, MAX_ANGLE, Action
 from cartoonface.errors import ActionsError
-from cartoonface.files import write_text_atomic
+from cartoonface.files import read_user_text, write_text_atomic
 
 FORMAT = "cartoonface-actions"
 VERSION = 1
@@ -53,12 +53,7 @@ def save_actions(path: str | os.PathLike[str], actions: Sequence[Action]) -> Pat
 
 def load_actions(path: str | os.PathLike[str], duration: float) -> tuple[Action, ...]:
     """Read and validate the actions file at `path` for audio of `duration` seconds."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ActionsError(f"{path}: actions file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ActionsError(f"{path}: cannot read the actions file as UTF-8 text ({exc})") from None
+    text = read_user_text(path, ActionsError, "actions file")
     return actions_from_json(text, str(path), duration)
 
 

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from cartoonface.errors import OptionError, TranscriptError
-from cartoonface.files import write_text_atomic
+from cartoonface.files import read_user_text, write_text_atomic
 from cartoonface.speech.alignment import LOW_CONFIDENCE, Alignment, alignment_to_dict, analyse
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import write_textgrid
@@ -48,20 +48,6 @@ def parse_pause(text: str | None) -> tuple[float, float] | None:
     except ValueError:
         raise OptionError(f"--pause {text!r}: expected START,END in seconds, e.g. 2.1,2.8") from None
     return start, end
-
-
-def read_text(path: Path) -> str:
-    """The transcript at `path` as text (UTF-8, a BOM allowed); TranscriptError when unreadable."""
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise TranscriptError(f"{path}: no such transcript file") from None
-    except IsADirectoryError:
-        raise TranscriptError(f"{path}: is a folder; expected a UTF-8 text file") from None
-    except UnicodeDecodeError:
-        raise TranscriptError(f"{path}: not UTF-8 text; save the transcript as UTF-8") from None
-    except OSError as exc:
-        raise TranscriptError(f"{path}: cannot read the transcript ({exc.strerror})") from None
 
 
 def check_output(path: Path, option: str) -> None:
@@ -110,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.output, "-o")
     if args.json is not None:
         check_output(args.json, "--json")
-    text = read_text(args.transcript)
+    text = read_user_text(args.transcript, TranscriptError, "transcript file")
     shown = Progress()
     try:
         shown("decode", 0.0)

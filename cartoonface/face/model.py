@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from cartoonface.errors import FaceModelError
-from cartoonface.files import write_text_atomic
+from cartoonface.files import read_user_text, write_text_atomic
 
 FORMAT = "cartoonface-face"
 VERSION = 1
@@ -305,12 +305,7 @@ def _check_box(points: np.ndarray, hair: np.ndarray, source: str) -> None:
 def load_face(path: str | os.PathLike[str]) -> FaceModel:
     """Read and validate a face JSON file; FaceModelError names the file and field."""
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FaceModelError(f"{source}: no such face file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FaceModelError(f"{source}: cannot read the face file: {exc}") from None
+    text = read_user_text(path, FaceModelError, "face file")
     try:
         obj = json.loads(text)
     except json.JSONDecodeError as exc:
