@@ -16,7 +16,9 @@ from typing import IO
 from flask import Flask, Request, Response
 
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
+from cartoonface.web import photo_views
 from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
+from cartoonface.web.drafts import sweep_drafts
 from cartoonface.web.inputs import MAX_FACE_BYTES, MAX_PHOTO_BYTES, Limits
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import add_headers
@@ -73,6 +75,7 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     def sweep(_folder: Path | None = None) -> None:
         with sweep_lock:
             apply_retention(settings.instance, settings.retention_days, settings.retention_mb)
+            sweep_drafts(settings.instance)
 
     fail_interrupted(settings.instance)
     sweep()
@@ -82,6 +85,7 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     app.extensions["cartoonface"] = WebState(settings, limits, Runner(settings.workers, sweep))
     app.url_map.converters["jobid"] = JobIdConverter
     app.register_blueprint(bp)
+    app.register_blueprint(photo_views.bp)
 
     @app.after_request
     def headers(response: Response) -> Response:

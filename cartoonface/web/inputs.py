@@ -105,8 +105,8 @@ def _text(form: MultiDict[str, str], name: str) -> str:
 
 def form_values(form: MultiDict[str, str]) -> dict[str, str]:
     """The plain fields as sent, to fill the form again when it comes back with errors."""
-    return {name: _text(form, name) for name in ("face_sample", "page", "title", "background", "clothes",
-                                                 "transcript")}
+    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "title", "background",
+                                                 "clothes", "transcript")}
 
 
 def check_photo(upload: FileStorage, data: bytes, too_big: bool,
@@ -133,9 +133,11 @@ def check_photo(upload: FileStorage, data: bytes, too_big: bool,
 
 
 def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
-               errors: dict[str, str]) -> tuple[bytes | None, str, tuple[str, ...]]:
+               errors: dict[str, str], chosen: tuple[bytes, str, tuple[str, ...]] | None = None
+               ) -> tuple[bytes | None, str, tuple[str, ...]]:
     """The face model JSON (bytes), its label and notes about it: an uploaded face model
-    or a photo (not both) wins over the sample chosen."""
+    or a photo (not both) wins over `chosen` (a checked photo face: JSON bytes, label,
+    notes), which wins over the sample chosen."""
     upload = files.get("face_file")
     data, too_big = read_upload(upload, MAX_FACE_BYTES)
     photo = files.get("photo")
@@ -164,6 +166,8 @@ def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], li
             errors["face_file"] = str(exc)
             return None, name, ()
         return data, name, ()
+    if chosen is not None:
+        return chosen
     sample = _text(form, "face_sample")
     if sample not in limits.samples:
         errors["face_sample"] = "Choose one of the sample faces, or upload a face model (JSON) or a photo."
@@ -245,9 +249,10 @@ def check_choice(form: MultiDict[str, str], name: str, allowed: tuple[str, ...] 
     return value
 
 
-def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorage],
-                     limits: Limits) -> Submission | dict[str, str]:
-    """Check every field; return the Submission, or field -> message for each problem."""
+def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
+                     chosen: tuple[bytes, str, tuple[str, ...]] | None = None) -> Submission | dict[str, str]:
+    """Check every field (`chosen`: a face from a photo draft, see check_face); return the
+    Submission, or field -> message for each problem."""
     errors: dict[str, str] = {}
     title = " ".join(_text(form, "title").split())
     if len(title) > MAX_TITLE:
@@ -255,7 +260,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
-    face, face_label, face_notes = check_face(form, files, limits, errors)
+    face, face_label, face_notes = check_face(form, files, limits, errors, chosen)
     transcript = check_transcript(form, files, limits, errors)
     audio, ext, audio_label, duration = check_audio(files, limits, errors)
     if errors or face is None or audio is None or transcript is None:

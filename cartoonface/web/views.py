@@ -6,6 +6,7 @@ GET  /jobs/<id>                 progress, error, or the result (player + zip dow
 GET  /jobs/<id>/status          JSON: state, stage, percent, error
 GET  /jobs/<id>/site/<path>     the generated folder's files (shown in an iframe)
 GET  /jobs/<id>/download        the generated folder as a zip
+The "face from a photo" routes (/photos...) are in photo_views.py.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
 
 from cartoonface.web.config import PACKAGE, Settings
+from cartoonface.web.drafts import draft_choice, load_draft
 from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, check_submission, form_values,
                                     megabytes)
 from cartoonface.web.runner import Runner
@@ -30,6 +32,8 @@ from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_
 from cartoonface.web.worker import SITE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
+
+DRAFT_GONE = "The face from your photo is no longer kept (photos are kept for a day); please upload it again."
 
 QUEUED_LABEL = "Waiting for a free worker"
 STAGES = {
@@ -120,8 +124,9 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
                 "background": limits.backgrounds[0] if limits.backgrounds else "",
                 "clothes": limits.clothes[0] if limits.clothes else "", "transcript": ""}
     shown = {**defaults, **{key: value for key, value in values.items() if value}}
+    draft = load_draft(state().settings.instance, shown["face_draft"]) if shown.get("face_draft") else None
     return render_template(
-        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES,
+        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES, draft=draft,
         max_title=MAX_TITLE, upload_mb=megabytes(limits.upload_bytes), photo_mb=megabytes(MAX_PHOTO_BYTES),
         csrf=csrf_token(),
         csrf_field=CSRF_FIELD, jobs=recent_jobs(),
@@ -136,8 +141,12 @@ def when(epoch: float) -> str:
 
 @bp.get("/")
 def index() -> tuple[str, int]:
-    """The empty form and this browser's recent jobs."""
-    return render_form({}, {})
+    """The empty form and this browser's recent jobs; ?photo=<id> chooses the face of that
+    photo draft (photo_views.py)."""
+    draft_id = request.args.get("photo", "")
+    if draft_id and load_draft(state().settings.instance, draft_id) is None:
+        return render_form({}, {"face_sample": DRAFT_GONE}, 404)
+    return render_form({"face_draft": draft_id}, {})
 
 
 @bp.post("/jobs")
@@ -147,7 +156,12 @@ def submit() -> Response | tuple[str, int]:
     if not csrf_ok(request.form.get(CSRF_FIELD)):
         return render_form(values, {"form": "This form has expired or did not come from this page. "
                                             "Please check the fields and press Generate again."}, 400)
-    checked = check_submission(request.form, request.files, state().limits)
+    draft_id = values["face_draft"]
+    chosen = draft_choice(state().settings.instance, draft_id) if draft_id else None
+    checked = check_submission(request.form, request.files, state().limits, chosen)
+    if draft_id and chosen is None:
+        values["face_draft"] = ""
+        return render_form(values, {**(checked if isinstance(checked, dict) else {}), "face_sample": DRAFT_GONE}, 400)
     if isinstance(checked, dict):
         return render_form(values, checked, 400)
     job = create_job(state().settings.instance, checked.spec, checked.files)
