@@ -14,9 +14,12 @@ Onset evidence: the syllable starts where the vowel of the one before it ends, i
 100-1000 Hz band energy falls (stops, affricates, fricatives: their closure or frication
 begins) or sits in a dip (nasals, laterals, glides, vowel-initial syllables). The fall and
 dip measures, the duration factors per syllable type and the pause penalty were tuned on
-Biaobei sentences 000001-000035 only (bench/align.py; docs/BENCHMARKS.md).
+Biaobei sentences 000001-000035 only (bench/align.py; docs/BENCHMARKS.md). Each class's
+evidence is moved by a small lead (ONSET_LEAD): a sonorant's dip is deepest inside the
+consonant, after the syllable has started.
 
-Pauses: a pause inside the part (Biaobei's `sp`, at least 0.1 s: shorter silences are taken
+Pauses: silence is quiet both below 1 kHz and above 3 kHz (a voiceless fricative or
+aspiration is quiet only below 1 kHz, and is part of its syllable). A pause inside the part (Biaobei's `sp`, at least 0.1 s: shorter silences are taken
 for stop closures) or silence at its edges (at least 0.04 s) is modelled as a gap: the
 syllable before it ends where the silence starts, the next starts where it ends.
 Otherwise one syllable ends where the next starts. Syllables are ordered, do not overlap and
@@ -146,6 +149,14 @@ MARGIN_SCALE = 0.5         # score margin (units of evidence) of confidence 1 - 
                            # 000001-000035 this makes the mean confidence (0.81) near the share of
                            # onsets within 50 ms (95 %) without flattening the low end
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
+# Frames by which a class's onset precedes the peak of its evidence (negative: follows it).
+# The dip of a nasal, lateral or r is deepest inside the consonant, about 20 ms after the
+# consonant (and the syllable) starts; a glide's after ~10 ms; the steepest fall into a stop
+# closure comes ~10 ms before the closure is complete, where the reference puts the onset.
+# Each is the rounded median signed error per class on Biaobei 000001-000035 with no lead.
+ONSET_LEAD = {"closure": -1, "aspirated": -1, "frication": 0, "sonorant": 2, "glide": 1, "none": 0}
+FRICATION_RANGE = 0.4      # share of the 3-8 kHz range above its floor that is no silence
+FRICATION_FLOOR = 10.0     # dB above the 3-8 kHz floor that is always tolerated in a silence
 
 
 def _smooth(x: np.ndarray, width: int = 3) -> np.ndarray:
@@ -162,9 +173,22 @@ def edge_evidence(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, 30.0)
 
 
+def _earlier(x: np.ndarray, frames: int) -> np.ndarray:
+    """(T,) evidence moved `frames` positions earlier (later when negative), zero-filled."""
+    if frames == 0:
+        return x
+    out = np.zeros_like(x)
+    if frames > 0:
+        out[:-frames] = x[frames:]
+    else:
+        out[-frames:] = x[:frames]
+    return out
+
+
 def onset_evidence(low: np.ndarray) -> dict[str, np.ndarray]:
     """(T,) smoothed 100-1000 Hz dB per boundary position -> for each initial class, (T,)
-    evidence that a syllable of that class starts there (higher is likelier)."""
+    evidence that a syllable of that class starts there (higher is likelier), each moved by
+    the class's ONSET_LEAD."""
     pad = np.pad(low, 12, mode="edge")
     fall = FALL_WEIGHT * np.clip(pad[10:-14] - pad[14:-10], 0.0, 30.0)   # dB fall, 2 frames before to 2 after
     windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
@@ -173,8 +197,8 @@ def onset_evidence(low: np.ndarray) -> dict[str, np.ndarray]:
     # only at (near) local minima: a flat quiet stretch is one dip, not many
     nearby = np.lib.stride_tricks.sliding_window_view(pad[9:-9], 7).min(axis=1)
     dip = DIP_WEIGHT * np.clip(np.where(low <= nearby + 1.0, dip, 0.0), 0.0, DIP_CAP)
-    return {"closure": fall, "aspirated": fall, "frication": fall,
-            "sonorant": dip, "glide": dip, "none": dip}
+    measure = {"closure": fall, "aspirated": fall, "frication": fall, "sonorant": dip, "glide": dip, "none": dip}
+    return {c: _earlier(x, ONSET_LEAD[c]) for c, x in measure.items()}
 
 
 _NEG = -1e18                # score of an impossible cut
@@ -315,7 +339,8 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     if not np.isfinite(loud) or loud - floor < 10.0:
         return prior_split(span, syllables, LOW_CONFIDENCE)
     threshold = floor + 0.3 * (loud - floor)
-    silence = np.clip((threshold - inner) / SILENCE_SCALE, -3.0, 1.0)
+    silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, -3.0, 1.0),
+                         _high_band_silence(_smooth(feats.high), index[:-1]))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
     by_class = onset_evidence(low)
@@ -331,6 +356,18 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     # that k = 0 and k = total are exactly the span's ends
     times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
     return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
+
+
+def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """(T_all,) smoothed 3-8 kHz dB of the clip, (T,) indices of the span's frames -> (T,)
+    silence evidence of that band alone: a voiceless fricative or aspiration is quiet below
+    1 kHz but loud above 3 kHz, and is no pause. The band counts as quiet below its floor plus
+    FRICATION_RANGE of its range, and always within FRICATION_FLOOR dB of its floor (noisy or
+    band-limited recordings, whose range in this band is mostly noise)."""
+    band = high[inner]
+    floor = np.percentile(high, 5)
+    threshold = floor + max(FRICATION_RANGE * (np.percentile(band, 95) - floor), FRICATION_FLOOR)
+    return np.clip((threshold - band) / SILENCE_SCALE, -3.0, 1.0)
 
 
 def _confidence(margins: np.ndarray, quality: float) -> np.ndarray:
