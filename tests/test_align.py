@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from cartoonface.speech.align import LOW_CONFIDENCE, align_syllables, relative_durations, syllable_type
+from cartoonface.speech.align import LOW_CONFIDENCE, align_syllables, onset_evidence, relative_durations, syllable_type
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.espeak import synthesize
 
@@ -195,3 +195,38 @@ def test_noise_lowers_the_confidence_but_keeps_the_count():
     unsure = align_syllables(noisy, span, syllables)
     check_shape(unsure, span, len(syllables))
     assert np.mean([t.confidence for t in unsure]) < np.mean([t.confidence for t in sure]) - 0.2
+
+
+def hiss(seconds: float, rng: np.random.Generator) -> np.ndarray:
+    """A voiceless "s"-like frication: white noise high-passed above 4 kHz (nothing below 1 kHz)."""
+    spectrum = np.fft.rfft(rng.standard_normal(int(seconds * RATE)))
+    spectrum[np.fft.rfftfreq(int(seconds * RATE), 1.0 / RATE) < 4000] = 0.0
+    noise = np.fft.irfft(spectrum, int(seconds * RATE))
+    return 0.1 * noise / np.abs(noise).max()
+
+
+def test_frication_at_the_start_of_a_part_belongs_to_the_syllable():
+    """A fricative is quiet below 1 kHz like silence, but loud above 3 kHz: not a leading pause."""
+    rng = np.random.default_rng(11)
+    lead, frication = 0.3, 0.12
+    pieces = [np.zeros(int(lead * RATE)), hiss(frication, rng), burst(0.25, rng), np.zeros(int(0.04 * RATE)),
+              burst(0.3, rng), np.zeros(int(lead * RATE))]
+    samples = np.concatenate(pieces) + 1e-4 * rng.standard_normal(sum(map(len, pieces)))
+    audio = Audio(samples.astype(np.float32), RATE, "test")
+    span = Span(lead, lead + frication + 0.25 + 0.04 + 0.3)
+    timings = align_syllables(audio, span, ["sa1", "ba4"])
+    check_shape(timings, span, 2)
+    assert timings[0].start - span.start <= 0.02
+    assert abs(timings[1].start - (lead + frication + 0.25)) <= 0.03
+
+
+def test_sonorant_onsets_are_found_before_the_deepest_point_of_their_dip():
+    """A nasal's dip is deepest inside the consonant; the syllable starts as the level falls into it."""
+    t = np.arange(60.0)
+    low = 20.0 - 6.0 * np.exp(-(((t - 30.0) / 6.0) ** 2))
+    evidence = onset_evidence(low)
+    deepest = int(np.argmin(low))
+    assert int(np.argmax(evidence["sonorant"])) < deepest
+    assert evidence["sonorant"].max() > 0.0
+    falling = np.flatnonzero(np.diff(low) < 0)
+    assert int(np.argmax(evidence["sonorant"])) >= falling.min()
