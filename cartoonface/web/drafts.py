@@ -2,8 +2,8 @@
 corrected by the user before a job uses it (docs/web.md, "Face from a photo").
 
 A draft is a folder `<instance>/photos/<id>/` (ids as for jobs, store.py) written
-atomically when the photo is read: `photo.jpg` (the upright photo at most DISPLAY_SIDE
-pixels a side, the picture the points are drawn on), `draft.json` (the user's file name,
+atomically when the photo is read: `photo.jpg` (the head's part of the upright photo,
+at most DISPLAY_SIDE pixels a side: the picture the points are drawn on), `draft.json` (the user's file name,
 the warnings, the detected points and hair in photo.jpg pixels, the detected model and
 the linear map from photo to model pixels) and `edit.json` (the points as the user left
 them and the model they give, rewritten atomically on every change).
@@ -41,6 +41,8 @@ from cartoonface.web.store import delete_job, valid_id
 # The picture the points are shown and edited on: long side in pixels, JPEG quality.
 DISPLAY_SIDE = 1024
 JPEG_QUALITY = 88
+# The editor shows the box of the points and hair widened by this share of its size each way.
+HEAD_MARGIN = 0.3
 # A dragged point may leave the photo by this share of its size (a chin at the edge).
 EDGE_MARGIN = 0.25
 # The edited points arrive as JSON text of at most this many characters
@@ -126,9 +128,22 @@ def linear_map(photo: np.ndarray, model: np.ndarray) -> np.ndarray:
     return solution[:2].T
 
 
-def display_jpeg(rgb: np.ndarray) -> tuple[bytes, float]:
-    """The (H, W, 3) uint8 photo as JPEG bytes at most DISPLAY_SIDE a side; returns
-    (bytes, display pixels per photo pixel)."""
+def head_box(found: PhotoFace, shape: tuple[int, ...]) -> tuple[int, int, int, int]:
+    """The part of the photo shown in the editor, (x0, y0, x1, y1) pixels of an image of
+    `shape` (H, W, ...): the box of the points and the hair, widened by HEAD_MARGIN of its
+    size each way and cut to the photo, so the face fills the editor."""
+    both = np.vstack([found.points, found.hair])
+    low, high = both.min(axis=0), both.max(axis=0)
+    pad = HEAD_MARGIN * (high - low)
+    height, width = shape[:2]
+    x0, y0 = np.floor(np.maximum(low - pad, 0)).astype(int)
+    x1, y1 = np.ceil(np.minimum(high + pad, [width, height])).astype(int)
+    return int(x0), int(y0), max(int(x1), int(x0) + 1), max(int(y1), int(y0) + 1)
+
+
+def display_jpeg(rgb: np.ndarray) -> tuple[bytes, tuple[int, int], float]:
+    """The (H, W, 3) uint8 picture as JPEG bytes at most DISPLAY_SIDE a side; returns
+    (bytes, (width, height) of the JPEG, its pixels per pixel of `rgb`)."""
     image = Image.fromarray(rgb)
     k = min(1.0, DISPLAY_SIDE / max(image.size))
     if k < 1.0:
@@ -136,14 +151,15 @@ def display_jpeg(rgb: np.ndarray) -> tuple[bytes, float]:
                              Image.Resampling.LANCZOS)
     out = io.BytesIO()
     image.save(out, "JPEG", quality=JPEG_QUALITY)
-    return out.getvalue(), k
+    return out.getvalue(), image.size, k
 
 
-def detect(data: bytes, ext: str, label: str) -> tuple[bytes, tuple[int, int], float, PhotoFace]:
+def detect(data: bytes, ext: str, label: str) -> tuple[bytes, tuple[int, int], np.ndarray, float, PhotoFace]:
     """Read the photo bytes (format `ext`, decided by the caller from the content) and find
-    the face. Returns (photo.jpg bytes, its (width, height), display pixels per photo.rgb
-    pixel, the PhotoFace). InputError naming `label` (never a server path) when the photo
-    cannot be read or holds no usable face."""
+    the face. Returns (photo.jpg bytes: the head's part of the photo, its (width, height),
+    the (2,) photo.rgb pixel of its corner, its pixels per photo.rgb pixel, the PhotoFace).
+    InputError naming `label` (never a server path) when the photo cannot be read or holds
+    no usable face."""
     with tempfile.TemporaryDirectory(prefix="cartoonface-photo-") as tmp:
         path = Path(tmp) / f"photo.{ext}"
         path.write_bytes(data)
@@ -152,10 +168,9 @@ def detect(data: bytes, ext: str, label: str) -> tuple[bytes, tuple[int, int], f
             found = face_from_photo(photo, "photo")
         except InputError as exc:
             raise InputError(str(exc).replace(str(path), label)) from None
-    jpeg, k = display_jpeg(photo.rgb)
-    height, width = photo.rgb.shape[:2]
-    size = (max(1, round(width * k)), max(1, round(height * k))) if k < 1.0 else (width, height)
-    return jpeg, size, k, found
+    x0, y0, x1, y1 = head_box(found, photo.rgb.shape)
+    jpeg, size, k = display_jpeg(photo.rgb[y0:y1, x0:x1])
+    return jpeg, size, np.array([x0, y0], dtype=float), k, found
 
 
 def _pairs(array: np.ndarray) -> list[list[float]]:
@@ -169,8 +184,8 @@ def _named(array: np.ndarray) -> dict[str, list[float]]:
 def create_draft(instance: Path, data: bytes, ext: str, label: str, draft_id: str) -> Draft:
     """Detect the face in the photo bytes and store the draft `draft_id` (a new_id());
     return it. InputError as detect()."""
-    jpeg, size, k, found = detect(data, ext, label)
-    detected = found.points * k
+    jpeg, size, corner, k, found = detect(data, ext, label)
+    detected = (found.points - corner) * k
     base = face_to_dict(found.face)
     model = np.array([base["points"][name] for name in POINT_NAMES], dtype=float)
     record = {
@@ -178,7 +193,7 @@ def create_draft(instance: Path, data: bytes, ext: str, label: str, draft_id: st
         "warnings": list(found.warnings),
         "size": list(size),
         "detected": _named(detected),
-        "hair": _pairs(found.hair * k),
+        "hair": _pairs((found.hair - corner) * k),
         "base": base,
         "to_model": linear_map(detected, model).tolist(),
         "created": time.time(),
