@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import soundfile
 
-from cartoonface.speech.align import align_syllables
+from cartoonface.speech.align import align_syllables, initial_class, syllable_type
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.espeak import synthesize
 from cartoonface.speech.features import HOP, frames
@@ -199,8 +199,11 @@ def equal_split(part: Part) -> np.ndarray:
 
 
 def evaluate(recordings: list[Recording], with_dtw: bool = False) -> dict[str, object]:
-    """Onset errors (s) of the aligner and of the baseline, inner-onset mask, aligner seconds, speech seconds."""
-    errors, base, warped, inner, seconds, speech, confidence = [], [], [], [], 0.0, 0.0, []
+    """Onset errors (s, rounded to 1 us: references and onsets on a 10 ms grid give errors of
+    exactly 50 ms that float arithmetic would put either side of the limit) of the aligner and
+    of the baseline, signed aligner errors, initial class per onset, inner-onset mask, aligner
+    seconds, speech seconds."""
+    signed, classes, base, warped, inner, seconds, speech, confidence = [], [], [], [], [], 0.0, 0.0, []
     for rec in recordings:
         for part in rec.parts:
             started = time.process_time()
@@ -208,14 +211,30 @@ def evaluate(recordings: list[Recording], with_dtw: bool = False) -> dict[str, o
             seconds += time.process_time() - started
             speech += part.end - part.start
             reference = np.array(part.onsets)
-            errors.extend(np.abs(np.array([t.start for t in timings]) - reference))
+            signed.extend(np.array([t.start for t in timings]) - reference)
+            classes.extend(initial_class(syllable_type(p).initial) for p in part.syllables)
             base.extend(np.abs(equal_split(part) - reference))
             if with_dtw:
                 warped.extend(np.abs(espeak_dtw(rec.audio, part) - reference))
             inner.extend([False] + [True] * (len(part.onsets) - 1))
             confidence.extend(t.confidence for t in timings)
-    return {"errors": np.array(errors), "base": np.array(base), "dtw": np.array(warped), "inner": np.array(inner),
-            "seconds": seconds, "speech": speech, "confidence": np.array(confidence)}
+    def rounded(x):
+        return np.round(np.array(x), 6)
+    return {"errors": rounded(np.abs(signed)), "base": rounded(base), "dtw": rounded(warped), "inner": np.array(inner),
+            "signed": np.array(signed), "classes": np.array(classes), "seconds": seconds, "speech": speech,
+            "confidence": np.array(confidence)}
+
+
+def by_class(result: dict[str, object]) -> str:
+    """Per initial class over the inner onsets: count, median signed error (ms; positive = the
+    aligner's onset is later than the reference) and share within 50 ms."""
+    cells = []
+    for name in ("closure", "aspirated", "frication", "sonorant", "glide", "none"):
+        mask = (result["classes"] == name) & result["inner"]
+        if mask.any():
+            cells.append(f"{name} n={mask.sum()} {1000 * np.median(result['signed'][mask]):+.0f} ms "
+                         f"{100 * np.mean(result['errors'][mask] <= 0.05):.0f}%")
+    return "  by initial (inner onsets: n, median signed error, within 50 ms): " + ", ".join(cells)
 
 
 def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
@@ -234,6 +253,7 @@ def report(name: str, recordings: list[Recording], with_dtw: bool = False) -> No
     print(row("equal split", result["base"], result["inner"]))
     if with_dtw:
         print(row("espeak+DTW", result["dtw"], result["inner"]))
+    print(by_class(result))
     bad = result["errors"] > 0.05
     conf = result["confidence"]
     if bad.any() and (~bad).any():

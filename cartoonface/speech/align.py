@@ -92,6 +92,12 @@ _CLASS = {**dict.fromkeys(("b", "d", "g", "z", "zh", "j"), "closure"),
           "": "none"}
 
 
+def initial_class(initial: str) -> str:
+    """Pinyin initial ("" for none, y/w included) -> its class: "closure", "aspirated",
+    "frication", "sonorant", "glide" or "none" (an unknown initial counts as "none")."""
+    return _CLASS.get(initial, "none")
+
+
 def syllable_type(pinyin: str) -> SyllableType:
     """Tone-numbered pinyin ("hang2", "wanr1", "lü4", "lv4") -> SyllableType; never raises."""
     text = re.sub(r"[^a-z0-9]", "", pinyin.lower().replace("ü", "v").replace("u:", "v"))
@@ -123,7 +129,7 @@ def relative_durations(syllables: Sequence[str]) -> np.ndarray:
     weights = []
     for k, pinyin in enumerate(syllables):
         t = syllable_type(pinyin)
-        w = _INITIAL_FACTOR[_CLASS[t.initial]] * _TONE_FACTOR[t.tone]
+        w = _INITIAL_FACTOR[initial_class(t.initial)] * _TONE_FACTOR[t.tone]
         w *= _FINAL_LETTER_FACTOR ** max(len(t.final) - 1, 0)
         w *= _NASAL_FACTOR if t.final.endswith(("n", "ng")) else 1.0
         w *= _ERHUA_FACTOR if t.erhua else 1.0
@@ -344,7 +350,7 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
     by_class = onset_evidence(low)
-    evidence = np.stack([by_class[_CLASS[syllable_type(p).initial]][index] for p in syllables])
+    evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
     edges = edge_evidence(low, _smooth(feats.high))[:, index]
     evidence[0] = 0.0
     lattice = _forward(evidence, silence, edges, means)
