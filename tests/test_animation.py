@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -12,7 +13,9 @@ from lxml import etree
 from cartoonface.errors import OptionError
 from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.animation import animation_svg, clock
+from cartoonface.face.lift import lift
+from cartoonface.face.pose import pose_face, rig
+from cartoonface.render.animation import animation_svg, clock, unroll
 from cartoonface.render.pathdata import MIRROR, TOLERANCE, compact_paths
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -97,12 +100,55 @@ def test_still_parts_stay_outside_frames(face):
         assert len(found[name]) > 0, f"{name} is drawn"
 
 
-def test_a_moving_head_animates_the_hair_on_twos(face):
+def test_a_moving_head_is_drawn_in_every_frame(face):
     turn = [FaceState(pose=Pose(turn=0.5 * i)) for i in range(12)]
-    every = tracks(etree.fromstring(animation_svg(face, turn, 12)))["hair"]
-    twos = tracks(etree.fromstring(animation_svg(face, turn, 30)))["hair"]
-    assert len(every.findall("s:g", NS)) > len(twos.findall("s:g", NS)) > 1
-    assert all(end - begin >= round(2000 / 30) - 1 for begin, end, _ in intervals(twos)[:-1])
+    for fps in (12, 30, 60):
+        hair = tracks(etree.fromstring(animation_svg(face, turn, fps)))["hair"]
+        spans = intervals(hair)
+        assert len(spans) == len(turn), f"{fps} fps: one drawing per pose"
+        assert len({content(frame) for _, _, frame in spans}) == len(turn)
+
+
+def roll_at(svg: etree._Element, layer: str, ms: int) -> tuple[float, float, float]:
+    """(angle, cx, cy) of the rotation the layer's discrete <animateTransform> shows at `ms`."""
+    turn = svg.find(f"s:g[@id='{layer}']/s:animateTransform", NS)
+    assert turn.get("type") == "rotate" and turn.get("calcMode") == "discrete"
+    values = [tuple(map(float, v.split())) for v in turn.get("values").split(";")]
+    times = [float(t) * float(turn.get("dur")) * 1000 for t in turn.get("keyTimes").split(";")]
+    assert times[0] == 0 and len(times) == len(values)
+    return values[max(i for i, t in enumerate(times) if t <= ms + 0.01)]
+
+
+def test_roll_is_a_rotation_of_the_head_layers_matching_the_posed_face(face):
+    rolls = [0, 0, 4, 4, 4, -7.5, -7.5, 15, 0]
+    states = [FaceState(pose=Pose(tilt=3, turn=-6, roll=r), mouth=(("a", 1.0),)) for r in rolls]
+    svg = etree.fromstring(animation_svg(face, states, 30))
+    face_track = tracks(svg)["face"]
+    assert not face_track.findall("s:g[@visibility]", NS), "the roll alone redraws nothing"
+    lifted = lift(face)
+    origin = rig(lifted).origin
+    for index, state in enumerate(states):
+        angles = {roll_at(svg, layer, round(index * 1000 / 30)) for layer in ("hair", "face")}
+        assert len(angles) == 1, "hair and face turn together"
+        angle, cx, cy = angles.pop()
+        assert angle == pytest.approx(-state.pose.roll)
+        posed = pose_face(lifted, state)
+        drawn = unroll(posed, state.pose.roll, origin)
+        if state.pose.roll:  # drawn without roll: as the unrolled pose, pupils within 0.05 px per degree
+            flat = pose_face(lifted, dataclasses.replace(state, pose=Pose(tilt=3, turn=-6)))
+            assert np.abs(drawn.hair - flat.hair).max() < 1e-6
+            assert np.hypot(*(drawn.pupils - flat.pupils).T).max() < 0.05 * abs(state.pose.roll) + 1e-6
+        a = np.radians(angle)  # SVG rotate(a cx cy), clockwise on screen
+        for mine, theirs in ((drawn.xy, posed.xy), (drawn.hair, posed.hair)):
+            moved = (mine - (cx, cy)) @ np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]]) + (cx, cy)
+            gap = np.hypot(*(moved - theirs).T).max()
+            assert gap < 1e-3, f"roll {state.pose.roll}: the turned drawing is off by {gap:.4f} px"
+    assert svg.find("s:g[@id='clothes']/s:animateTransform", NS) is None
+
+
+def test_a_head_that_never_rolls_has_no_rotation(face):
+    svg = etree.fromstring(animation_svg(face, [FaceState(pose=Pose(turn=i)) for i in range(4)], 30))
+    assert not svg.findall(".//s:animateTransform", NS)
 
 
 def test_layers_references_ids_and_rounding(face):

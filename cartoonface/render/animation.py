@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import html
+import math
 import re
 from collections import Counter
 from collections.abc import Sequence
@@ -50,7 +51,7 @@ from lxml import etree
 
 from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
-from cartoonface.face.pose import pose_face
+from cartoonface.face.pose import PosedFace, pose_face, rig
 from cartoonface.face.state import FaceState
 from cartoonface.render.pathdata import compact_paths
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
@@ -86,10 +87,10 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
-# Head poses drawn per second at most: at 30 fps the head moves "on twos" (each pose held for
-# two frames, as animators draw slow movements), lips and eyes still change on every frame.
-# Halves the frames that redraw the whole head during a tilt, turn or nod (docs/output.md).
-POSE_RATE = 15
+# The head's roll (Pose.roll, a sideways lean) is drawn as a rotation of the hair and face
+# layers, in steps of this many decimals of a degree: 0.01 degree moves a point 250 px from
+# the centre by 0.04 px.
+ROLL_DECIMALS = 2
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
 _PATH_DATA = re.compile(rb' d="([^"]*)"')
 
@@ -364,16 +365,46 @@ def _share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]
             for track, track_drawings in drawings.items()}
 
 
-def on_twos(states: Sequence[FaceState], fps: int) -> list[FaceState]:
-    """`states` with the head pose held for fps // POSE_RATE frames at a time (from the first of them)."""
-    step = max(1, fps // POSE_RATE)
-    if step == 1:
-        return list(states)
-    held = []
-    for index, state in enumerate(states):
-        pose = states[index - index % step].pose
-        held.append(state if state.pose == pose else dataclasses.replace(state, pose=pose))
-    return held
+def unrolled(state: FaceState) -> FaceState:
+    """`state` with no roll."""
+    if not state.pose.roll:
+        return state
+    return dataclasses.replace(state, pose=dataclasses.replace(state.pose, roll=0.0))
+
+
+def unroll(posed: PosedFace, roll: float, origin: np.ndarray) -> PosedFace:
+    """`posed` (a face posed with `roll` degrees) turned back by the roll about the rig's
+    `origin` (2,) pixels. pose_face rolls last, in the image plane about that origin
+    (face/pose.py: Rz @ Rx @ Ry, y flipped: x' = cos x + sin y, y' = -sin x + cos y), so
+    this is the face posed without roll, except the pupils, which keep gazing at the fixed
+    focus (up to 0.05 px per degree of roll apart); drawn and turned by `rotate(-roll)` (SVG
+    angles turn clockwise on screen) it is the posed face exactly."""
+    if not roll:
+        return posed
+    c, s = math.cos(math.radians(roll)), math.sin(math.radians(roll))
+    back = np.array([[c, s], [-s, c]])  # row vectors: (x', y') @ back = (c x' - s y', s x' + c y')
+
+    def turn(points: np.ndarray) -> np.ndarray:
+        return (points - origin) @ back + origin
+
+    return dataclasses.replace(posed, xy=turn(posed.xy), hair=turn(posed.hair), pupils=turn(posed.pupils))
+
+
+def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, centre: str) -> None:
+    """Turn each of `layers` by the head's roll: `rolls` (one per frame, hundredths of a degree,
+    positive counter-clockwise) as one discrete `<animateTransform>` whose key times are the
+    frame boundaries of the runs of equal rolls; `centre` "x y" is the rotation origin.
+    Nothing is added when the head never rolls."""
+    if not any(rolls):
+        return
+    all_runs = runs(rolls)
+    total = frame_ms(len(rolls), fps)
+    values = ";".join(f"{-rolls[run.first] / 10 ** ROLL_DECIMALS:g} {centre}" for run in all_runs)
+    times = ";".join(f"{frame_ms(run.first, fps) / total:.7g}" for run in all_runs)
+    for layer in layers:
+        layer.insert(0, etree.Element(f"{{{SVG}}}animateTransform", {
+            "attributeName": "transform", "type": "rotate", "calcMode": "discrete", "values": values,
+            "keyTimes": times, "dur": clock(total), "fill": "freeze"}))
 
 
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
@@ -404,12 +435,18 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     root.append(background_layer(background, figure, defs))
     writer = _Writer(defs)
     lifted = lift(face)
-    drawn: dict[FaceState, tuple[int, ...]] = {}
+    origin = rig(lifted).origin
+    drawn: dict[tuple[FaceState, tuple[float, ...]], tuple[int, ...]] = {}
     frames = []
-    for state in on_twos(states, fps):
-        parts = drawn.get(state)
+    rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
+    for state, roll in zip(states, rolls, strict=True):
+        # turned back by the roll as written (the two turns cancel exactly)
+        posed = unroll(pose_face(lifted, state), roll / 10 ** ROLL_DECIMALS, origin)
+        # the drawing depends on the state without roll and on the pupils (written to 0.1 px)
+        key = (unrolled(state), tuple(np.round(posed.pupils, 1).ravel().tolist()))
+        parts = drawn.get(key)
         if parts is None:
-            parts = drawn[state] = writer.collect(face_group(face, pose_face(lifted, state), UID))
+            parts = drawn[key] = writer.collect(face_group(face, posed, UID))
         frames.append((state, parts))
     mapping, tidy = writer.finish()
     tracks = _tracks(frames, [part.track for part in writer.raw], mapping)
@@ -422,4 +459,6 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     layer = _el(root, "g", id="face")
     for name, track in tracks.items():
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
+    _roll((hair, layer), rolls, fps,
+          f"{origin[0]:.6g} {origin[1]:.6g}")
     return etree.tostring(root, xml_declaration=True, encoding="utf-8")
