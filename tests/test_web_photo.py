@@ -17,6 +17,7 @@ from markupsafe import escape
 from PIL import Image
 
 from cartoonface.face.model import POINT_NAMES, face_from_dict
+from cartoonface.web import photo_views
 from cartoonface.web.drafts import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts_root, linear_map, load_draft,
                                     sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
@@ -105,6 +106,36 @@ def test_upload_shows_the_points_over_the_photo_and_the_cartoon(app, client, dra
     script = re.search(r'<script src="([^"]+)"', page).group(1)
     assert client.get(script).status_code == 200
     assert "script-src 'self'" in client.get(draft_url).headers["Content-Security-Policy"]
+
+
+def test_several_faces_are_warned_about_and_the_largest_is_used(app, client):
+    from skimage import data
+
+    astronaut = Image.fromarray(data.astronaut())
+    canvas = Image.new("RGB", (900, 512), (200, 200, 200))
+    canvas.paste(astronaut, (0, 0))
+    canvas.paste(astronaut.resize((320, 320)), (560, 100))
+    buffer = io.BytesIO()
+    canvas.save(buffer, "PNG")
+    response = upload(client, buffer.getvalue(), "two.png")
+    assert response.status_code == 303
+    page = client.get(response.headers["Location"]).get_data(as_text=True)
+    assert re.search(r'id="photo-warnings">.*2 faces in the photo; using the largest', page, re.S)
+    # the shown part of the photo is around the larger face (the left one)
+    draft = draft_of(app, response.headers["Location"])
+    assert draft.size[0] < 560 * 1.1
+
+
+def test_a_busy_server_says_so(app, client, photo, monkeypatch):
+    monkeypatch.setattr(photo_views, "DETECT_WAIT", 0.05)
+    assert photo_views._detecting.acquire(timeout=5)
+    try:
+        answer = upload(client, photo)
+    finally:
+        photo_views._detecting.release()
+    assert answer.status_code == 503
+    assert "busy" in answer.get_data(as_text=True)
+    assert upload(client, photo).status_code == 303
 
 
 def test_moving_a_point_moves_the_cartoon_and_is_saved(app, client, draft_url):
@@ -298,10 +329,20 @@ def test_check_drag_and_generate_in_chromium(server, inputs, browser, tmp_path):
     assert circles.count() == len(POINT_NAMES)
     assert page.locator("#photo-warnings li").count() >= 1
 
+    corner = 'circle.point[data-name="8.3"]'
+    before = float(page.get_attribute(corner, "cx"))
+    page.focus(corner)
+    page.keyboard.press("Shift+ArrowRight")
+    assert float(page.get_attribute(corner, "cx")) > before
+    page.click("#reset-points")
+    assert float(page.get_attribute(corner, "cx")) == pytest.approx(before, abs=0.01)
+    page.wait_for_function("() => document.getElementById('preview').src.startsWith('data:')", timeout=10_000)
+    reset = page.evaluate("() => [document.getElementById('preview').src,"
+                          " document.getElementById('editor').getAttribute('data-updated')]")
+
     chin = page.locator('circle.point[data-name="2.1"]')
     chin.hover()
     assert page.inner_text("#point-name").startswith("2.1: chin")
-    first = page.evaluate("() => document.getElementById('preview').src")
     start = json.loads(page.input_value("#points"))["2.1"]
     box = chin.bounding_box()
     x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
@@ -309,17 +350,13 @@ def test_check_drag_and_generate_in_chromium(server, inputs, browser, tmp_path):
     page.mouse.down()
     page.mouse.move(x, y + 25, steps=5)
     page.mouse.up()
-    page.wait_for_function("() => document.getElementById('editor').hasAttribute('data-updated')", timeout=10_000)
-    assert page.evaluate("() => document.getElementById('preview').src") != first
-    assert page.evaluate("() => document.getElementById('preview').src").startswith("data:image/svg+xml")
+    page.wait_for_function("(seen) => document.getElementById('editor').getAttribute('data-updated') !== seen",
+                           arg=reset[1], timeout=10_000)
+    shown = page.evaluate("() => document.getElementById('preview').src")
+    assert shown.startswith("data:image/svg+xml") and shown != reset[0]
     moved = json.loads(page.input_value("#points"))["2.1"]
     assert moved[1] > start[1] + 5
     assert page.is_hidden("#points-error")
-
-    page.focus('circle.point[data-name="8.3"]')
-    before = float(page.get_attribute('circle.point[data-name="8.3"]', "cx"))
-    page.keyboard.press("ArrowRight")
-    assert float(page.get_attribute('circle.point[data-name="8.3"]', "cx")) > before
 
     page.click("#use-face")
     page.wait_for_url(f"{server}/?photo=*")
@@ -329,6 +366,7 @@ def test_check_drag_and_generate_in_chromium(server, inputs, browser, tmp_path):
     page.click("#generate")
     page.wait_for_url(f"{server}/jobs/*")
     assert "astronaut.jpg (points checked)" in page.inner_text(".meta")
+    assert page.inner_text("#face-notes").startswith("astronaut.jpg: ")
     page.wait_for_selector("#result", timeout=120_000)
     assert refused == []
     context.close()

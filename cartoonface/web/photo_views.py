@@ -59,6 +59,7 @@ def render_editor(draft: Draft, error: str = "", status: int = 200) -> tuple[str
     return render_template("web/photo_edit.html", draft=draft, points=points, radius=radius,
                            hair=" ".join(f"{x:.1f},{y:.1f}" for x, y in draft.hair),
                            points_json=json.dumps(dict(zip(POINT_NAMES, draft.points.round(2).tolist()))),
+                           detected_json=json.dumps(dict(zip(POINT_NAMES, draft.detected.round(2).tolist()))),
                            error=error, csrf=csrf_token(), csrf_field=CSRF_FIELD,
                            max_points_chars=MAX_POINTS_CHARS), status
 

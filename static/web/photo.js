@@ -2,7 +2,8 @@
  * pointer events; arrow keys move the selected point, Shift moves further). After a
  * change the points are sent to the server (debounced), which answers with the new
  * cartoon preview (SVG, shown as an image) or the reason they cannot make a face.
- * The hidden field #points always holds the points, so "Use this face" saves them. */
+ * The hidden field #points always holds the points, so "Use this face" saves them;
+ * "Back to the detected points" (shown only with this script) undoes every move. */
 (function () {
   "use strict";
   var editor = document.getElementById("editor");
@@ -148,6 +149,17 @@
       place(circle, parseFloat(circle.getAttribute("cx")) + move[0], parseFloat(circle.getAttribute("cy")) + move[1]);
       changed();
     });
+  });
+
+  var reset = document.getElementById("reset-points");
+  reset.hidden = false;
+  reset.addEventListener("click", function () {
+    var detected = JSON.parse(reset.getAttribute("data-points"));
+    circles.forEach(function (c) {
+      var p = detected[c.getAttribute("data-name")];
+      place(c, p[0], p[1]);
+    });
+    changed();
   });
 
   form.addEventListener("submit", function () {
