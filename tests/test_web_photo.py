@@ -7,7 +7,10 @@ import io
 import json
 import os
 import re
+import subprocess
+import sys
 import time
+import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -22,8 +25,9 @@ from cartoonface.web.drafts import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts
                                     sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
-from tests.test_web import csrf, form, make_app, png_bytes, post, speech  # noqa: F401  (speech: a fixture)
-from tests.test_web_e2e import inputs, server  # noqa: F401  (fixtures for the browser test)
+from tests.conftest import ROOT
+from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, make_app, png_bytes, post
+from tests.test_web_e2e import free_port
 
 pytest.importorskip("mediapipe", reason="needs the photo extra (scripts/setup.sh)")
 
@@ -55,6 +59,14 @@ def client(app):
 @pytest.fixture(scope="module")
 def photo() -> bytes:
     return astronaut_jpeg()
+
+
+@pytest.fixture(scope="module")
+def speech(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A short Mandarin recording made with espeak-ng (a WAV file) of tests/test_web.py's text."""
+    path = tmp_path_factory.mktemp("speech") / "speech.wav"
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), SPOKEN], check=True)
+    return path
 
 
 def upload(client, content: bytes, name: str = "astro.jpg", token: str | None = "") -> object:
@@ -260,7 +272,7 @@ def test_the_checked_face_becomes_the_jobs_face_model(app, client, draft_url, sp
     page = client.get(answer.headers["Location"]).get_data(as_text=True)
     assert f'name="face_draft" value="{draft_id}"' in page and 'id="face_sample"' not in page
     draft = draft_of(app, draft_url)
-    sent = form(client, speech, "", face_sample=None, face_draft=draft_id)
+    sent = form(client, speech.read_bytes(), "", face_sample=None, face_draft=draft_id)
     response = post(client, sent)
     assert response.status_code == 303, response.get_data(as_text=True)
     job = load_job(Path(app.instance_path), response.headers["Location"].rsplit("/", 1)[1])
@@ -275,7 +287,7 @@ def test_a_draft_that_is_gone_is_reported_in_the_form(client, speech):
     gone = new_id()
     page = client.get(f"/?photo={gone}")
     assert page.status_code == 404 and "no longer kept" in page.get_data(as_text=True)
-    response = post(client, form(client, speech, "", face_sample=None, face_draft=gone))
+    response = post(client, form(client, speech.read_bytes(), "", face_sample=None, face_draft=gone))
     assert response.status_code == 400
     text = response.get_data(as_text=True)
     assert 'id="face_sample-error"' in text and "no longer kept" in text
@@ -311,8 +323,34 @@ def test_linear_map_recovers_an_affine_map():
 # --- in a real browser -------------------------------------------------------------------
 
 
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory):
+    """`cartoonface serve` (one worker) in a subprocess on a free loopback port; yields its base URL."""
+    instance = tmp_path_factory.mktemp("served")
+    port = free_port()
+    with open(instance / "server.log", "wb") as log:
+        process = subprocess.Popen(
+            [sys.executable, "-m", "cartoonface", "serve", "--port", str(port), "--instance", str(instance)],
+            stdout=log, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, "CARTOONFACE_WORKERS": "1"})
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            with urllib.request.urlopen(base + "/", timeout=2) as answer:
+                if answer.status == 200:
+                    break
+        except OSError:
+            if process.poll() is not None or time.monotonic() > deadline:
+                process.kill()
+                raise AssertionError((instance / "server.log").read_text()) from None
+            time.sleep(0.2)
+    yield base
+    process.terminate()
+    process.wait(timeout=30)
+
+
 @pytest.mark.browser
-def test_check_drag_and_generate_in_chromium(server, inputs, browser, tmp_path):  # noqa: F811
+def test_check_drag_and_generate_in_chromium(server, speech, browser, tmp_path):
     jpeg = tmp_path / "astronaut.jpg"
     jpeg.write_bytes(astronaut_jpeg())
     context = browser.new_context(viewport={"width": 1100, "height": 900})
@@ -361,8 +399,8 @@ def test_check_drag_and_generate_in_chromium(server, inputs, browser, tmp_path):
     page.click("#use-face")
     page.wait_for_url(f"{server}/?photo=*")
     page.locator("#chosen-face").wait_for()
-    page.set_input_files("#audio", str(inputs["wav"]))
-    page.set_input_files("#transcript_file", str(inputs["transcript"]))
+    page.set_input_files("#audio", str(speech))
+    page.fill("#transcript", TRANSCRIPT)
     page.click("#generate")
     page.wait_for_url(f"{server}/jobs/*")
     assert "astronaut.jpg (points checked)" in page.inner_text(".meta")
