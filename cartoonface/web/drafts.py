@@ -196,7 +196,6 @@ def create_draft(instance: Path, data: bytes, ext: str, label: str, draft_id: st
         "hair": _pairs((found.hair - corner) * k),
         "base": base,
         "to_model": linear_map(detected, model).tolist(),
-        "created": time.time(),
     }
     edit = {"points": record["detected"], "face": base}
     with atomic_directory(drafts_root(instance) / draft_id) as tmp:
