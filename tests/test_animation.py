@@ -34,11 +34,19 @@ def talking(*mouths: tuple[str, int]) -> list[FaceState]:
 
 
 def intervals(track: etree._Element) -> list[tuple[int, int, etree._Element]]:
-    """(begin ms, end ms, frame <g>) of every <set> in a track, sorted by begin."""
+    """(begin ms, end ms, frame <g>) of every interval of every <set> in a track, sorted by
+    begin. A <set> has a begin list and either one dur or an end list as long."""
     found = []
     for show in track.iterfind(".//s:set", NS):
-        begin = round(float(show.get("begin")) * 1000)
-        found.append((begin, begin + round(float(show.get("dur")) * 1000), show.getparent()))
+        begins = [round(float(value) * 1000) for value in show.get("begin").split(";")]
+        if show.get("dur") is not None:
+            assert show.get("end") is None
+            ends = [begin + round(float(show.get("dur")) * 1000) for begin in begins]
+        else:
+            ends = [round(float(value) * 1000) for value in show.get("end").split(";")]
+        assert len(ends) == len(begins)
+        assert all(a < b <= c for a, b, c in zip(begins, ends, begins[1:] + [ends[-1]])), "time order"
+        found += [(begin, end, show.getparent()) for begin, end in zip(begins, ends, strict=True)]
     return sorted(found, key=lambda item: item[0])
 
 
@@ -86,7 +94,8 @@ def test_identical_frames_are_merged_and_written_once(face):
     shapes = sorted(f.get("data-shape") for f in frames)
     assert shapes == ["a", "m"]
     rest = next(f for f in frames if f.get("data-shape") == "m")
-    assert len(rest.findall("s:set", NS)) == 3
+    assert len([span for span in spans if span[2] is rest]) == 3, "the rest mouth shows three times"
+    assert len(rest.findall("s:set", NS)) == 2, "one <set> for its first two runs, one frozen for the last"
 
 
 def test_still_parts_stay_outside_frames(face):

@@ -195,7 +195,7 @@ class _Writer:
             number = tidy_ids.get(key)
             if number is None:
                 number = tidy_ids[key] = len(tidy)
-                tidy.append(_own_ids(elements, f"k{number}"))
+                tidy.append(_own_ids(elements, short_id("k", number)))
             mapping.append(number)
         return mapping, tidy
 
@@ -253,16 +253,29 @@ class _Writer:
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
 
 
+def short_id(letter: str, number: int) -> str:
+    """An id for drawing `number` (>= 0): `letter` and the number in base 36 ("k", 1295 -> "kzz")."""
+    digits = ""
+    while True:
+        number, digit = divmod(number, 36)
+        digits = "0123456789abcdefghijklmnopqrstuvwxyz"[digit] + digits
+        if not number:
+            return letter + digits
+
+
 def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
-    """`elements` with their local definition ids ("c0", ...) made unique by `prefix`, and the
-    references to them."""
+    """`elements` with their local definition ids ("c0", "c1", ...) made unique: `prefix`,
+    `prefix`-1, ..., and the references to them."""
+    def own(local: str) -> str:
+        return prefix if local == "c0" else f"{prefix}-{local[1:]}"
+
     for top in elements:
         for node in top.iter():
             for name, value in node.attrib.items():
                 if name == "id":
-                    node.set(name, prefix + value)
+                    node.set(name, own(value))
                 elif value.startswith("url(#c"):
-                    node.set(name, f"url(#{prefix}{value[5:]}")
+                    node.set(name, f"url(#{own(value[5:-1])})")
     return elements
 
 
@@ -326,6 +339,17 @@ def _dissolve(element: etree._Element) -> list[etree._Element]:
     return [element]
 
 
+def _show(frame: etree._Element, spans: Sequence[tuple[int, int]]) -> etree._Element:
+    """Add to `frame` the `<set>` making it visible during `spans` ((begin, end) ms, in time
+    order): one begin list, with one `dur` if all spans are as long, else with the list of
+    their ends (SMIL: each interval ends at the first end after its begin). Returns the set."""
+    begins = ";".join(clock(begin) for begin, _ in spans)
+    lengths = {end - begin for begin, end in spans}
+    timing = ({"dur": clock(lengths.pop())} if len(lengths) == 1
+              else {"end": ";".join(clock(end) for _, end in spans)})
+    return _el(frame, "set", attributeName="visibility", to="visible", begin=begins, **timing)
+
+
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
                  keys: Sequence[int], fps: int, shapes: Sequence[str]) -> None:
     """Write one track into `parent`: its drawing as is if it never changes, else one
@@ -336,12 +360,15 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
         return
     frames = [_el(holder, "g", visibility="hidden") for _ in drawings]
     all_runs = runs(keys)
-    for run in all_runs:
-        begin, end = frame_ms(run.first, fps), frame_ms(run.first + run.count, fps)
-        show = _el(frames[run.drawing], "set", attributeName="visibility", to="visible", begin=clock(begin),
-                   dur=clock(end - begin))
-        if run is all_runs[-1]:
-            show.set("fill", "freeze")
+    shown: list[list[tuple[int, int]]] = [[] for _ in drawings]  # (begin, end) ms of each drawing's runs
+    for run in all_runs[:-1]:
+        shown[run.drawing].append((frame_ms(run.first, fps), frame_ms(run.first + run.count, fps)))
+    for frame, spans in zip(frames, shown, strict=True):
+        if spans:
+            _show(frame, spans)
+    last = all_runs[-1]
+    _show(frames[last.drawing], [(frame_ms(last.first, fps), frame_ms(last.first + last.count, fps))]).set(
+        "fill", "freeze")
     for number, frame in enumerate(frames):
         if track == MOUTH_TRACK:
             frame.set("data-shape", shapes[number])
@@ -356,7 +383,7 @@ def _share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]
     names: dict[int, str] = {}
     for part, count in uses.items():
         if count > 1:
-            names[part] = f"g{len(names)}"
+            names[part] = short_id("g", len(names))
             _el(defs, "g", id=names[part]).extend(tidy[part])
     return {track: [[element for part in drawing
                      for element in ([etree.Element(f"{{{SVG}}}use", href=f"#{names[part]}")] if part in names
@@ -436,17 +463,21 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     writer = _Writer(defs)
     lifted = lift(face)
     origin = rig(lifted).origin
+    by_state: dict[FaceState, tuple[int, ...]] = {}
     drawn: dict[tuple[FaceState, tuple[float, ...]], tuple[int, ...]] = {}
     frames = []
     rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
     for state, roll in zip(states, rolls, strict=True):
-        # turned back by the roll as written (the two turns cancel exactly)
-        posed = unroll(pose_face(lifted, state), roll / 10 ** ROLL_DECIMALS, origin)
-        # the drawing depends on the state without roll and on the pupils (written to 0.1 px)
-        key = (unrolled(state), tuple(np.round(posed.pupils, 1).ravel().tolist()))
-        parts = drawn.get(key)
+        parts = by_state.get(state)
         if parts is None:
-            parts = drawn[key] = writer.collect(face_group(face, posed, UID))
+            # turned back by the roll as written (the two turns cancel exactly)
+            posed = unroll(pose_face(lifted, state), roll / 10 ** ROLL_DECIMALS, origin)
+            # the drawing depends on the state without roll and on the pupils (written to 0.1 px)
+            key = (unrolled(state), tuple(np.round(posed.pupils, 1).ravel().tolist()))
+            parts = drawn.get(key)
+            if parts is None:
+                parts = drawn[key] = writer.collect(face_group(face, posed, UID))
+            by_state[state] = parts
         frames.append((state, parts))
     mapping, tidy = writer.finish()
     tracks = _tracks(frames, [part.track for part in writer.raw], mapping)
