@@ -408,3 +408,22 @@ def test_check_drag_and_generate_in_chromium(server, speech, browser, tmp_path):
     page.wait_for_selector("#result", timeout=120_000)
     assert refused == []
     context.close()
+
+    # on a phone: a finger drags a point (pointer events from touch)
+    phone = browser.new_context(viewport={"width": 390, "height": 844}, has_touch=True, is_mobile=True)
+    page = phone.new_page()
+    page.goto(server + "/photos")
+    page.set_input_files("#photo", str(jpeg))
+    page.click("#find-face")
+    page.wait_for_url(f"{server}/photos/*")
+    start = json.loads(page.input_value("#points"))["2.1"]
+    box = page.locator('circle.point[data-name="2.1"]').bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    touch = phone.new_cdp_session(page)
+    touch.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [{"x": x, "y": y}]})
+    for step in range(1, 6):
+        touch.send("Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [{"x": x, "y": y + 4 * step}]})
+    touch.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+    page.wait_for_function("() => document.getElementById('editor').hasAttribute('data-updated')", timeout=10_000)
+    assert json.loads(page.input_value("#points"))["2.1"][1] > start[1] + 5
+    phone.close()
