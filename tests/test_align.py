@@ -224,9 +224,20 @@ def test_sonorant_onsets_are_found_before_the_deepest_point_of_their_dip():
     """A nasal's dip is deepest inside the consonant; the syllable starts as the level falls into it."""
     t = np.arange(60.0)
     low = 20.0 - 6.0 * np.exp(-(((t - 30.0) / 6.0) ** 2))
-    evidence = onset_evidence(low)
+    evidence = onset_evidence(low, np.full_like(low, 10.0))
     deepest = int(np.argmin(low))
     assert int(np.argmax(evidence["sonorant"])) < deepest
     assert evidence["sonorant"].max() > 0.0
     falling = np.flatnonzero(np.diff(low) < 0)
     assert int(np.argmax(evidence["sonorant"])) >= falling.min()
+
+
+def test_a_dip_above_1_khz_alone_is_evidence_for_a_sonorant_onset_not_for_a_stop():
+    """A nasal murmur can keep the 0.1-1 kHz band up while the 1-3 kHz band drops."""
+    t = np.arange(60.0)
+    mid = 20.0 - 12.0 * np.exp(-(((t - 30.0) / 5.0) ** 2))
+    flat = np.full_like(mid, 15.0)
+    evidence = onset_evidence(flat, mid)
+    assert evidence["sonorant"].max() > 0.0 and abs(int(np.argmax(evidence["sonorant"])) - 30) <= 4
+    assert evidence["closure"].max() == 0.0 and evidence["frication"].max() == 0.0
+    assert onset_evidence(flat, flat)["sonorant"].max() == 0.0

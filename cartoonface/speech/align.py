@@ -12,7 +12,8 @@ pauses between them (and before the first / after the last), maximising
 
 Onset evidence: the syllable starts where the vowel of the one before it ends, i.e. where the
 100-1000 Hz band energy falls (stops, affricates, fricatives: their closure or frication
-begins) or sits in a dip (nasals, laterals, glides, vowel-initial syllables). The fall and
+begins) or sits in a dip (nasals, laterals, glides, vowel-initial syllables; a dip of the
+1000-3000 Hz band counts too, at a lower weight). The fall and
 dip measures, the duration factors per syllable type and the pause penalty were tuned on
 Biaobei sentences 000001-000035 only (bench/align.py; docs/BENCHMARKS.md). Each class's
 evidence is moved by a small lead (ONSET_LEAD): a sonorant's dip is deepest inside the
@@ -144,6 +145,8 @@ DURATION_SPREAD = 0.35     # sd of log(duration / expected duration)
 FALL_WEIGHT = 0.2          # per dB of band-energy fall across an obstruent onset
 DIP_WEIGHT = 0.1           # per dB of dip depth at a sonorant / glide / vowel onset
 DIP_CAP = 8.0              # dB: deeper dips are closures or pauses, no likelier onsets of these
+MID_DIP_SHARE = 0.4        # weight of a 1-3 kHz dip next to a 0.1-1 kHz one (the larger counts):
+                           # a nasal's murmur or a glide can keep the low band up while F2/F3 drop
 SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pause evidence
 PAUSE_PENALTY = 3.0        # per pause, in units of evidence
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
@@ -191,18 +194,25 @@ def _earlier(x: np.ndarray, frames: int) -> np.ndarray:
     return out
 
 
-def onset_evidence(low: np.ndarray) -> dict[str, np.ndarray]:
-    """(T,) smoothed 100-1000 Hz dB per boundary position -> for each initial class, (T,)
-    evidence that a syllable of that class starts there (higher is likelier), each moved by
-    the class's ONSET_LEAD."""
-    pad = np.pad(low, 12, mode="edge")
-    fall = FALL_WEIGHT * np.clip(pad[10:-14] - pad[14:-10], 0.0, 30.0)   # dB fall, 2 frames before to 2 after
+def _dip(band: np.ndarray) -> np.ndarray:
+    """(T,) smoothed dB of one band -> (T,) dB depth of the dip at each local minimum (0 elsewhere),
+    below the lower of the highest levels within 120 ms before and after, capped at DIP_CAP."""
+    pad = np.pad(band, 12, mode="edge")
     windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
     left, right = windows[:-13].max(axis=1), windows[13:].max(axis=1)
-    dip = np.minimum(left, right) - low
+    dip = np.minimum(left, right) - band
     # only at (near) local minima: a flat quiet stretch is one dip, not many
     nearby = np.lib.stride_tricks.sliding_window_view(pad[9:-9], 7).min(axis=1)
-    dip = DIP_WEIGHT * np.clip(np.where(low <= nearby + 1.0, dip, 0.0), 0.0, DIP_CAP)
+    return np.clip(np.where(band <= nearby + 1.0, dip, 0.0), 0.0, DIP_CAP)
+
+
+def onset_evidence(low: np.ndarray, mid: np.ndarray) -> dict[str, np.ndarray]:
+    """(T,) smoothed 100-1000 Hz and 1000-3000 Hz dB per boundary position -> for each initial
+    class, (T,) evidence that a syllable of that class starts there (higher is likelier), each
+    moved by the class's ONSET_LEAD."""
+    pad = np.pad(low, 2, mode="edge")
+    fall = FALL_WEIGHT * np.clip(pad[:-4] - pad[4:], 0.0, 30.0)   # dB fall, 2 frames before to 2 after
+    dip = DIP_WEIGHT * np.maximum(_dip(low), MID_DIP_SHARE * _dip(mid))
     measure = {"closure": fall, "aspirated": fall, "frication": fall, "sonorant": dip, "glide": dip, "none": dip}
     return {c: _earlier(x, ONSET_LEAD[c]) for c, x in measure.items()}
 
@@ -349,7 +359,7 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
                          _high_band_silence(_smooth(feats.high), index[:-1]))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
-    by_class = onset_evidence(low)
+    by_class = onset_evidence(low, _smooth(feats.mid))
     evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
     edges = edge_evidence(low, _smooth(feats.high))[:, index]
     evidence[0] = 0.0
