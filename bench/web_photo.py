@@ -58,4 +58,5 @@ def main() -> None:
     print(f"upload astronaut (512x512 JPEG, {len(buffer.getvalue()) // 1024} kB): first {uploads[0]:.2f} s "
           f"(with the model load), median of the next {UPLOADS - 1}: {statistics.median(uploads[1:]):.3f} s")
     print(f"preview update (POST points -> SVG), median of {UPDATES}: {1000 * statistics.median(updates):.1f} ms")
-    print(f"editor page {len(html.encode('utf-8')) // 1024} kB, photo.jpg {jpeg // 1024} kB, preview SVG {svg // 1024} kB")
+    print(f"editor page {len(html.encode('utf-8')) // 1024} kB, photo.jpg {jpeg // 1024} kB, "
+          f"preview SVG {svg // 1024} kB")
