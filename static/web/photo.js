@@ -66,6 +66,9 @@
     previewState.textContent = "Updating the cartoon…";
     fetch(url, { method: "POST", body: body, credentials: "same-origin", cache: "no-store" })
       .then(function (response) {
+        if (response.status === 404) {
+          return { ok: false, answer: { error: "This photo is no longer kept (photos are kept for a day); please upload it again." } };
+        }
         return response.json().then(function (answer) { return { ok: response.ok, answer: answer }; });
       })
       .then(function (result) {
