@@ -13,16 +13,17 @@ pauses between them (and before the first / after the last), maximising
 Onset evidence: the syllable starts where the vowel of the one before it ends, i.e. where the
 100-1000 Hz band energy falls (stops, affricates, fricatives: their closure or frication
 begins) or sits in a dip (nasals, laterals, glides, vowel-initial syllables; a dip of the
-1000-3000 Hz band counts too, at a lower weight). The fall and
-dip measures, the duration factors per syllable type and the pause penalty were tuned on
-Biaobei sentences 000001-000035 only (bench/align.py; docs/BENCHMARKS.md). Each class's
-evidence is moved by a small lead (ONSET_LEAD): a sonorant's dip is deepest inside the
-consonant, after the syllable has started.
+1000-3000 Hz band counts too, at a lower weight). Each class's evidence is moved by a small
+lead (ONSET_LEAD): a sonorant's dip is deepest inside the consonant, after the syllable has
+started. The fall and dip measures, the leads, the duration factors per syllable type and the
+pause penalty were tuned on Biaobei sentences 000001-000035 only (bench/align.py;
+docs/BENCHMARKS.md).
 
 Pauses: silence is quiet both below 1 kHz and above 3 kHz (a voiceless fricative or
-aspiration is quiet only below 1 kHz, and is part of its syllable). A pause inside the part (Biaobei's `sp`, at least 0.1 s: shorter silences are taken
-for stop closures) or silence at its edges (at least 0.04 s) is modelled as a gap: the
-syllable before it ends where the silence starts, the next starts where it ends.
+aspiration is quiet only below 1 kHz, and is part of its syllable). A pause inside the part
+(Biaobei's `sp`, at least 0.1 s: shorter silences are taken for stop closures) or silence at
+its edges (at least 0.04 s) is modelled as a gap: the syllable before it ends where the
+silence starts, the next starts where it ends.
 Otherwise one syllable ends where the next starts. Syllables are ordered, do not overlap and
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
@@ -166,6 +167,7 @@ LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 ONSET_LEAD = {"closure": -1, "aspirated": -1, "frication": 0, "sonorant": 2, "glide": 1, "none": 0}
 FRICATION_RANGE = 0.4      # share of the 3-8 kHz range above its floor that is no silence
 FRICATION_FLOOR = 10.0     # dB above the 3-8 kHz floor that is always tolerated in a silence
+                           # (no effect on Biaobei; checked on Chao 1922, whose high band is noise)
 
 
 def _smooth(x: np.ndarray, width: int = 3) -> np.ndarray:
