@@ -11,37 +11,19 @@ from __future__ import annotations
 import statistics
 import time
 
-import numpy as np
 
 from cartoonface.animate.behaviour import schedule, speech_pauses
 from cartoonface.animate.frames import sample_frames
 from cartoonface.animate.timeline import build_timeline
-from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from tests.synthetic import synthetic_talk
 
 DURATION = 180.0
 FPS = 30
 RUNS = 15
 
 
-def synthetic_alignment(duration: float, seed: int = 0) -> Alignment:
-    """A talk of `duration` seconds with random syllables and pauses."""
-    rng = np.random.default_rng(seed)
-    sentences, t = [], 0.6
-    while t < duration - 5:
-        syllables = []
-        for _ in range(int(rng.integers(4, 13))):
-            length = float(rng.uniform(0.15, 0.35))
-            shapes = tuple(str(s) for s in rng.choice(MOUTH_SYMBOLS, size=int(rng.integers(1, 5))))
-            syllables.append(Syllable("x", "x1", shapes, round(t, 3), round(t + length, 3), 1.0))
-            t += length
-        sentences.append(Sentence("s", syllables[0].start, syllables[-1].end, tuple(syllables)))
-        t += float(rng.uniform(0.4, 1.0))
-    return Alignment(tuple(sentences), duration, ())
-
-
 def main() -> None:
-    alignment = synthetic_alignment(DURATION)
+    alignment = synthetic_talk(DURATION)
     times: dict[str, list[float]] = {"schedule": [], "timeline": [], "frames": [], "total": []}
     for run in range(RUNS):
         t0 = time.perf_counter()

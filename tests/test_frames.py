@@ -14,27 +14,12 @@ from cartoonface.errors import InputError, OptionError
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.state import FaceState
 from cartoonface.speech.alignment import Alignment, Sentence, Syllable
-
-
-def _talk(duration: float = 30.0, seed: int = 2) -> Alignment:
-    """A synthetic talk: sentences of 4-12 syllables of 0.15-0.35 s with random shapes, 0.4-1 s pauses."""
-    rng = np.random.default_rng(seed)
-    sentences, t = [], 0.6
-    while t < duration - 5:
-        syllables = []
-        for _ in range(int(rng.integers(4, 13))):
-            length = float(rng.uniform(0.15, 0.35))
-            shapes = tuple(str(s) for s in rng.choice(MOUTH_SYMBOLS, size=int(rng.integers(1, 5))))
-            syllables.append(Syllable("x", "x1", shapes, round(t, 3), round(t + length, 3), 1.0))
-            t += length
-        sentences.append(Sentence("s", syllables[0].start, syllables[-1].end, tuple(syllables)))
-        t += float(rng.uniform(0.4, 1.0))
-    return Alignment(tuple(sentences), duration, ())
+from tests.synthetic import synthetic_talk
 
 
 @pytest.fixture(scope="module")
 def timeline():
-    alignment = _talk()
+    alignment = synthetic_talk(30.0, seed=2)
     return build_timeline(alignment, schedule(alignment.duration, speech_pauses(alignment), seed=5))
 
 
