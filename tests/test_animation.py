@@ -287,3 +287,31 @@ def test_smooth_joins_drop_the_mirrored_control_point():
         assert "s" in compact[d]
         given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))
         assert np.abs(np.array(absolute_points(compact[d])) - given).max() <= MIRROR
+
+
+def test_many_drawings_have_unique_ids_and_every_reference_resolves(face):
+    # enough distinct mouths, eyes and poses for ids of three base-36 digits
+    symbols = ("a", "o", "e", "i", "u", "m")
+    states = [FaceState(pose=Pose(tilt=(i % 7) - 3, turn=(i % 11) - 5, roll=(i % 5) - 2), blink=(i % 9) / 8,
+                        mouth=((symbols[i % 6], 0.3 + 0.7 * (i % 13) / 12), (symbols[(i + 1) % 6], 0.7 - 0.7 * (i % 13) / 12)))
+              for i in range(400)]
+    data = animation_svg(face, states, 30)
+    svg = etree.fromstring(data)
+    ids = [node.get("id") for node in svg.iter() if node.get("id")]
+    assert len(ids) > 1500
+    assert len(ids) == len(set(ids)), "ids are unique"
+    by_id = {node.get("id"): node for node in svg.iter() if node.get("id")}
+    for use in svg.iter(f"{S}use"):
+        target = by_id[use.get("href")[1:]]
+        assert target.tag in (f"{S}g", f"{S}path")
+        if target.tag == f"{S}path":  # a clip path's outline drawn again: it styles nothing itself
+            assert target.getparent().tag == f"{S}clipPath" and target.get("class") is None
+            assert use.get("class"), "the <use> carries the style"
+            frame = use
+            while frame.get("visibility") != "hidden" and frame.get("data-part") is None:
+                frame = frame.getparent()
+            assert target in frame.iter(), "the outline sits in the same frame as its use"
+    for node in svg.iter():
+        for value in node.attrib.values():
+            for target in re.findall(r"url\(#([^)]+)\)", value):
+                assert target in by_id, f"dangling reference #{target}"

@@ -68,7 +68,8 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "c
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
-HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
+HAIR_TRACKS = ("hair",)
+REUSE_TRACKS = ("face", "eyes")  # drawn in the hair layer, behind the clothes; every other track in the face layer
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_group) go with the part, renamed so each distinct part drawing has its own.
 DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
@@ -197,7 +198,18 @@ class _Writer:
                 number = tidy_ids[key] = len(tidy)
                 tidy.append(_own_ids(elements, short_id("k", number)))
             mapping.append(number)
+        self._short_classes(tidy)
         return mapping, tidy
+
+    def _short_classes(self, tidy: list[list[etree._Element]]) -> None:
+        """Rename the style classes of the `tidy` drawings (each written once in the document) by
+        how often they are used: the most used ones get one letter ("a".."z", "A".."Z")."""
+        nodes = [node for elements in tidy for top in elements for node in top.iter() if node.get("class")]
+        counts = Counter(node.get("class") for node in nodes)
+        names = {label: _letters(rank) for rank, (label, _) in enumerate(counts.most_common())}
+        for node in nodes:
+            node.set("class", names[node.get("class")])
+        self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
 
     def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> list[etree._Element]:
         """The part with compact paths, groups that only pass on style dissolved, style as
@@ -218,6 +230,8 @@ class _Writer:
         for top in elements:
             for node in top.iter():
                 self._tidy_node(node, renamed)
+        if part.track in REUSE_TRACKS:
+            _reuse_clip_outlines(definitions, elements)
         return [*definitions, *elements]
 
     def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
@@ -253,6 +267,36 @@ class _Writer:
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
 
 
+def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
+    """Draw a top-level path of `elements` whose outline is that of a clip path's only path in
+    `definitions` (the mouth's opening clipping the teeth, an eye's outline clipping the eyeball)
+    as a `<use>` of it: the clip path's path gets the id of its clip path plus "_". The `<use>`
+    carries the style (class) and the path none, so the shown copy inherits it."""
+    outlines = {}
+    for definition in definitions:
+        if definition.tag == f"{{{SVG}}}clipPath" and len(definition) == 1 and definition[0].get("d"):
+            outlines.setdefault(definition[0].get("d"), definition)
+    for index, node in enumerate(elements):
+        definition = outlines.get(node.get("d")) if node.tag == f"{{{SVG}}}path" else None
+        if definition is None or set(node.attrib) - {"d", "class"}:
+            continue
+        definition[0].set("id", definition.get("id") + "_")
+        use = etree.Element(f"{{{SVG}}}use", href=f"#{definition.get('id')}_")
+        if node.get("class"):
+            use.set("class", node.get("class"))
+        elements[index] = use
+
+
+def _letters(number: int) -> str:
+    """A CSS class name for `number` >= 0 made of letters only: 0 -> "a", 51 -> "Z", 52 -> "aa"."""
+    alphabet = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+    name = alphabet[number % 52]
+    while number >= 52:
+        number = number // 52 - 1
+        name = alphabet[number % 52] + name
+    return name
+
+
 def short_id(letter: str, number: int) -> str:
     """An id for drawing `number` (>= 0): `letter` and the number in base 36 ("k", 1295 -> "kzz")."""
     digits = ""
@@ -266,8 +310,9 @@ def short_id(letter: str, number: int) -> str:
 def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
     """`elements` with their local definition ids ("c0", "c1", ...) made unique: `prefix`,
     `prefix`-1, ..., and the references to them."""
-    def own(local: str) -> str:
-        return prefix if local == "c0" else f"{prefix}-{local[1:]}"
+    def own(local: str) -> str:  # "c0" -> prefix, "c0_" -> prefix + "_", "c1" -> prefix + "-1"
+        number, rest = re.fullmatch(r"c(\d+)(\D*)", local).groups()
+        return prefix + ("" if number == "0" else f"-{number}") + rest
 
     for top in elements:
         for node in top.iter():
@@ -276,6 +321,8 @@ def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element
                     node.set(name, own(value))
                 elif value.startswith("url(#c"):
                     node.set(name, f"url(#{own(value[5:-1])})")
+                elif name == "href" and value.startswith("#c"):
+                    node.set(name, f"#{own(value[1:])}")
     return elements
 
 
@@ -319,22 +366,26 @@ def _tracks(frames: Sequence[tuple[FaceState, tuple[int, ...]]], raw_tracks: Seq
 
 
 def _dissolve(element: etree._Element) -> list[etree._Element]:
-    """Replace every `<g>` in `element` whose attributes are all INHERITED style by its children,
-    each child taking the style it does not set itself; returns `element`, or its children if
-    `element` itself dissolved. Fewer elements for the browser, fewer bytes per frame."""
-    groups = [node for node in element.iter(f"{{{SVG}}}g")
-              if all(name in INHERITED or name == "class" for name in node.attrib)]
-    for group in reversed(groups):  # innermost first
-        style = {name: value for name, value in group.attrib.items() if name != "class"}
+    """Hand the INHERITED style of every `<g>` in `element` down to its children (each child
+    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children;
+    returns `element`, or its children if `element` itself dissolved. Fewer elements and
+    classes for the browser, fewer bytes per frame (a clipped group keeps only its clip)."""
+    groups = list(element.iter(f"{{{SVG}}}g"))
+    for group in groups:  # outermost first, so handed-down style goes on down
+        style = {name: value for name, value in group.attrib.items() if name in INHERITED}
         for child in group:
             for name, value in style.items():
                 if name not in child.attrib:
                     child.set(name, value)
+        for name in style:
+            del group.attrib[name]
+    empty = [group for group in groups if all(name == "class" for name in group.attrib)]
+    for group in reversed(empty):  # innermost first
         parent = group.getparent()
         if parent is not None:
             index = parent.index(group)
             parent[index : index + 1] = list(group)
-    if groups and groups[0] is element:
+    if empty and empty[0] is element:
         return list(element)
     return [element]
 
