@@ -17,19 +17,22 @@ We keep that form and make it small:
   repeat the eyes, and a still head does not repeat the hair;
 - a part drawing that looks the same in consecutive frames is one longer
   `<set>`; a drawing that comes back later (the rest mouth, open eyes) is
-  written once with one `<set>` per time it is shown;
+  written once, its earlier runs in one `<set>` with a begin list (and one
+  `dur`, or an end list), its last run in a `<set>` of its own;
 - a track whose drawing never changes is written once, outside any frame;
+- every frame's state is drawn (no pose held over frames); the head's roll is
+  not drawn into the parts but is a rotation of the hair and face layers (one
+  discrete `<animateTransform>` each), so a sideways lean redraws nothing;
 - coordinates are whole pixels in relative path commands (render/pathdata.py);
 - a part shown in several drawings of its track (the face outline under
-  different mouths) is defined once and drawn with `<use>`. (Outlines drawn
-  twice inside one part, such as the eye's white, outline and clip, stay
-  copies: `<use>` saved 6 % of the bytes but each one is a shadow tree the
-  browser builds, and the page took 25 % longer to be ready.)
-- repeated presentation attributes become a handful of CSS classes;
-- the head pose is held for two frames at 30 fps (POSE_RATE).
+  different mouths) is defined once and drawn with `<use>`; a path with the
+  outline of its part's clip path (the mouth's opening, an eye's white and
+  outline) is a `<use>` of the clip path's outline;
+- repeated presentation attributes become CSS classes, the most used ones
+  named by one letter; ids are short (base 36).
 
 Frame i shows time i / fps. Times are written in whole milliseconds, each
-`begin`/`dur` derived from the frame boundaries round(i * 1000 / fps), so the
+`begin`/`dur`/`end` derived from the frame boundaries round(i * 1000 / fps), so the
 `<set>`s of one track tile the timeline with no gap and no overlap. The last
 drawing of each track is frozen (`fill="freeze"`) so the face stays after the
 end. SMIL starts at 0 when the document loads: animation.svg opened on its
@@ -68,8 +71,7 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "c
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
-HAIR_TRACKS = ("hair",)
-REUSE_TRACKS = ("face", "eyes")  # drawn in the hair layer, behind the clothes; every other track in the face layer
+HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_group) go with the part, renamed so each distinct part drawing has its own.
 DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
@@ -230,8 +232,7 @@ class _Writer:
         for top in elements:
             for node in top.iter():
                 self._tidy_node(node, renamed)
-        if part.track in REUSE_TRACKS:
-            _reuse_clip_outlines(definitions, elements)
+        _reuse_clip_outlines(definitions, elements)
         return [*definitions, *elements]
 
     def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
@@ -404,7 +405,8 @@ def _show(frame: etree._Element, spans: Sequence[tuple[int, int]]) -> etree._Ele
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
                  keys: Sequence[int], fps: int, shapes: Sequence[str]) -> None:
     """Write one track into `parent`: its drawing as is if it never changes, else one
-    `<g visibility="hidden">` per distinct drawing with a `<set>` per run of frames showing it."""
+    `<g visibility="hidden">` per distinct drawing, shown by `<set>`s (_show) over the runs of
+    frames showing it."""
     holder = _el(parent, "g", data_part=track)
     if len(drawings) == 1:
         holder.extend(drawings[0])
