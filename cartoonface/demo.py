@@ -10,7 +10,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from cartoonface.cli.generate import ProgressBar, summary
+from cartoonface.cli.generate import summary
+from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import InputError
 from cartoonface.pipeline import Options, generate
 

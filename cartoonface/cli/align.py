@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import OptionError, TranscriptError
 from cartoonface.files import read_user_text, write_text_atomic
 from cartoonface.speech.alignment import LOW_CONFIDENCE, Alignment, alignment_to_dict, analyse
@@ -56,23 +57,6 @@ def check_output(path: Path, option: str) -> None:
         raise OptionError(f"{option} {path}: is a folder; expected a file name")
 
 
-class Progress:
-    """A progress(stage, fraction) callback showing the stage and its share done on one stderr line."""
-
-    def __init__(self) -> None:
-        self.open = False  # a progress line is shown and not yet ended
-
-    def __call__(self, stage: str, fraction: float) -> None:
-        print(f"\r{stage:<8} {fraction:4.0%}", end="", file=sys.stderr, flush=True)
-        self.open = True
-
-    def close(self) -> None:
-        """End the progress line (before notes, an error message or the summary)."""
-        if self.open:
-            print(file=sys.stderr, flush=True)
-            self.open = False
-
-
 def summary(alignment: Alignment, output: Path, seconds: float) -> str:
     """The one-line report of a finished alignment."""
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
@@ -97,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json is not None:
         check_output(args.json, "--json")
     text = read_user_text(args.transcript, TranscriptError, "transcript file")
-    shown = Progress()
+    shown = ProgressBar(sys.stderr)
     try:
         shown("decode", 0.0)
         audio = load_audio(args.audio)

@@ -9,14 +9,13 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TextIO
 
+from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import OptionError
 from cartoonface.pipeline import Options, Result, generate
 from cartoonface.render.pages import PAGES
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 
-BAR_WIDTH = 24  # characters
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -70,28 +69,6 @@ def parse_link(text: str) -> tuple[str, str]:
     if not sep:
         raise OptionError(f"--link {text!r}: expected LABEL=URL")
     return label, url
-
-
-class ProgressBar:
-    """A progress(stage, fraction) callback drawing one self-overwriting line on `stream`."""
-
-    def __init__(self, stream: TextIO) -> None:
-        self.stream = stream
-        self.open = False  # a bar line is drawn and not yet ended
-
-    def __call__(self, stage: str, fraction: float) -> None:
-        filled = round(fraction * BAR_WIDTH)
-        self.stream.write(f"\r[{'#' * filled}{'.' * (BAR_WIDTH - filled)}] {fraction:4.0%} {stage:<8}")
-        self.open = True
-        if fraction >= 1:
-            self.close()
-        self.stream.flush()
-
-    def close(self) -> None:
-        """End the bar's line (before an error message or the summary)."""
-        if self.open:
-            self.stream.write("\n")
-            self.open = False
 
 
 def summary(result: Result) -> str:
