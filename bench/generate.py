@@ -9,7 +9,8 @@ Figures (issue 4, "Done means"):
 - wall time of `pipeline.generate` (median of RUNS, in-process; target < 6 s, >= 30x real time)
   and the share of each stage;
 - peak memory (max RSS of a child process doing one run);
-- SVG bytes per minute of audio, raw and gzipped (targets < 1.5 MB and < 200 KB at 30 fps);
+- SVG bytes per minute of audio, raw and gzipped (targets < 1.5 MB and < 200 KB at 30 fps),
+  and how they split between the shared definitions and the part tracks;
 - page-ready time in headless Chromium (navigation start to the load event of index.html
   from file://, median of RUNS; target < 2 s), and the SVG-vs-audio gap after 2 s of play.
 """
@@ -108,6 +109,24 @@ def page_ready(index: Path) -> tuple[list[float], float]:
     return loads, gap
 
 
+def bytes_by_track(svg: bytes, minutes: float) -> str:
+    """Raw / gzipped KB per minute of the document's <defs> and of each part track
+    (`<g data-part>`), with the track's number of frames, as one line."""
+    from lxml import etree
+
+    root = etree.fromstring(svg)
+    ns = "{http://www.w3.org/2000/svg}"
+    pieces = [("defs", root.find(f"{ns}defs"))] + [(g.get("data-part"), g) for g in root.iter(f"{ns}g")
+                                                   if g.get("data-part")]
+    texts = []
+    for name, element in pieces:
+        data = etree.tostring(element)
+        frames = len(element.findall(f"{ns}g[@visibility='hidden']"))
+        texts.append(f"{name} {len(data) / minutes / 1e3:.0f}/{len(gzip.compress(data, 6)) / minutes / 1e3:.0f}"
+                     + (f" ({frames} frames)" if frames else ""))
+    return "KB per minute raw/gzipped: " + ", ".join(texts)
+
+
 def main() -> None:
     """Build the input, run generate RUNS times, print the figures."""
     face = sorted(FACES.glob("*.json"))[0]
@@ -133,6 +152,7 @@ def main() -> None:
         raw, packed = len(svg) / minutes, len(gzip.compress(svg, 6)) / minutes
         print(f"SVG per minute: {raw / 1e6:.2f} MB raw, {packed / 1e3:.0f} KB gzipped "
               f"(targets < 1.5 MB, < 200 KB); whole folder {result.size / 1e6:.1f} MB")
+        print(bytes_by_track(svg, minutes))
         loads, gap = page_ready(result.out_dir / "index.html")
         print(f"page ready in headless Chromium: median {statistics.median(loads):.2f} s of {RUNS} "
               f"({', '.join(f'{x:.2f}' for x in loads)}); SVG-audio gap after 2 s of play {gap * 1000:.0f} ms")
