@@ -8,14 +8,12 @@ import subprocess
 import numpy as np
 import pytest
 
-pytest.importorskip("cartoonface.speech.transcript", reason="speech/transcript.py (issue 3, transcript) not landed yet")
-
-from cartoonface.errors import TranscriptError  # noqa: E402
-from cartoonface.speech.alignment import MAX_PIECE, sentence_pieces, analyse, reconcile  # noqa: E402
-from cartoonface.speech.audio import Audio, load_audio  # noqa: E402
-from cartoonface.speech.sentences import find_speech_parts  # noqa: E402
-from cartoonface.speech.transcript import parse_transcript  # noqa: E402
-from tests.test_sentences import noisy, recording  # noqa: E402
+from cartoonface.errors import TranscriptError
+from cartoonface.speech.alignment import FAST_RATE, MAX_PIECE, MAX_RATE, analyse, reconcile, sentence_pieces
+from cartoonface.speech.audio import Audio, load_audio
+from cartoonface.speech.sentences import find_speech_parts
+from cartoonface.speech.transcript import parse_transcript
+from tests.test_sentences import noisy, recording
 
 
 def test_one_part_per_sentence_is_kept():
@@ -99,6 +97,17 @@ def test_transcript_far_longer_than_the_speech_is_refused():
     text = "今天天气很好我们一起去公园散步吧。" * 3
     with pytest.raises(TranscriptError, match="story.txt: .* syllables to fit in .* is this the transcript"):
         analyse(noisy(samples), text, source="story.txt")
+
+
+def test_transcript_too_long_for_a_natural_rate_is_aligned_but_flagged():
+    audio = noisy(recording([8], [])[0])
+    speech = sum(part.end - part.start for part in find_speech_parts(audio))
+    syllables = round(speech * (FAST_RATE + MAX_RATE) / 2)  # between the usual and the refused rate
+    text = "天" * syllables + "。"
+    alignment = analyse(audio, text, source="story.txt")
+    assert sum(len(s.syllables) for s in alignment.sentences) == syllables
+    assert any("fast for Mandarin" in note for note in alignment.notes)
+    assert not any("fast for Mandarin" in note for note in analyse(audio, "天" * 8 + "。").notes)
 
 
 def test_transcript_in_another_language_is_refused():

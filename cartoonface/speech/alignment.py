@@ -44,8 +44,10 @@ FORCED_COST = 8.0  # cutting at an evenly spaced point with no dip (only when no
 DIPS_PER_SECOND = 1.0  # longest dips kept per second of a part (at least MIN_DIPS)
 MIN_DIPS = 3
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
-# is far longer than the recording (an error); fewer than MIN_RATE is aligned but flagged.
+# is far longer than the recording (an error); more than FAST_RATE or fewer than MIN_RATE is aligned
+# but flagged.
 MAX_RATE = 12.0
+FAST_RATE = 8.0
 MIN_RATE = 1.0
 LOW_CONFIDENCE = 0.5
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
@@ -208,6 +210,11 @@ def _check_rate(syllables: int, speech: float, source: str, notes: list[str]) ->
         raise TranscriptError(
             f"{source}: {syllables} syllables to fit in {speech:.1f} s of speech ({rate:.0f} per second; "
             f"Mandarin is read at 3-7, at most {MAX_RATE:g} accepted): is this the transcript of this recording?"
+        )
+    if rate > FAST_RATE:
+        notes.append(
+            f"{rate:.1f} syllables per second of speech ({syllables} in {speech:.1f} s) is fast for Mandarin "
+            "(3-7 is usual): the transcript may hold more than the recording says; timing is a best effort"
         )
     if rate < MIN_RATE:
         notes.append(
