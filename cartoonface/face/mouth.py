@@ -68,6 +68,13 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "n": MouthShape(up=(-0.3, "mns0"), dn=(0.4, "mns0"), corner_dy=(-1 / 3, "upper_lip_h")),
 }
 
+# Our addition to 5.2.2 (the thesis moves only the chin 2.1 with 8.2): a real
+# jaw opens by rotating about the ear, so the jaw corners 2.13 / 2.14, about
+# half as far from the hinge as the chin, drop by this share of the chin's
+# drop. Without it an open mouth pulls the chin (depth 1.33 d, Table 2.1) down
+# alone and, with the head tilted down, the chin turns into a point.
+JAW_CORNER_SHARE = 0.5
+
 # Outer mouth contour in drawing order (Alg. 2.2 step 13) and the inner lips.
 OUTER_LIP = ("8.4", "8.9", "8.1", "8.10", "8.3", "8.2")
 INNER_LIP = ("8.4", "2.2", "8.3", "2.3")
@@ -86,7 +93,7 @@ def shape_displacements(face: FaceModel) -> np.ndarray:
     inner upper lip 2.2 rise with 8.9; the peaks 8.9 / 8.10 also move inwards
     with the corners in proportion to their distance from the mouth centre
     (so a narrowing shape never carries a corner past a peak); 8.10 mirrors
-    8.9; the chin 2.1 follows 8.2; the inner lower lip 2.3 follows 8.2 but
+    8.9; the chin 2.1 follows 8.2, the jaw corners by JAW_CORNER_SHARE of it; the inner lower lip 2.3 follows 8.2 but
     never rises above 2.2 (in f the lower lip tucks under the upper one).
     """
     i = POINT_INDEX
@@ -113,6 +120,8 @@ def shape_displacements(face: FaceModel) -> np.ndarray:
         d[i["2.2"], 1] = up
         d[i["8.2"], 1] = dn
         d[i["2.1"], 1] = dn
+        d[i["2.13"], 1] = JAW_CORNER_SHARE * dn
+        d[i["2.14"], 1] = JAW_CORNER_SHARE * dn
         lower = max(p[i["2.3"], 1] + dn, p[i["2.2"], 1] + up)
         d[i["2.3"], 1] = lower - p[i["2.3"], 1]
     return out

@@ -43,8 +43,24 @@ SWAP_START = 8.0
 SWAP_END = 12.0
 SWAP_POSITIVE = (("11.3", "Q"), ("10.9", "M"), ("2.13", "K"))
 SWAP_NEGATIVE = (("11.2", "N"), ("10.10", "L"), ("2.14", "J"))
+# Our addition, in the spirit of Alg. 2.3 steps 5-6: Table 2.1 puts the jaw
+# corners 2.13 / 2.14 (0.36 d) far behind the chin (1.33 d), so a head tilted
+# down drops the chin about 0.25 d below them and the chin turns into a point.
+# Seen from above, the jaw's silhouette is its forward part: for tilt > 0 the
+# jaw corners blend towards K / J (1.18 d, Alg. 2.1) in proportion to the tilt,
+# all the way at +15 degrees.
+TILT_JAW = (("2.13", "K"), ("2.14", "J"))
+
 # Eyes in PosedFace.pupils order: image-left eye (3.6, radius r1), image-right (3.5, r2).
 EYEBALLS = ("3.6", "3.5")
+# Upper and lower lid of each eye, same order.
+EYE_LIDS = (("3.2", "3.4"), ("3.1", "3.3"))
+# Our addition to 2.4.3.2: the thesis's gaze keeps the eyes on the viewer, so at
+# tilt +15 an iris slides up under its lid. After the gaze, each iris centre is
+# kept at least IRIS_KEEP x its radius inside the lids, measured along the line
+# from the upper to the lower lid point (never past the middle of the opening):
+# then at least about half of an open eye's iris shows at every pose.
+IRIS_KEEP = 0.35
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,7 +128,9 @@ class Rig:
     iris_r: np.ndarray  # (2,)
     lids: tuple[np.ndarray, np.ndarray]  # flat indices of upper / lower lid y
     pupil_rows: np.ndarray  # rows of 3.6, 3.5 in xy
+    lid_rows: tuple[np.ndarray, np.ndarray]  # rows of the upper / lower lid of each eye in xy
     swap: tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]  # (replaced, by) rows
+    tilt_jaw: tuple[np.ndarray, np.ndarray]  # (replaced, by) rows for tilt > 0
 
 
 def _rows(names: tuple[str, ...]) -> np.ndarray:
@@ -168,11 +186,24 @@ def rig(lifted: LiftedFace) -> Rig:
         iris_r=iris_r,
         lids=(upper, lower),
         pupil_rows=eyes,
+        lid_rows=(_rows(tuple(u for u, _ in EYE_LIDS)), _rows(tuple(lo for _, lo in EYE_LIDS))),
         swap=(
             (_rows(tuple(a for a, _ in SWAP_POSITIVE)), _rows(tuple(b for _, b in SWAP_POSITIVE))),
             (_rows(tuple(a for a, _ in SWAP_NEGATIVE)), _rows(tuple(b for _, b in SWAP_NEGATIVE))),
         ),
+        tilt_jaw=(_rows(tuple(a for a, _ in TILT_JAW)), _rows(tuple(b for _, b in TILT_JAW))),
     )
+
+
+def _keep_in_lids(pupils: np.ndarray, upper: np.ndarray, lower: np.ndarray, iris_r: np.ndarray) -> np.ndarray:
+    """(2, 2) iris centres moved along the upper-to-lower lid line (all (2, 2) image
+    pixels) so that each lies at least IRIS_KEEP x its radius (iris_r (2,)) inside
+    the lids, or in the middle of an opening narrower than that."""
+    axis = lower - upper
+    length2 = np.maximum((axis * axis).sum(axis=1), 1e-12)
+    t = ((pupils - upper) * axis).sum(axis=1) / length2
+    margin = np.minimum(0.5, IRIS_KEEP * iris_r / np.sqrt(length2))
+    return pupils + (np.clip(t, margin, 1.0 - margin) - t)[:, None] * axis
 
 
 _N_MOUTH = len(MOUTH_SYMBOLS)
@@ -216,8 +247,12 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     pupils = centres[:, :2] + (r.radius / np.sqrt((toward * toward).sum(axis=1)))[:, None] * toward[:, :2]
     pupils += r.origin
     xy = out[:n]
+    pupils = _keep_in_lids(pupils, xy[r.lid_rows[0]], xy[r.lid_rows[1]], r.iris_r)
     xy[r.pupil_rows] = pupils
 
+    if pose.tilt > 0:
+        replaced, by = r.tilt_jaw
+        xy[replaced] += (pose.tilt / MAX_ANGLE) * (xy[by] - xy[replaced])
     weight = (abs(turn) - SWAP_START) / (SWAP_END - SWAP_START)
     if weight > 0:
         replaced, by = r.swap[0] if turn > 0 else r.swap[1]
