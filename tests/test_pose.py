@@ -237,3 +237,35 @@ def test_numpy_numbers_are_accepted_as_plain_floats():
     assert type(pose.turn) is float
     state = FaceState(pose=pose, blink=np.float32(0.5), mouth=(("a", np.float64(1.0)),))
     assert type(state.blink) is float and state.blink == 0.5
+
+
+@pytest.mark.parametrize("angles", list(itertools.product((-15, 0, 15), repeat=3)))
+def test_iris_centre_stays_inside_the_lids(face, angles):
+    """The gaze may roll an eye up, but each iris centre stays a share of its radius
+    below the upper lid and above the lower lid (pose.IRIS_KEEP), so the iris never
+    vanishes under a lid of an open eye."""
+    posed = pose_face(lift(face), FaceState(pose=Pose(*angles)))
+    for pupil, radius, (upper, lower) in zip(posed.pupils, posed.iris_r, (("3.2", "3.4"), ("3.1", "3.3"))):
+        u, lo = posed.p(upper), posed.p(lower)
+        axis = lo - u
+        t = (pupil - u) @ axis / (axis @ axis)
+        margin = 0.3 * radius / np.linalg.norm(axis)
+        assert margin <= t <= 1 - margin
+
+
+def _turn_angle(a, b, c):
+    """Degrees the path a -> b -> c turns at b (0 = straight on)."""
+    u, v = b - a, c - b
+    return float(np.degrees(np.arccos(np.clip(u @ v / np.linalg.norm(u) / np.linalg.norm(v), -1, 1))))
+
+
+@pytest.mark.parametrize("mouth", ("m", "a", "o"))
+@pytest.mark.parametrize("angles", list(itertools.product((-15, 0, 15), repeat=3)))
+def test_chin_stays_below_the_mouth_and_round(face, angles, mouth):
+    """At every pose the chin 2.1 is below the lower lip 8.2 (along the face's own
+    vertical) and the jaw polyline 2.14 -> 2.1 -> 2.13 turns by less than 100 degrees
+    at the chin (no spike)."""
+    posed = pose_face(lift(face), FaceState(pose=Pose(*angles)).with_mouth(mouth))
+    down = posed.p("2.1") - (posed.p("3.5") + posed.p("3.6")) / 2
+    assert (posed.p("2.1") - posed.p("8.2")) @ down > 0
+    assert _turn_angle(posed.p("2.14"), posed.p("2.1"), posed.p("2.13")) < 100
