@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import os
+import socket
 import subprocess
 import sys
+import time
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -49,3 +53,36 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subpro
         cwd=cwd or ROOT,
         timeout=timeout,
     )
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listens on now."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory):
+    """A real `cartoonface serve` (one worker) in a subprocess on a free loopback port; yields its base URL."""
+    instance = tmp_path_factory.mktemp("served")
+    port = free_port()
+    with open(instance / "server.log", "wb") as log:
+        process = subprocess.Popen(
+            [sys.executable, "-m", "cartoonface", "serve", "--port", str(port), "--instance", str(instance)],
+            stdout=log, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, "CARTOONFACE_WORKERS": "1"})
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            with urllib.request.urlopen(base + "/", timeout=2) as answer:
+                if answer.status == 200:
+                    break
+        except OSError:
+            if process.poll() is not None or time.monotonic() > deadline:
+                process.kill()
+                raise AssertionError((instance / "server.log").read_text()) from None
+            time.sleep(0.2)
+    yield base
+    process.terminate()
+    process.wait(timeout=30)

@@ -3,12 +3,7 @@
 from __future__ import annotations
 
 import http.client
-import os
-import socket
 import subprocess
-import sys
-import time
-import urllib.request
 import zipfile
 from pathlib import Path
 
@@ -21,40 +16,6 @@ pytestmark = pytest.mark.browser
 SPOKEN = "ni3 hao3, shi4 jie4. jin1 tian1 tian1 qi4 hen3 hao3."
 TRANSCRIPT = "你好，世界。今天天气很好。"
 TITLE = "<script>window.pwned=1</script>早安"
-
-
-def free_port() -> int:
-    """A TCP port on 127.0.0.1 that nothing listens on now."""
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory):
-    """`cartoonface serve` in a subprocess; yields its base URL."""
-    instance = tmp_path_factory.mktemp("instance")
-    port = free_port()
-    log = open(instance / "server.log", "wb")
-    process = subprocess.Popen(
-        [sys.executable, "-m", "cartoonface", "serve", "--port", str(port), "--instance", str(instance)],
-        stdout=log, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, "CARTOONFACE_WORKERS": "1"})
-    base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 60
-    while True:
-        try:
-            with urllib.request.urlopen(base + "/", timeout=2) as answer:
-                if answer.status == 200:
-                    break
-        except OSError:
-            if process.poll() is not None or time.monotonic() > deadline:
-                log.close()
-                raise AssertionError((instance / "server.log").read_text()) from None
-            time.sleep(0.2)
-    yield base
-    process.terminate()
-    process.wait(timeout=30)
-    log.close()
 
 
 @pytest.fixture(scope="module")

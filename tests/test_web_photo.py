@@ -8,9 +8,7 @@ import json
 import os
 import re
 import subprocess
-import sys
 import time
-import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +23,7 @@ from cartoonface.web.drafts import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts
                                     sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
-from tests.conftest import ROOT
 from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, make_app, png_bytes, post
-from tests.test_web_e2e import free_port
 
 pytest.importorskip("mediapipe", reason="needs the photo extra (scripts/setup.sh)")
 
@@ -321,32 +317,6 @@ def test_linear_map_recovers_an_affine_map():
 
 
 # --- in a real browser -------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory):
-    """`cartoonface serve` (one worker) in a subprocess on a free loopback port; yields its base URL."""
-    instance = tmp_path_factory.mktemp("served")
-    port = free_port()
-    with open(instance / "server.log", "wb") as log:
-        process = subprocess.Popen(
-            [sys.executable, "-m", "cartoonface", "serve", "--port", str(port), "--instance", str(instance)],
-            stdout=log, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, "CARTOONFACE_WORKERS": "1"})
-    base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 60
-    while True:
-        try:
-            with urllib.request.urlopen(base + "/", timeout=2) as answer:
-                if answer.status == 200:
-                    break
-        except OSError:
-            if process.poll() is not None or time.monotonic() > deadline:
-                process.kill()
-                raise AssertionError((instance / "server.log").read_text()) from None
-            time.sleep(0.2)
-    yield base
-    process.terminate()
-    process.wait(timeout=30)
 
 
 @pytest.mark.browser
