@@ -136,3 +136,18 @@ def test_with_mouth_refuses_unknown_symbol():
 
 def test_inner_lip_names_are_model_points():
     assert all(n in POINT_INDEX for n in INNER_LIP + OUTER_LIP)
+
+
+@pytest.mark.parametrize("symbol", MOUTH_SYMBOLS)
+def test_jaw_corners_follow_the_opening_less_than_the_chin(face, symbol):
+    """The jaw hinges at the ear: when a shape drops the chin 2.1, the jaw corners
+    2.13 / 2.14 drop too, by less than the chin, and the face stays symmetric."""
+    moved = mouth_points(face, ((symbol, 1.0),)) - face.points
+    chin = moved[POINT_INDEX["2.1"], 1]
+    for corner in ("2.13", "2.14"):
+        dy = moved[POINT_INDEX[corner], 1]
+        if chin > 0:
+            assert 0 < dy < chin
+        else:
+            assert chin <= dy <= 0
+    assert moved[POINT_INDEX["2.13"], 1] == pytest.approx(moved[POINT_INDEX["2.14"], 1])
