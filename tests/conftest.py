@@ -44,6 +44,16 @@ def browser():
         launched.close()
 
 
+def speak(text: str, path: Path, speed: int | None = None) -> Path:
+    """Synthesise Mandarin `text` (Hanzi or tone-numbered pinyin) with espeak-ng into WAV `path`.
+
+    `speed` is espeak-ng's words per minute (its default when None). Returns `path`.
+    """
+    rate = [] if speed is None else ["-s", str(speed)]
+    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", *rate, "-w", str(path), text], check=True)
+    return path
+
+
 def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subprocess.CompletedProcess[str]:
     """Run `python -m cartoonface ARGS` as a user would; return the finished process."""
     return subprocess.run(

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -14,6 +13,7 @@ from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import find_speech_parts
 from cartoonface.speech.transcript import parse_transcript
 from tests.test_sentences import noisy, recording
+from tests.conftest import speak
 
 
 def test_one_part_per_sentence_is_kept():
@@ -127,7 +127,7 @@ def espeak_audio(folder, texts: list[str], pauses: list[float]) -> tuple[Audio, 
     pieces, starts, position = [], [], 0.0
     for index, text in enumerate(texts):
         path = folder / f"{index}.wav"
-        subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), text], check=True)
+        speak(text, path)
         audio = load_audio(path)
         loud = np.flatnonzero(np.abs(audio.samples) > 0.01)
         speech = audio.samples[loud[0] : loud[-1] + 1]
@@ -156,7 +156,7 @@ def test_analyse_espeak_speech(tmp_path):
     pieces = []
     for index, text in enumerate(texts):
         path = tmp_path / f"{index}.wav"
-        subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), text], check=True)
+        speak(text, path)
         audio = load_audio(path)
         pieces += [audio.samples, np.zeros(int(0.8 * audio.rate), np.float32)]
     audio = Audio(np.concatenate(pieces), audio.rate, "espeak")

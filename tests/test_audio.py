@@ -12,6 +12,7 @@ import soundfile
 
 from cartoonface.errors import AudioError
 from cartoonface.speech.audio import MAX_SECONDS, browser_copy, ffmpeg_exe, load_audio
+from tests.conftest import speak
 
 needs_espeak = pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency")
 
@@ -27,7 +28,7 @@ def speech(tmp_path_factory) -> Path:
     if shutil.which("espeak-ng") is None:
         pytest.skip("espeak-ng is a Debian dependency (scripts/setup.sh)")
     path = tmp_path_factory.mktemp("speech") / "speech.wav"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), "ni3 hao3 shi4 jie4"], check=True)
+    speak("ni3 hao3 shi4 jie4", path)
     return path
 
 

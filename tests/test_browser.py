@@ -8,7 +8,6 @@ from __future__ import annotations
 import math
 import re
 import shutil
-import subprocess
 from io import BytesIO
 from pathlib import Path
 
@@ -16,6 +15,7 @@ import pytest
 from PIL import Image
 
 from cartoonface.pipeline import Options, generate
+from tests.conftest import speak
 
 pytestmark = [
     pytest.mark.browser,
@@ -43,7 +43,7 @@ def site(tmp_path_factory) -> Path:
     """A generated audio-book folder for ~5 s of espeak-ng Mandarin."""
     folder = tmp_path_factory.mktemp("browser")
     speech = folder / "speech.wav"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-s", "150", "-w", str(speech), TEXT], check=True)
+    speak(TEXT, speech, speed=150)
     generate(ROOT / "samples" / "faces" / "female.json", speech, TEXT, folder / "site",
              Options(title="小猫 <test>", fps=FPS, seed=3))
     return folder / "site"

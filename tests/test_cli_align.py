@@ -4,20 +4,17 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 import soundfile
 
-pytest.importorskip("cartoonface.speech.transcript", reason="speech/transcript.py (issue 3, transcript) not landed yet")
-
-from cartoonface.cli import main  # noqa: E402
-from cartoonface.speech.audio import load_audio  # noqa: E402
-from cartoonface.speech.sentences import find_speech_parts  # noqa: E402
-from cartoonface.speech.textgrid import read_textgrid  # noqa: E402
-from tests.conftest import run_cli  # noqa: E402
+from cartoonface.cli import main
+from cartoonface.speech.audio import load_audio
+from cartoonface.speech.sentences import find_speech_parts
+from cartoonface.speech.textgrid import read_textgrid
+from tests.conftest import run_cli, speak
 
 pytestmark = pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency")
 
@@ -31,7 +28,7 @@ def speech(tmp_path_factory) -> tuple[Path, Path]:
     pieces = []
     for index, text in enumerate(TEXTS):
         path = folder / f"{index}.wav"
-        subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), text], check=True)
+        speak(text, path)
         samples, rate = soundfile.read(path, dtype="float32")
         pieces += [samples, np.zeros(int(0.8 * rate), np.float32)]
     recording = folder / "recording.wav"

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import run_cli
+from tests.conftest import run_cli, speak
 
 pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
 
@@ -23,7 +22,7 @@ def inputs(tmp_path_factory) -> tuple[Path, Path]:
     """A short espeak-ng recording and its transcript file."""
     folder = tmp_path_factory.mktemp("cli")
     speech, transcript = folder / "speech.wav", folder / "text.txt"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-s", "150", "-w", str(speech), TEXT], check=True)
+    speak(TEXT, speech, speed=150)
     transcript.write_text(TEXT, encoding="utf-8")
     return speech, transcript
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -14,6 +13,7 @@ from lxml import etree, html
 from cartoonface.errors import ActionsError, AudioError, FaceModelError, InputError, OptionError, TranscriptError
 from cartoonface.pipeline import STAGES, Options, generate
 from cartoonface.speech.textgrid import read_textgrid
+from tests.conftest import speak
 
 pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
 
@@ -27,7 +27,7 @@ def inputs(tmp_path_factory) -> tuple[Path, Path]:
     """A short espeak-ng Mandarin recording and its transcript file."""
     folder = tmp_path_factory.mktemp("inputs")
     speech, transcript = folder / "speech.wav", folder / "text.txt"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-s", "160", "-w", str(speech), TEXT], check=True)
+    speak(TEXT, speech, speed=160)
     transcript.write_text(TEXT + "\n", encoding="utf-8")
     return speech, transcript
 

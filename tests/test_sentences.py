@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +11,7 @@ import pytest
 from cartoonface.errors import OptionError
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import Span, dips, find_speech_parts, learn_pause
+from tests.conftest import speak
 
 RATE = 16000
 
@@ -179,7 +179,7 @@ def test_dips_prefer_a_real_pause():
 
 def espeak(text: str, path: Path) -> Path:
     """Synthesise pinyin `text` with espeak-ng's Mandarin voice into WAV `path`."""
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), text], check=True)
+    speak(text, path)
     return path
 
 

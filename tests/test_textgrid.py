@@ -6,12 +6,10 @@ import re
 
 import pytest
 
-pytest.importorskip("cartoonface.speech.transcript", reason="speech/transcript.py (issue 3, transcript) not landed yet")
-
-from cartoonface.errors import AlignmentError  # noqa: E402
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable  # noqa: E402
-from cartoonface.speech.mouth_shapes import shape_onsets, shapes_for  # noqa: E402
-from cartoonface.speech.textgrid import TIERS, load_textgrid, read_textgrid, write_textgrid  # noqa: E402
+from cartoonface.errors import AlignmentError
+from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.mouth_shapes import shape_onsets, shapes_for
+from cartoonface.speech.textgrid import TIERS, load_textgrid, read_textgrid, write_textgrid
 
 
 def syllable(text: str, pinyin: str, start: float, end: float) -> Syllable:

@@ -29,7 +29,7 @@ from cartoonface.web.runner import STOPPED, Runner
 from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, valid_id, write_status)
-from tests.conftest import ROOT, run_cli
+from tests.conftest import ROOT, run_cli, speak
 
 SAMPLES = ROOT / "samples" / "faces"
 TRANSCRIPT = "你好，世界。"
@@ -52,7 +52,7 @@ def wav_bytes(samples: np.ndarray, rate: int) -> bytes:
 def speech(tmp_path_factory: pytest.TempPathFactory) -> bytes:
     """A short Mandarin recording made with espeak-ng (WAV bytes)."""
     path = tmp_path_factory.mktemp("speech") / "speech.wav"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), SPOKEN], check=True)
+    speak(SPOKEN, path)
     return path.read_bytes()
 
 

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import http.client
-import subprocess
 import zipfile
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import ROOT
+from tests.conftest import ROOT, speak
 
 pytestmark = pytest.mark.browser
 
@@ -23,7 +22,7 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A face model JSON, a short espeak-ng recording, a corrupt WAV and the transcript file."""
     folder = tmp_path_factory.mktemp("inputs")
     wav = folder / "speech.wav"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(wav), SPOKEN], check=True)
+    speak(SPOKEN, wav)
     corrupt = folder / "corrupt.wav"
     corrupt.write_bytes(wav.read_bytes()[:44] + b"\x07garbage" * 3)
     transcript = folder / "transcript.txt"

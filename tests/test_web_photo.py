@@ -7,7 +7,6 @@ import io
 import json
 import os
 import re
-import subprocess
 import time
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from cartoonface.web.drafts import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
 from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, make_app, png_bytes, post
+from tests.conftest import speak
 
 pytest.importorskip("mediapipe", reason="needs the photo extra (scripts/setup.sh)")
 
@@ -61,7 +61,7 @@ def photo() -> bytes:
 def speech(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A short Mandarin recording made with espeak-ng (a WAV file) of tests/test_web.py's text."""
     path = tmp_path_factory.mktemp("speech") / "speech.wav"
-    subprocess.run(["espeak-ng", "-v", "cmn-latn-pinyin", "-w", str(path), SPOKEN], check=True)
+    speak(SPOKEN, path)
     return path
 
 
