@@ -35,13 +35,14 @@ import time
 import urllib.error
 import urllib.parse
 import urllib.request
-import wave
 import zipfile
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
 import soundfile
+
+from tests.synthetic import wav_bytes
 
 ROOT = Path(__file__).resolve().parent.parent
 BIAOBEI = ROOT.parent / "shared" / "bench" / "zh" / "biaobei"
@@ -180,13 +181,7 @@ def recording(sentences: list[tuple[np.ndarray, int, str]], start: int, seconds:
     joined = np.zeros(int(seconds * rate), dtype=np.float32)
     speech = np.concatenate(pieces)[: len(joined)]
     joined[: len(speech)] = speech
-    buffer = io.BytesIO()
-    with wave.open(buffer, "wb") as out:
-        out.setnchannels(1)
-        out.setsampwidth(2)
-        out.setframerate(rate)
-        out.writeframes((np.clip(joined, -1, 1) * 32767).astype("<i2").tobytes())
-    return buffer.getvalue(), "".join(texts)
+    return wav_bytes(joined, rate), "".join(texts)
 
 
 def wait_all(client: Client, ids: list[str], timeout: float) -> dict[str, tuple[dict, float]]:

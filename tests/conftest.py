@@ -11,6 +11,9 @@ import urllib.request
 from pathlib import Path
 
 import pytest
+from flask.testing import FlaskClient
+
+from cartoonface.web import create_app
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -96,3 +99,35 @@ def server(tmp_path_factory: pytest.TempPathFactory):
     yield base
     process.terminate()
     process.wait(timeout=30)
+
+
+class Client(FlaskClient):
+    """Flask's test client, closing what each request opened: the answer (read in full)
+    and the request body it encoded (a temporary file for large bodies)."""
+
+    def open(self, *args, **kwargs):
+        kwargs.setdefault("buffered", True)
+        response = super().open(*args, **kwargs)
+        response.request.input_stream.close()
+        return response
+
+
+def make_app(instance: Path, **config):
+    """The app on `instance` with `config`, one worker, using the closing test client."""
+    app = create_app({"INSTANCE_PATH": str(instance), "WORKERS": 1, **config})
+    app.test_client_class = Client
+    return app
+
+
+@pytest.fixture(scope="module")
+def app(tmp_path_factory: pytest.TempPathFactory):
+    """One app (one worker) on a fresh instance folder for the module."""
+    app = make_app(tmp_path_factory.mktemp("instance"), MAX_UPLOAD_MB=1, MAX_TRANSCRIPT_CHARS=200)
+    yield app
+    app.extensions["cartoonface"].runner.close()
+
+
+@pytest.fixture()
+def client(app):
+    """A test client of the module's app."""
+    return app.test_client()

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import io
+import wave
+
 import numpy as np
 
 from cartoonface.face.mouth import MOUTH_SYMBOLS
@@ -23,3 +26,14 @@ def synthetic_talk(duration: float, seed: int = 0) -> Alignment:
         sentences.append(Sentence("s", syllables[0].start, syllables[-1].end, tuple(syllables)))
         t += float(rng.uniform(0.4, 1.0))
     return Alignment(tuple(sentences), duration, ())
+
+
+def wav_bytes(samples: np.ndarray, rate: int) -> bytes:
+    """16-bit mono WAV bytes of float samples in [-1, 1]."""
+    buffer = io.BytesIO()
+    with wave.open(buffer, "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(rate)
+        out.writeframes((np.clip(samples, -1, 1) * 32767).astype("<i2").tobytes())
+    return buffer.getvalue()

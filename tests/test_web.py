@@ -10,13 +10,11 @@ import socket
 import subprocess
 import sys
 import time
-import wave
 import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
-from flask.testing import FlaskClient
 from markupsafe import escape
 from PIL import Image
 
@@ -29,23 +27,13 @@ from cartoonface.web.runner import STOPPED, Runner
 from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, valid_id, write_status)
-from tests.conftest import ROOT, run_cli, speak
+from tests.conftest import ROOT, Client, make_app, run_cli, speak
+from tests.synthetic import wav_bytes
 
 SAMPLES = ROOT / "samples" / "faces"
 TRANSCRIPT = "你好，世界。"
 SPOKEN = "ni3 hao3, shi4 jie4."
 XSS = "<script>alert('x')</script>"
-
-
-def wav_bytes(samples: np.ndarray, rate: int) -> bytes:
-    """16-bit mono WAV bytes of float samples in [-1, 1]."""
-    buffer = io.BytesIO()
-    with wave.open(buffer, "wb") as out:
-        out.setnchannels(1)
-        out.setsampwidth(2)
-        out.setframerate(rate)
-        out.writeframes((np.clip(samples, -1, 1) * 32767).astype("<i2").tobytes())
-    return buffer.getvalue()
 
 
 @pytest.fixture(scope="module")
@@ -62,35 +50,7 @@ def sample_name() -> str:
     return sorted(SAMPLES.glob("*.json"))[0].stem
 
 
-class Client(FlaskClient):
-    """Flask's test client, closing what each request opened: the answer (read in full)
-    and the request body it encoded (a temporary file for large bodies)."""
 
-    def open(self, *args, **kwargs):
-        kwargs.setdefault("buffered", True)
-        response = super().open(*args, **kwargs)
-        response.request.input_stream.close()
-        return response
-
-
-def make_app(instance: Path, **config):
-    """The app on `instance` with `config`, one worker, using the closing test client."""
-    app = create_app({"INSTANCE_PATH": str(instance), "WORKERS": 1, **config})
-    app.test_client_class = Client
-    return app
-
-
-@pytest.fixture(scope="module")
-def app(tmp_path_factory: pytest.TempPathFactory):
-    """One app (one worker) on a fresh instance folder for the module."""
-    app = make_app(tmp_path_factory.mktemp("instance"), MAX_UPLOAD_MB=1, MAX_TRANSCRIPT_CHARS=200)
-    yield app
-    app.extensions["cartoonface"].runner.close()
-
-
-@pytest.fixture()
-def client(app):
-    return app.test_client()
 
 
 def csrf(client) -> str:

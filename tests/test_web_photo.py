@@ -22,7 +22,7 @@ from cartoonface.web.drafts import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts
                                     sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
-from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, make_app, png_bytes, post
+from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post
 from tests.conftest import speak
 
 pytest.importorskip("mediapipe", reason="needs the photo extra (scripts/setup.sh)")
@@ -38,18 +38,6 @@ def astronaut_jpeg() -> bytes:
     buffer = io.BytesIO()
     Image.fromarray(data.astronaut()).save(buffer, "JPEG", quality=90)
     return buffer.getvalue()
-
-
-@pytest.fixture(scope="module")
-def app(tmp_path_factory: pytest.TempPathFactory):
-    app = make_app(tmp_path_factory.mktemp("instance"), MAX_UPLOAD_MB=1, MAX_TRANSCRIPT_CHARS=200)
-    yield app
-    app.extensions["cartoonface"].runner.close()
-
-
-@pytest.fixture()
-def client(app):
-    return app.test_client()
 
 
 @pytest.fixture(scope="module")
