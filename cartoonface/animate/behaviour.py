@@ -33,7 +33,6 @@ import numpy as np
 KINDS = ("blink", "brow", "tilt", "turn", "nod")
 ENVELOPE_KINDS = ("blink", "brow", "nod")
 ANGLE_KINDS = ("tilt", "turn", "nod")
-MAX_ANGLE = 15.0  # degrees: the pose limit of the face model (ARCHITECTURE.md, Pose)
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
 # The thesis measures a behaviour's interval from the end of one to the start of
