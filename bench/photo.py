@@ -72,7 +72,7 @@ def crop(photo: Image.Image, box: np.ndarray) -> tuple[Image.Image, np.ndarray, 
 
 def load_seconds() -> list[float]:
     """Model load times (import + detector + face mesh) in fresh processes."""
-    code = ("import time; t = time.perf_counter(); from cartoonface.face.landmarks import landmarker; "
+    code = ("import time; t = time.perf_counter(); from cartoonface.photo.landmarks import landmarker; "
             "landmarker(); print(time.perf_counter() - t)")
     return [float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                  check=True).stdout.strip()) for _ in range(LOAD_RUNS)]
@@ -81,9 +81,9 @@ def load_seconds() -> list[float]:
 def main() -> None:
     """Print the figures."""
     from cartoonface.errors import InputError
-    from cartoonface.face.landmarks import IBUG68, landmarker
+    from cartoonface.photo.landmarks import IBUG68, landmarker
     from cartoonface.face.model import POINT_INDEX
-    from cartoonface.face.photo import face_from_photo, photo_from_image
+    from cartoonface.photo.model_from_photo import face_from_photo, photo_from_image
 
     loads = load_seconds()
     print(f"model load (import + detector + mesh, fresh process): median {statistics.median(loads):.2f} s "

@@ -1,4 +1,4 @@
-"""Face from a photo (cartoonface.face.photo, `cartoonface face from-photo`).
+"""Face from a photo (cartoonface.photo.model_from_photo, `cartoonface face from-photo`).
 
 The photos are skimage.data.astronaut() (a 512 x 512 portrait shipped by scikit-image)
 and pictures the tests make from it. Needs the photo extra (mediapipe, OpenCV,
@@ -28,7 +28,7 @@ if not MISSING:
     from cartoonface.cli import main
     from cartoonface.errors import InputError
     from cartoonface.face.model import POINT_INDEX, POINT_NAMES, load_face
-    from cartoonface.face.photo import face_from_photo, load_photo, photo_from_image
+    from cartoonface.photo.model_from_photo import face_from_photo, load_photo, photo_from_image
 
 from lxml import etree
 
@@ -262,8 +262,8 @@ def test_cli_writes_face_preview_and_overlay(tmp_path):
 def test_turned_head_is_warned_and_turned_back(original):
     from dataclasses import replace
 
-    from cartoonface.face.landmarks import landmarker
-    from cartoonface.face.photo import face_from_landmarks
+    from cartoonface.photo.landmarks import landmarker
+    from cartoonface.photo.model_from_photo import face_from_landmarks
 
     photo = photo_from_image(astronaut(), "turned")
     found = landmarker().find(photo.rgb)
@@ -285,7 +285,7 @@ def test_turned_head_is_warned_and_turned_back(original):
 def test_missing_photo_extra_is_a_clear_error(monkeypatch):
     import sys
 
-    from cartoonface.face.landmarks import Landmarker, PhotoExtraMissing, landmarker
+    from cartoonface.photo.landmarks import Landmarker, PhotoExtraMissing, landmarker
 
     landmarker()  # mediapipe fully imported first, so hiding one module leaves no half import behind
     monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)

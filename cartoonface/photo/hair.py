@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cartoonface.face.model import HAIR_POINTS
-from cartoonface.face.photo_palette import OVAL, polygon_mask
+from cartoonface.photo.palette import OVAL, polygon_mask
 
 # The window around the face box (its width w, height h): sideways, up, down.
 WINDOW_SIDE, WINDOW_UP, WINDOW_DOWN = 0.9, 0.8, 0.7

@@ -2,8 +2,8 @@
 
 `load_photo(path)` reads and checks the picture; `face_from_photo(photo)` finds the
 largest face (face mesh, landmarks.py), maps the mesh to the named points
-(landmarks_map.py), segments the hair (photo_hair.py), samples the colours
-(photo_palette.py), warns when the face is not neutral and normalises it (levels the
+(landmarks_map.py), segments the hair (hair.py), samples the colours
+(palette.py), warns when the face is not neutral and normalises it (levels the
 roll, turns it to face the camera, closes the mouth, drops a smile), and places it on
 the canvas of the sample faces (d = 100 px). docs/photo.md.
 """
@@ -21,11 +21,11 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageOps
 
 from cartoonface.errors import FaceModelError, InputError
-from cartoonface.face.landmarks import Landmarks, landmarker
-from cartoonface.face.landmarks_map import free_fapu, model_points
+from cartoonface.photo.landmarks import Landmarks, landmarker
+from cartoonface.photo.landmarks_map import free_fapu, model_points
 from cartoonface.face.model import POINT_INDEX, FaceModel, face_from_dict
-from cartoonface.face.photo_hair import Head, segment_head
-from cartoonface.face.photo_palette import BLACK, face_colours, hex_colour, mix, palette_values
+from cartoonface.photo.hair import Head, segment_head
+from cartoonface.photo.palette import BLACK, face_colours, hex_colour, mix, palette_values
 
 # A face narrower than this (in the photo's own pixels) is refused: too few pixels
 # for the eyes and mouth to be placed.

@@ -1,7 +1,7 @@
 """Face colours sampled from a photo: robust medians inside regions the face mesh outlines.
 
 Every sample comes from inside the face (skin, lips, iris, eyebrows), never from the
-background; hair and clothes come from the head segmentation (photo_hair.py). The
+background; hair and clothes come from the head segmentation (hair.py). The
 derived colours (shadow, mouth, cheek, outline, pupil) are mixes of the sampled ones.
 """
 

@@ -10,7 +10,7 @@ them and the model they give, rewritten atomically on every change).
 
 Moving a point by (dx, dy) photo pixels moves the model point by MAP @ (dx, dy), where MAP
 is the linear part of the least-squares affine map from the detected photo points to the
-detected model points: the normalisation face/photo.py applies (levelling, turning to
+detected model points: the normalisation photo/model_from_photo.py applies (levelling, turning to
 the camera, closing the mouth) stays, and the user's correction is added to it.
 """
 
@@ -32,7 +32,7 @@ from PIL import Image
 
 from cartoonface.errors import FaceModelError, InputError
 from cartoonface.face.model import POINT_INDEX, POINT_NAMES, FaceModel, face_from_dict, face_to_dict
-from cartoonface.face.photo import PhotoFace, face_from_photo, load_photo
+from cartoonface.photo.model_from_photo import PhotoFace, face_from_photo, load_photo
 from cartoonface.face.state import FaceState
 from cartoonface.files import atomic_directory, write_text_atomic
 from cartoonface.render.svg import face_svg, svg_bytes

@@ -3,7 +3,7 @@
 `check_submission(form, files, limits)` returns a `Submission` (the inputs as
 bytes under names chosen here, plus the request as plain values) or a dict of
 field -> message for the form. A photo becomes a face model here
-(face/photo.py), so a photo without a usable face is a message in the form. File types are decided from the bytes (magic
+(photo/model_from_photo.py), so a photo without a usable face is a message in the form. File types are decided from the bytes (magic
 numbers), never from the file name; the user's file name is only ever shown
 (escaped), never used in a path.
 """
@@ -20,7 +20,7 @@ from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import face_from_dict, face_to_dict
-from cartoonface.face.photo import face_from_photo, load_photo
+from cartoonface.photo.model_from_photo import face_from_photo, load_photo
 from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.transcript import parse_transcript

@@ -20,7 +20,7 @@ from flask import Blueprint, Response, abort, jsonify, redirect, render_template
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES
-from cartoonface.web.drafts import (MAX_POINTS_CHARS, PHOTO_FILE, POINT_LABELS, Draft, create_draft, edited_face,
+from cartoonface.web.draft_store import (MAX_POINTS_CHARS, PHOTO_FILE, POINT_LABELS, Draft, create_draft, edited_face,
                                     load_draft, parse_points, preview_svg, save_edit, sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES, megabytes, read_upload, shown_name, sniff_image
 from cartoonface.web.security import CSRF_FIELD, csrf_ok, csrf_token

@@ -23,7 +23,7 @@ from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
 
 from cartoonface.web.config import PACKAGE, Settings
-from cartoonface.web.drafts import draft_choice, load_draft
+from cartoonface.web.draft_store import draft_choice, load_draft
 from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, check_submission, form_values,
                                     megabytes)
 from cartoonface.web.runner import Runner
