@@ -19,7 +19,7 @@ from PIL import Image
 from cartoonface.face.model import POINT_NAMES, face_from_dict
 from cartoonface.web import photo_views
 from cartoonface.web.draft_store import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts_root, linear_map, load_draft,
-                                    sweep_drafts)
+                                         sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
 from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post

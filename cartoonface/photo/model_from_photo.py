@@ -10,7 +10,6 @@ the canvas of the sample faces (d = 100 px). docs/photo.md.
 
 from __future__ import annotations
 
-import io
 import math
 import os
 import warnings
@@ -18,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageOps
+from PIL import Image, ImageOps
 
 from cartoonface.errors import FaceModelError, InputError
 from cartoonface.photo.landmarks import Landmarks, landmarker
@@ -288,23 +287,3 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     return PhotoFace(face=face, points=photo_points, hair=head.polygon, turn=turn, roll=roll,
                      clothes=hex_colour(head.clothes) if head.clothes is not None else None,
                      warnings=tuple(notes))
-
-
-def overlay_png(photo: Photo, result: PhotoFace, max_side: int = 512) -> bytes:
-    """PNG bytes of the photo (scaled to at most `max_side` pixels a side) with the
-    detected named points (red dots) and the hair polygon (blue line and dots) drawn on it."""
-    image = Image.fromarray(photo.rgb)
-    k = min(1.0, max_side / max(image.size))
-    image = image.resize((max(1, round(image.width * k)), max(1, round(image.height * k))), Image.Resampling.LANCZOS)
-    draw = ImageDraw.Draw(image)
-    r = max(1.5, 0.012 * float(np.ptp(result.points[:, 0])) * k)
-    hair = [(float(x) * k, float(y) * k) for x, y in result.hair]
-    draw.line(hair, fill=(40, 110, 255), width=max(1, round(r / 2)))
-    for x, y in hair:
-        draw.ellipse((x - r, y - r, x + r, y + r), fill=(40, 110, 255))
-    for x, y in result.points * k:
-        draw.ellipse((x - r, y - r, x + r, y + r), fill=(255, 40, 40), outline=(255, 255, 255))
-    out = io.BytesIO()
-    image.save(out, "PNG", optimize=True)
-    return out.getvalue()
-

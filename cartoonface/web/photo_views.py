@@ -1,6 +1,6 @@
 """The "face from a photo" routes (blueprint "photo"): upload a photo, see the detected
 points over it beside the cartoon, drag points to correct them, then go on to the form
-with that face (drafts.py stores it; docs/web.md).
+with that face (draft_store.py stores it, point_editor.py checks the points; docs/web.md).
 
 GET  /photos                    the upload form
 POST /photos                    read the photo, find the face, store a draft, 303 to its editor
@@ -20,9 +20,10 @@ from flask import Blueprint, Response, abort, jsonify, redirect, render_template
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES
-from cartoonface.web.draft_store import (MAX_POINTS_CHARS, PHOTO_FILE, POINT_LABELS, Draft, create_draft, edited_face,
-                                    load_draft, parse_points, preview_svg, save_edit, sweep_drafts)
+from cartoonface.web.draft_store import PHOTO_FILE, Draft, create_draft, load_draft, save_edit, sweep_drafts
 from cartoonface.web.inputs import MAX_PHOTO_BYTES, megabytes, read_upload, shown_name, sniff_image
+from cartoonface.web.point_editor import MAX_POINTS_CHARS, edited_face, parse_points, preview_svg
+from cartoonface.web.point_labels import POINT_LABELS
 from cartoonface.web.security import CSRF_FIELD, csrf_ok, csrf_token
 from cartoonface.web.store import new_id
 from cartoonface.web.views import state
