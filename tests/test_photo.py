@@ -15,6 +15,9 @@ from importlib.util import find_spec
 
 import numpy as np
 import pytest
+from lxml import etree
+
+from tests.conftest import run_cli
 
 MISSING = [name for name in ("mediapipe", "cv2", "skimage") if find_spec(name) is None]
 pytestmark = pytest.mark.skipif(
@@ -29,10 +32,6 @@ if not MISSING:
     from cartoonface.errors import InputError
     from cartoonface.face.model import POINT_INDEX, POINT_NAMES, load_face
     from cartoonface.photo.model_from_photo import face_from_photo, load_photo, photo_from_image
-
-from lxml import etree
-
-from tests.conftest import run_cli
 
 # Where the astronaut's features are in the 512 x 512 photo (x0, y0, x1, y1), read off
 # the picture by eye; generous boxes that do not overlap.
@@ -263,13 +262,14 @@ def test_turned_head_is_warned_and_turned_back(original):
     from dataclasses import replace
 
     from cartoonface.photo.landmarks import landmarker
+    from cartoonface.photo.landmarks_map import eyes
     from cartoonface.photo.model_from_photo import face_from_landmarks
 
     photo = photo_from_image(astronaut(), "turned")
     found = landmarker().find(photo.rgb)
     # turn the mesh 25 degrees about the vertical axis through the eyes (nose to the image right)
     mesh = found.points.copy()
-    centre = (mesh[468] + mesh[473]) / 2
+    centre, _d = eyes(mesh)
     a = np.radians(25)
     rel = mesh - centre
     mesh[:, 0] = centre[0] + np.cos(a) * rel[:, 0] - np.sin(a) * rel[:, 2]

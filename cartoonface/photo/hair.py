@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cartoonface.face.model import HAIR_POINTS
-from cartoonface.photo.palette import OVAL, polygon_mask
+from cartoonface.photo.landmarks_map import OVAL, eyes
+from cartoonface.photo.palette import polygon_mask
 
 # The window around the face box (its width w, height h): sideways, up, down.
 WINDOW_SIDE, WINDOW_UP, WINDOW_DOWN = 0.9, 0.8, 0.7
@@ -116,7 +117,7 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     skinlike = _distance(lab, skin) < SKIN_DISTANCE
     rows = np.arange(sh)[:, None]
     candidates = person & ~face & ~skinlike
-    eyes_y = (mesh[[468, 473], 1].mean() - top) * scale
+    eyes_y = (eyes(mesh)[0][1] - top) * scale
     crown = candidates & (rows < eyes_y)
     hair = np.median(image[crown], axis=0) if crown.sum() >= MIN_HAIR_PIXELS else None
     if hair is not None:

@@ -21,8 +21,8 @@ from PIL import Image, ImageOps
 
 from cartoonface.errors import FaceModelError, InputError
 from cartoonface.photo.landmarks import Landmarks, landmarker
-from cartoonface.photo.landmarks_map import free_fapu, model_points
-from cartoonface.face.model import POINT_INDEX, FaceModel, face_from_dict
+from cartoonface.photo.landmarks_map import IRIS_LEFT, IRIS_RIGHT, eyes, free_fapu, model_points
+from cartoonface.face.model import FORMAT, POINT_INDEX, VERSION, FaceModel, face_from_dict
 from cartoonface.photo.hair import Head, segment_head
 from cartoonface.photo.palette import BLACK, face_colours, hex_colour, mix, palette_values
 
@@ -232,10 +232,11 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     if found.faces > 1:
         notes.append(f"{found.faces} faces in the photo; using the largest")
 
-    eyes = (mesh[468] + mesh[473]) / 2
-    roll = math.degrees(math.atan2(mesh[473, 1] - mesh[468, 1], mesh[473, 0] - mesh[468, 0]))
+    middle, _d = eyes(mesh)
+    across = mesh[IRIS_RIGHT] - mesh[IRIS_LEFT]
+    roll = math.degrees(math.atan2(across[1], across[0]))
     level = mesh.copy()
-    level[:, :2] = _rotate2d(mesh[:, :2], eyes[:2], -roll)
+    level[:, :2] = _rotate2d(mesh[:, :2], middle[:2], -roll)
     turn = float(np.degrees(np.median([math.atan2(level[b, 2] - level[a, 2], level[b, 0] - level[a, 0])
                                        for a, b in TURN_PAIRS])))
     if abs(turn) > MAX_TURN:
@@ -245,18 +246,18 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
         notes.append(f"the head leans {abs(roll):.0f} degrees sideways; the model is levelled")
 
     named = model_points(level)
-    photo_points = _rotate2d(named[:, :2], eyes[:2], roll)
+    photo_points = _rotate2d(named[:, :2], middle[:2], roll)
 
     colours = face_colours(photo.rgb, mesh)
     skin = colours["skin"]
     if skin is None:
         raise InputError(f"{source}: the face shows too little skin to sample its colour; expected a clear portrait")
     head = segment_head(photo.rgb, mesh, skin, roll)
-    hair_level = _rotate2d(head.polygon, eyes[:2], -roll)
+    hair_level = _rotate2d(head.polygon, middle[:2], -roll)
     hair_depth = float(np.mean(level[[234, 454], 2]))
     hair_xyz = np.column_stack([hair_level, np.full(len(hair_level), hair_depth)])
 
-    axis = level[[468, 473]].mean(axis=0)
+    axis, _d = eyes(level)
     frontal = _unturn(named, axis, turn)
     hair_frontal = _unturn(hair_xyz, axis, turn)
     d = float(np.hypot(*(frontal[POINT_INDEX["3.5"]] - frontal[POINT_INDEX["3.6"]])))
@@ -274,7 +275,7 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
 
     fapu = {key: value * k for key, value in free_fapu(level).items()}
     obj = {
-        "format": "cartoonface-face", "version": 1, "name": name, "canvas": list(CANVAS),
+        "format": FORMAT, "version": VERSION, "name": name, "canvas": list(CANVAS),
         "points": {n: [float(x), float(y)] for n, (x, y) in zip(POINT_INDEX, points)},
         "hair": [[float(x), float(y)] for x, y in hair],
         "fapu": fapu,

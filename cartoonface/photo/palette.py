@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cartoonface.photo.landmarks_map import IRIS_RIM, OVAL, eyes
+
 # Face-mesh loops (image left = the subject's right); the mesh's topology.
 LIPS_OUTER = (61, 185, 40, 39, 37, 0, 267, 269, 270, 409, 291, 375, 321, 405, 314, 17, 84, 181, 91, 146)
 LIPS_INNER = (78, 191, 80, 81, 82, 13, 312, 311, 310, 415, 308, 324, 318, 402, 317, 14, 87, 178, 88, 95)
@@ -17,8 +19,6 @@ EYE_RIGHT = (263, 466, 388, 387, 386, 385, 384, 398, 362, 382, 381, 380, 374, 37
 BROW_LEFT = (70, 63, 105, 66, 107, 55, 65, 52, 53, 46)
 BROW_RIGHT = (300, 293, 334, 296, 336, 285, 295, 282, 283, 276)
 NOSE_LOWER = (129, 98, 97, 2, 326, 327, 358, 344, 4, 115)
-OVAL = (10, 109, 67, 103, 54, 21, 162, 127, 234, 93, 132, 58, 172, 136, 150, 149, 176, 148, 152,
-        377, 400, 378, 379, 365, 397, 288, 361, 323, 454, 356, 389, 251, 284, 332, 297, 338)
 # Skin is sampled below this many d under the eyes (the forehead is often under a fringe).
 SKIN_BELOW_EYES = 0.25
 # Too few pixels to trust a median.
@@ -62,8 +62,8 @@ def face_colours(rgb: np.ndarray, mesh: np.ndarray) -> dict[str, np.ndarray | No
     rgb = rgb[low[1]:high[1], low[0]:high[0]]
     mesh = mesh - [low[0], low[1], 0]
     shape = rgb.shape[:2]
-    eyes_y = (mesh[468, 1] + mesh[473, 1]) / 2
-    d = float(np.hypot(*(mesh[473, :2] - mesh[468, :2])))
+    middle, d = eyes(mesh)
+    eyes_y = middle[1]
     rows = np.arange(shape[0])[:, None]
 
     skin = polygon_mask(shape, _loop(mesh, OVAL)) & (rows > eyes_y + SKIN_BELOW_EYES * d)
@@ -74,7 +74,7 @@ def face_colours(rgb: np.ndarray, mesh: np.ndarray) -> dict[str, np.ndarray | No
 
     cols = np.arange(shape[1])[None, :]
     iris = np.zeros(shape, dtype=bool)
-    for centre, rim, eye in ((468, range(469, 473), EYE_LEFT), (473, range(474, 478), EYE_RIGHT)):
+    for (centre, rim), eye in ((IRIS_RIM["r1"], EYE_LEFT), (IRIS_RIM["r2"], EYE_RIGHT)):
         cx, cy = mesh[centre, :2]
         r = float(np.mean(np.hypot(*(mesh[list(rim), :2] - mesh[centre, :2]).T)))
         dist = np.hypot(cols - cx, rows - cy)
