@@ -29,6 +29,8 @@ MIN_SEGMENT_SIDE = 8
 GRABCUT_ITERATIONS = 4
 # GrabCut's colour model arrays: OpenCV's fixed size (5 Gaussians x 13 values).
 GMM_VALUES = 65
+# GrabCut's rectangle, unused when it starts from a mask.
+NO_RECT = (0, 0, 0, 0)
 # The head ellipse (probable foreground) in face widths / heights: its centre this far
 # above the middle of the face box, its half-axes.
 HEAD_RAISE = 0.15
@@ -138,7 +140,7 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     if right < width:
         mask[above_chin, -band:] = cv2.GC_BGD
     bgd, fgd = np.zeros((1, GMM_VALUES), np.float64), np.zeros((1, GMM_VALUES), np.float64)
-    cv2.grabCut(image, mask, None, bgd, fgd, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    cv2.grabCut(image, mask, NO_RECT, bgd, fgd, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
     person = (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
 
     lab = _lab(image)
@@ -204,6 +206,6 @@ def _reach(mask: np.ndarray, centre: np.ndarray, directions: np.ndarray, gap: fl
         for i in hit:
             if last > 0 and (i - last) * RAY_STEP > gap:
                 break
-            last = i
+            last = int(i)
         out.append(steps[last])
     return np.array(out)

@@ -17,9 +17,10 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -119,6 +120,12 @@ def _pairs(array: np.ndarray) -> list[list[float]]:
     return [[round(float(x), 2), round(float(y), 2)] for x, y in array]
 
 
+def model_points(face: Mapping[str, object]) -> np.ndarray:
+    """(49, 2) the points of a face model's JSON object (face_to_dict) in POINT_NAMES order."""
+    points = cast(Mapping[str, Sequence[float]], face["points"])
+    return np.array([points[name] for name in POINT_NAMES], dtype=float)
+
+
 def named_points(array: np.ndarray) -> dict[str, list[float]]:
     """(49, 2) points in POINT_NAMES order as JSON: point name -> [x, y] rounded to 0.01."""
     return dict(zip(POINT_NAMES, _pairs(array)))
@@ -130,7 +137,7 @@ def create_draft(instance: Path, data: bytes, ext: str, label: str, draft_id: st
     jpeg, size, corner, k, found = detect(data, ext, label)
     detected = (found.points - corner) * k
     base = face_to_dict(found.face)
-    model = np.array([base["points"][name] for name in POINT_NAMES], dtype=float)
+    model = model_points(base)
     record = {
         "label": label,
         "warnings": list(found.warnings),

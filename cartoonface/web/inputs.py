@@ -84,9 +84,11 @@ def sniff_image(head: bytes) -> str | None:
     return None
 
 
-def shown_name(upload: FileStorage, fallback: str) -> str:
-    """The user's file name for messages only: last path part, at most SHOWN_NAME_CHARS."""
-    name = (upload.filename or "").replace("\\", "/").rsplit("/", 1)[-1].strip()
+def shown_name(upload: FileStorage | None, fallback: str) -> str:
+    """The user's file name for messages only: last path part, at most SHOWN_NAME_CHARS;
+    `fallback` when there is no upload or it has no name."""
+    filename = upload.filename if upload is not None else None
+    name = (filename or "").replace("\\", "/").rsplit("/", 1)[-1].strip()
     return (name or fallback)[:SHOWN_NAME_CHARS]
 
 
@@ -109,10 +111,10 @@ def form_values(form: MultiDict[str, str]) -> dict[str, str]:
                                                  "clothes", "transcript")}
 
 
-def check_photo(upload: FileStorage, data: bytes, too_big: bool,
+def check_photo(name: str, data: bytes, too_big: bool,
                 errors: dict[str, str]) -> tuple[bytes | None, str, tuple[str, ...]]:
-    """A face model made from a photo: (face JSON bytes, label, warnings about the photo)."""
-    name = shown_name(upload, "photo")
+    """A face model made from the photo bytes the user called `name`: (face JSON bytes,
+    label, warnings about the photo)."""
     if too_big:
         errors["photo"] = f"{name}: a photo must be at most {megabytes(MAX_PHOTO_BYTES)} MB."
         return None, name, ()
@@ -146,7 +148,7 @@ def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], li
         errors["photo"] = "Give either a face model (JSON) or a photo, not both."
         return None, "", ()
     if photo_data is not None:
-        return check_photo(photo, photo_data, photo_too_big, errors)
+        return check_photo(shown_name(photo, "photo"), photo_data, photo_too_big, errors)
     if data is not None:
         name = shown_name(upload, "face model")
         if too_big:

@@ -17,6 +17,7 @@ import json
 import threading
 
 from flask import Blueprint, Response, abort, jsonify, redirect, render_template, request, url_for
+from werkzeug.wrappers import Response as BaseResponse
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES
@@ -72,7 +73,7 @@ def upload_form() -> tuple[str, int]:
 
 
 @bp.post("/photos")
-def upload() -> Response | tuple[str, int]:
+def upload() -> BaseResponse | tuple[str, int]:
     """Read the uploaded photo and find the face: 303 to the new draft's editor, or the
     upload form with the reason (400; 503 when another photo is being read too long)."""
     if not csrf_ok(request.form.get(CSRF_FIELD)):
@@ -139,7 +140,7 @@ def update_preview(draft_id: str) -> tuple[Response, int]:
 
 
 @bp.post("/photos/<jobid:draft_id>")
-def use_face(draft_id: str) -> Response | tuple[str, int]:
+def use_face(draft_id: str) -> BaseResponse | tuple[str, int]:
     """Save the edited points (form field points, as for the preview) and 303 to the
     form with this face chosen; the editor again with the reason (400) when they are bad."""
     draft = stored_draft(draft_id)

@@ -20,7 +20,7 @@ from cartoonface.errors import FaceModelError, InputError
 from cartoonface.face.model import POINT_INDEX, POINT_NAMES, FaceModel, face_from_dict, face_to_dict
 from cartoonface.face.state import FaceState
 from cartoonface.render.svg import face_svg, svg_bytes
-from cartoonface.web.draft_store import Draft, named_points
+from cartoonface.web.draft_store import Draft, model_points, named_points
 from cartoonface.web.point_labels import POINT_LABELS
 
 # A dragged point may leave the photo by this share of its size (a chin at the edge).
@@ -73,8 +73,7 @@ def edited_face(draft: Draft, points: np.ndarray) -> tuple[FaceModel, dict[str, 
     """The face model of the draft with its photo points moved to `points` ((49, 2)
     photo.jpg pixels): (the FaceModel, its JSON object). InputError (from face_from_dict)
     naming the point when the result is not a valid face, e.g. a point dragged far away."""
-    base = np.array([draft.base["points"][name] for name in POINT_NAMES], dtype=float)  # type: ignore[index]
-    moved = base + (points - draft.detected) @ draft.to_model.T
+    moved = model_points(draft.base) + (points - draft.detected) @ draft.to_model.T
     obj = {**draft.base, "points": named_points(moved)}
     try:
         face = face_from_dict(obj, "the cartoon")

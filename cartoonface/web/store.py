@@ -84,7 +84,10 @@ class Job:
     @property
     def created(self) -> float:
         """Submission time, epoch seconds."""
-        return float(self.spec.get("created", 0.0))
+        created = self.spec.get("created", 0.0)
+        if not isinstance(created, (int, float)):
+            raise ValueError(f"job.json: created is {created!r}; expected epoch seconds")
+        return float(created)
 
 
 def new_id() -> str:
