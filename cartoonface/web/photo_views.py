@@ -34,6 +34,10 @@ from cartoonface.web.views import state
 DETECT_WAIT = 20.0
 _detecting = threading.Lock()
 
+# The editor's point dots: this share of the photo's long side, at least MIN_POINT_RADIUS px.
+POINT_RADIUS_SHARE = 0.008
+MIN_POINT_RADIUS = 2.0
+
 EXPIRED = "This form has expired or did not come from this page. Please try again."
 
 bp = Blueprint("photo", __name__)
@@ -57,7 +61,7 @@ def render_editor(draft: Draft, error: str = "", status: int = 200) -> tuple[str
     """The editor page of `draft`, with `error` (may be empty) above the points."""
     points = [(name, POINT_LABELS[name], float(x), float(y)) for name, (x, y) in zip(POINT_NAMES, draft.points)]
     width, height = draft.size
-    radius = max(2.0, 0.008 * max(width, height))
+    radius = max(MIN_POINT_RADIUS, POINT_RADIUS_SHARE * max(width, height))
     return render_template("web/photo_edit.html", draft=draft, points=points, radius=radius,
                            hair=" ".join(f"{x:.1f},{y:.1f}" for x, y in draft.hair),
                            points_json=json.dumps(dict(zip(POINT_NAMES, draft.points.round(2).tolist()))),
