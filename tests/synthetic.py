@@ -8,7 +8,7 @@ import wave
 import numpy as np
 
 from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.records import Alignment, Sentence, Syllable
 
 
 def synthetic_talk(duration: float, seed: int = 0) -> Alignment:

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from cartoonface.errors import TranscriptError
-from cartoonface.speech.alignment import FAST_RATE, MAX_PIECE, MAX_RATE, analyse, reconcile, sentence_pieces
+from cartoonface.speech.analyse import FAST_RATE, MAX_PIECE, MAX_RATE, analyse, sentence_pieces
+from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import find_speech_parts
 from cartoonface.speech.transcript import parse_transcript

@@ -8,7 +8,7 @@ from scipy import stats
 
 from cartoonface.animate import behaviour
 from cartoonface.animate.behaviour import Action, schedule, speech_pauses
-from cartoonface.speech.alignment import Alignment, Sentence
+from cartoonface.speech.records import Alignment, Sentence
 
 DURATION = 600.0
 

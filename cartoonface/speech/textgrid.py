@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.errors import AlignmentError, TranscriptError
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.records import Alignment, Sentence, Syllable, check_times
 from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shape_onsets, shapes_for
 
 TIERS = ("sentences", "syllables", "mouth shapes")
@@ -41,6 +41,9 @@ class Interval:
     start: float
     end: float
     text: str
+
+    def __post_init__(self) -> None:
+        check_times(self.start, self.end, f"interval {self.text!r}")
 
 
 def write_textgrid(alignment: Alignment) -> str:
@@ -270,7 +273,10 @@ def _read_intervals(reader: _Reader, name: str, size: int) -> list[Interval]:
             )
         previous = end
         if label.strip():
-            labelled.append(Interval(start, end, label.strip()))
+            try:
+                labelled.append(Interval(start, end, label.strip()))
+            except ValueError as exc:
+                raise AlignmentError(f"{reader.source}, line {line}: tier {name}, {exc}") from None
     return labelled
 
 
@@ -283,14 +289,20 @@ def _alignment(tiers: dict[str, list[Interval]], duration: float, source: str) -
         inside = [s for s in pending if s.start >= sentence.start - _SLACK and s.end <= sentence.end + _SLACK]
         pending = [s for s in pending if s not in inside]
         syllables = tuple(_syllable(item, shapes, source) for item in inside)
-        sentences.append(Sentence(sentence.text, sentence.start, sentence.end, syllables))
+        try:
+            sentences.append(Sentence(sentence.text, sentence.start, sentence.end, syllables))
+        except ValueError as exc:
+            raise AlignmentError(f"{source}: tier sentences, {exc}") from None
     if pending:
         item = pending[0]
         raise AlignmentError(
             f"{source}: tier syllables, interval {item.text!r} ({item.start:g}-{item.end:g} s) lies outside "
             "every interval of tier sentences; expected each syllable inside a sentence"
         )
-    return Alignment(tuple(sentences), duration, (f"timing read from {source}",))
+    try:
+        return Alignment(tuple(sentences), duration, (f"timing read from {source}",))
+    except ValueError as exc:
+        raise AlignmentError(f"{source}: {exc}") from None
 
 
 def _syllable(item: Interval, shapes: list[Interval], source: str) -> Syllable:
@@ -317,4 +329,7 @@ def _syllable(item: Interval, shapes: list[Interval], source: str) -> Syllable:
                 f"{source}: tier syllables, label {item.text!r} at {item.start:g} s: {exc}; "
                 "expected `text pinyin` such as `你 ni3`, or a mouth shapes tier"
             ) from None
-    return Syllable(text, pinyin, inside, item.start, item.end, 1.0)
+    try:
+        return Syllable(text, pinyin, inside, item.start, item.end, 1.0)
+    except ValueError as exc:
+        raise AlignmentError(f"{source}: tier syllables, {exc}") from None
