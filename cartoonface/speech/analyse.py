@@ -27,7 +27,7 @@ from cartoonface.speech.audio import Audio
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
-from cartoonface.speech.transcript import SentenceText, parse_transcript
+from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
 # is far longer than the recording (an error); more than FAST_RATE or fewer than MIN_RATE is aligned
@@ -42,7 +42,6 @@ MAX_JOINT = 60.0
 # Longer sentences are aligned in pieces of at most this many syllables (about 15 s of speech),
 # cut at commas where possible: one alignment call over minutes of speech would take minutes.
 MAX_PIECE = 60
-_CJK = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 
 
 def analyse(
@@ -114,7 +113,7 @@ def _check_language(text: str, source: str) -> None:
     Readings in braces (`OK{ou1 kei1}`) are not counted.
     """
     plain = re.sub(r"\{[^}]*\}", "", text)
-    chinese = len(_CJK.findall(plain))
+    chinese = len(HAN_RE.findall(plain))
     latin = len(re.findall(r"[A-Za-z]+", plain))
     if latin > chinese:
         raise TranscriptError(
