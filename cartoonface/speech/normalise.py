@@ -98,7 +98,7 @@ def latin_units(word: str, readings: tuple[str, ...] | None, notes: list[str]) -
                 for k, r in enumerate(readings)]
     letters = "".join(ascii_form(c) for c in word)
     if len(letters) == 1 or (letters.isupper() and len(letters) <= _ACRONYM_MAX):
-        units = []
+        units: list[Unit] = []
         for shown, letter in zip(word, letters.upper()):
             units.extend(Unit(shown if k == 0 else "", reading=r, no_sandhi=True)
                          for k, r in enumerate(_LETTERS[letter]))

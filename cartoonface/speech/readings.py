@@ -65,13 +65,13 @@ def look_up(domain: list[Unit], notes: list[str]) -> list[Unit]:
     if len(simplified) != len(hans):
         simplified = "".join(_t2s().convert(c) or c for c in hans)
     words = seg(simplified) if simplified else []
-    spans = []
+    spans: list[tuple[int, str, str]] = []
     for index, word in enumerate(words):
         readings = lazy_pinyin(word, style=Style.TONE3, neutral_tone_with_five=True, v_to_u=True)
         if len(readings) != len(word):
             readings = [_reading_of(c) for c in word]
         spans.extend((index, c, r) for c, r in zip(word, readings))
-    out = []
+    out: list[Unit] = []
     k = 0
     for unit in domain:
         if not unit.han:

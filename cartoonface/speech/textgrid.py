@@ -159,7 +159,7 @@ class _Reader:
         self.tokens = []
         for match in _TOKEN.finditer(text):
             kind = match.lastgroup
-            if kind in ("skip", "word"):
+            if kind is None or kind in ("skip", "word"):
                 continue
             line = text.count("\n", 0, match.start()) + 1
             value = match.group(kind)

@@ -240,6 +240,7 @@ def _read_sentence(clean: str, start: int, end: int,
             i += 1
         elif "0" <= a <= "9":
             number = NUMBER_RE.match(ascii_text, i - start)
+            assert number is not None  # NUMBER_RE matches at every ASCII digit
             spoken, by_digit = number_words(number, ascii_text[number.end():number.end() + 2])
             domain.extend(Unit(c, han=c, reading=DIGIT_READINGS.get(c, "") if by_digit else "",
                                 no_sandhi=by_digit) for c in spoken)
