@@ -29,7 +29,7 @@ import soundfile
 
 from cartoonface.speech.align import align_syllables, initial_class, syllable_type
 from cartoonface.speech.audio import Audio
-from cartoonface.speech.espeak import synthesize
+from tests.espeak import synthesize
 from cartoonface.speech.features import HOP, frames
 from cartoonface.speech.sentences import Span, find_speech_parts
 
