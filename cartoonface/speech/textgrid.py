@@ -36,7 +36,7 @@ _SLACK = 1e-4
 
 @dataclass(frozen=True)
 class Interval:
-    """One labelled interval of a tier: `start`, `end` seconds, `text`."""
+    """One interval of a tier: `start`, `end` seconds (0 <= start <= end), `text` ("" when unlabelled)."""
 
     start: float
     end: float
@@ -224,6 +224,22 @@ def read_textgrid(text: str, source: str) -> Alignment:
     `sentences` and `syllables`, when intervals are out of order, or when a
     syllable lies outside every sentence.
     """
+    duration, tiers = read_tiers(text, source)
+    for name in TIERS[:2]:
+        if name not in tiers:
+            raise AlignmentError(f"{source}: no interval tier named {name!r}; expected tiers {', '.join(TIERS)}")
+    labelled = {name: [item for item in items if item.text] for name, items in tiers.items()}
+    return _alignment(labelled, duration, source)
+
+
+def read_tiers(text: str, source: str) -> tuple[float, dict[str, list[Interval]]]:
+    """Parse any interval TextGrid `text` (long or short format) read from `source`.
+
+    Returns (xmax of the TextGrid in seconds, {tier name: every interval in time order,
+    labels stripped, "" for an unlabelled one}); point tiers are skipped. Raises
+    AlignmentError naming `source` and the line when the text is not a TextGrid or an
+    interval is empty, negative or overlaps the one before.
+    """
     reader = _Reader(text, source)
     if reader.string('"ooTextFile" (a Praat text file)') != "ooTextFile":
         reader.position -= 1
@@ -251,15 +267,12 @@ def read_textgrid(text: str, source: str) -> Alignment:
             reader.position -= 5
             raise reader.fail('"IntervalTier" or "TextTier"')
         tiers[name] = _read_intervals(reader, name, size)
-    for name in TIERS[:2]:
-        if name not in tiers:
-            raise AlignmentError(f"{source}: no interval tier named {name!r}; expected tiers {', '.join(TIERS)}")
-    return _alignment(tiers, duration, source)
+    return duration, tiers
 
 
 def _read_intervals(reader: _Reader, name: str, size: int) -> list[Interval]:
-    """Read `size` intervals of tier `name`; only the labelled ones are returned, in time order."""
-    labelled = []
+    """Read `size` intervals of tier `name` in time order, labels stripped."""
+    intervals = []
     previous = None
     for index in range(1, size + 1):
         line = reader.tokens[reader.position].line if reader.position < len(reader.tokens) else 0
@@ -272,12 +285,11 @@ def _read_intervals(reader: _Reader, name: str, size: int) -> list[Interval]:
                 "is empty or overlaps the one before; expected increasing times"
             )
         previous = end
-        if label.strip():
-            try:
-                labelled.append(Interval(start, end, label.strip()))
-            except ValueError as exc:
-                raise AlignmentError(f"{reader.source}, line {line}: tier {name}, {exc}") from None
-    return labelled
+        try:
+            intervals.append(Interval(start, end, label.strip()))
+        except ValueError as exc:
+            raise AlignmentError(f"{reader.source}, line {line}: tier {name}, {exc}") from None
+    return intervals
 
 
 def _alignment(tiers: dict[str, list[Interval]], duration: float, source: str) -> Alignment:
