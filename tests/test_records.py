@@ -10,8 +10,9 @@ import math
 
 import pytest
 
-from cartoonface.animate.behaviour import MAX_ANGLE, Action
+from cartoonface.animate.behaviour import Action
 from cartoonface.errors import AlignmentError
+from cartoonface.face.state import MAX_ANGLE
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.textgrid import Interval, read_textgrid, write_textgrid
 

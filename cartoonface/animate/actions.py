@@ -19,8 +19,9 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, MAX_ANGLE, Action
+from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, Action
 from cartoonface.errors import ActionsError
+from cartoonface.face.state import MAX_ANGLE
 from cartoonface.files import read_user_text, write_text_atomic
 
 FORMAT = "cartoonface-actions"

@@ -30,11 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model
+
 KINDS = ("blink", "brow", "tilt", "turn", "nod")
 ENVELOPE_KINDS = ("blink", "brow", "nod")
 ANGLE_KINDS = ("tilt", "turn", "nod")
-MAX_ANGLE = 15.0  # degrees: the pose limit of the face model (ARCHITECTURE.md, Pose)
-RAMP_SLACK = 0.0005  # seconds: attack + release may pass the duration by this much (times kept to the ms)
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
 # The thesis measures a behaviour's interval from the end of one to the start of
@@ -74,6 +74,9 @@ TILT_ANGLE = 3.0
 TURN_ANGLE = 6.0
 NOD_ANGLE = (3.0, 6.0)  # nod depth in degrees, head down
 BROW_RAMP = 0.3  # a brow raise rises over 30 % of its duration and falls over 30 %
+
+
+RAMP_SLACK = 0.0005  # seconds: attack + release may pass the duration by this much (times kept to the ms)
 
 
 @dataclass(frozen=True)
