@@ -144,7 +144,9 @@ SPOKEN = "ni3 hao3, shi4 jie4."
 def csrf(client) -> str:
     """The CSRF token of the client's session, read from the form."""
     page = client.get("/").get_data(as_text=True)
-    return re.search(r'name="csrf_token" value="([^"]+)"', page).group(1)
+    token = re.search(r'name="csrf_token" value="([^"]+)"', page)
+    assert token is not None, "the form has no csrf_token field"
+    return token.group(1)
 
 
 def form(client, speech: bytes, sample: str, **fields) -> dict:
