@@ -22,8 +22,7 @@ from cartoonface.web.draft_store import (DELETED_PREFIX, DRAFT_SECONDS, EDIT_FIL
                                          drafts_root, linear_map, load_draft, sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
-from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post
-from tests.conftest import speak
+from tests.conftest import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post, speak
 
 pytest.importorskip("mediapipe", reason="needs the photo extra (scripts/setup.sh)")
 

@@ -1,6 +1,6 @@
 """`cartoonface align`: recording + transcript -> Praat TextGrid (and JSON) of sentences, syllables, mouth shapes.
 
-A thin shell over `cartoonface.speech.alignment.analyse`: progress on
+A thin shell over `cartoonface.speech.analyse.analyse`: progress on
 stderr, notes on stderr, a one-line summary on stdout. docs/alignment.md
 describes the outputs.
 """
@@ -16,7 +16,8 @@ from pathlib import Path
 from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import OptionError, TranscriptError
 from cartoonface.files import read_user_text, write_text_atomic
-from cartoonface.speech.alignment import LOW_CONFIDENCE, Alignment, alignment_to_dict, analyse
+from cartoonface.speech.analyse import LOW_CONFIDENCE, analyse
+from cartoonface.speech.records import Alignment, alignment_to_dict
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import write_textgrid
 

@@ -23,7 +23,7 @@ from markupsafe import Markup
 from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
-from cartoonface.speech.alignment import Alignment
+from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import browser_copy
 
 PAGES = ("audiobook", "announcer")
