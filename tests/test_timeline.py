@@ -7,7 +7,7 @@ import pytest
 from cartoonface.animate.behaviour import Action
 from cartoonface.animate.frames import states_at
 from cartoonface.animate.timeline import LAG_MS, LEAD_MS, REST, build_timeline
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.mouth_shapes import shape_onsets
 
 

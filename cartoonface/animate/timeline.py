@@ -69,7 +69,7 @@ class Timeline:
 
 
 def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
-    """Key frames for an Alignment (speech/alignment.py) and behaviour `actions`.
+    """Key frames for an Alignment (speech/records.py) and behaviour `actions`.
 
     Returns a Timeline of alignment.duration (rounded to ms) with the tracks
     mouth, blink, brow, tilt, turn and nod.

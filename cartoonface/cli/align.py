@@ -1,6 +1,6 @@
 """`cartoonface align`: recording + transcript -> Praat TextGrid (and JSON) of sentences, syllables, mouth shapes.
 
-A thin shell over `cartoonface.speech.alignment.analyse`: progress on
+A thin shell over `cartoonface.speech.analyse.analyse`: progress on
 stderr, notes on stderr, a one-line summary on stdout. docs/alignment.md
 describes the outputs.
 """
@@ -19,7 +19,7 @@ from cartoonface.errors import OptionError, TranscriptError
 from cartoonface.files import read_user_text, write_text_atomic
 
 if TYPE_CHECKING:
-    from cartoonface.speech.alignment import Alignment
+    from cartoonface.speech.records import Alignment
 
 HELP = "time the sentences, syllables and mouth shapes of a recording (Praat TextGrid)"
 
@@ -63,7 +63,7 @@ def check_output(path: Path, option: str) -> None:
 
 def summary(alignment: Alignment, output: Path, seconds: float) -> str:
     """The one-line report of a finished alignment."""
-    from cartoonface.speech.alignment import LOW_CONFIDENCE
+    from cartoonface.speech.analyse import LOW_CONFIDENCE
 
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
     low = sum(s.confidence < LOW_CONFIDENCE for s in syllables)
@@ -81,8 +81,9 @@ def _count(number: int, noun: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Align the recording with its transcript and write the outputs; returns 0."""
-    from cartoonface.speech.alignment import alignment_to_dict, analyse
+    from cartoonface.speech.analyse import analyse
     from cartoonface.speech.audio import load_audio
+    from cartoonface.speech.records import alignment_to_dict
     from cartoonface.speech.textgrid import write_textgrid
 
     started = time.perf_counter()

@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Protocol, Sequence
 import numpy as np
 
 from cartoonface.speech.features import HOP, frames
+from cartoonface.speech.pinyin import split_initial
 
 if TYPE_CHECKING:
     from cartoonface.speech.audio import Audio
@@ -81,9 +82,6 @@ class SyllableType:
     erhua: bool
 
 
-_INITIALS = ("zh", "ch", "sh", "b", "p", "m", "f", "d", "t", "n", "l", "g", "k", "h",
-             "j", "q", "x", "r", "z", "c", "s", "y", "w")
-
 # Initial classes (standard Mandarin phonology): closure = silent stop or affricate onset,
 # frication = voiceless fricative, sonorant = nasal, lateral or r, glide = y/w, none = vowel.
 _CLASS = {**dict.fromkeys(("b", "d", "g", "z", "zh", "j"), "closure"),
@@ -110,8 +108,8 @@ def syllable_type(pinyin: str) -> SyllableType:
     erhua = len(text) > 2 and text.endswith("r") and text != "er"
     if erhua:
         text = text[:-1]
-    initial = next((i for i in _INITIALS if text.startswith(i) and len(text) > len(i)), "")
-    return SyllableType(initial, text[len(initial):], tone, erhua)
+    initial, final = split_initial(text, glides=True)
+    return SyllableType(initial, final, tone, erhua)
 
 
 # Relative duration of a syllable by type, multiplied together; fitted on Biaobei 000001-000035
