@@ -47,7 +47,8 @@ from typing import TYPE_CHECKING, Protocol, Sequence
 
 import numpy as np
 
-from cartoonface.speech.features import HOP, frames
+from cartoonface.speech.audio import digital_silence
+from cartoonface.speech.features import HOP, WINDOW_SECONDS, frames
 
 if TYPE_CHECKING:
     from cartoonface.speech.audio import Audio
@@ -149,6 +150,18 @@ DIP_CAP = 8.0              # dB: deeper dips are closures or pauses, no likelier
 MID_DIP_SHARE = 0.4        # weight of a 1-3 kHz dip next to a 0.1-1 kHz one (the larger counts):
                            # a nasal's murmur or a glide can keep the low band up while F2/F3 drop
 SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pause evidence
+SILENCE_CLIP = (-3.0, 1.0)  # pause evidence per frame is kept within these bounds (a loud frame
+                            # costs at most 3 units, a quiet one earns at most 1)
+# The part's level range: its loud level is this percentile of its 100-1000 Hz frames, its floor
+# this percentile of the frames of the part and its margins that hold recorded sound (digital
+# silence, audio.DIGITAL_SILENCE, is no noise floor: exact zeros between joined sentences would
+# put the floor 40 dB under the real one, and the pauses inside the part would count as speech).
+LOUD_PERCENTILE = 95.0
+FLOOR_PERCENTILE = 5.0
+MIN_RECORDED = 0.05        # share of recorded frames below which the floor is taken over all frames
+SILENCE_SHARE = 0.3        # frames below floor + this share of the range are silent
+MIN_RANGE_DB = 10.0        # a part with a smaller range is noise or silence: duration-prior split
+QUALITY_RANGE_DB = 20.0    # dB of range above MIN_RANGE_DB at which the signal quality reaches 1
 PAUSE_PENALTY = 3.0        # per pause, in units of evidence
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
@@ -353,12 +366,14 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     # boundary k (time span.start + k * HOP) sits at the centre of feature frame MARGIN + k - 1.
     index = np.clip(MARGIN + np.arange(total + 1) - 1, 0, low.size - 1)
     inner = low[index[:-1]]
-    loud, floor = np.percentile(inner, 95), np.percentile(low, 5)
-    if not np.isfinite(loud) or loud - floor < 10.0:
+    recorded = ~_dead_frames(clip, audio.rate, low.size)
+    loud = np.percentile(inner, LOUD_PERCENTILE)
+    floor = np.percentile(low[recorded] if recorded.mean() >= MIN_RECORDED else low, FLOOR_PERCENTILE)
+    if not np.isfinite(loud) or loud - floor < MIN_RANGE_DB:
         return prior_split(span, syllables, LOW_CONFIDENCE)
-    threshold = floor + 0.3 * (loud - floor)
-    silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, -3.0, 1.0),
-                         _high_band_silence(_smooth(feats.high), index[:-1]))
+    threshold = floor + SILENCE_SHARE * (loud - floor)
+    silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, *SILENCE_CLIP),
+                         _high_band_silence(_smooth(feats.high), index[:-1], recorded))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
     by_class = onset_evidence(low, _smooth(feats.mid))
@@ -368,7 +383,7 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     lattice = _forward(evidence, silence, edges, means)
     starts, ends = _best_cut(lattice)
     margins = _onset_margins(lattice, evidence, silence, edges, means, starts)
-    quality = float(np.clip((loud - floor - 10.0) / 20.0, 0.0, 1.0))
+    quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
     confidence = _confidence(margins, quality)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
@@ -376,16 +391,26 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
 
 
-def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
-    """(T_all,) smoothed 3-8 kHz dB of the clip, (T,) indices of the span's frames -> (T,)
+def _dead_frames(clip: np.ndarray, rate: int, count: int) -> np.ndarray:
+    """(count,) bool: feature frame i (25 ms from i * HOP s of the (n,) `clip` at `rate` Hz) holds
+    only digital silence (audio.DIGITAL_SILENCE); frames past the clip's end count as silent."""
+    blocks = digital_silence(clip, rate, HOP)
+    covered = int(np.ceil(WINDOW_SECONDS / HOP))
+    padded = np.concatenate([blocks, np.ones(count + covered, dtype=bool)])
+    return np.all(np.lib.stride_tricks.sliding_window_view(padded, covered)[:count], axis=1)
+
+
+def _high_band_silence(high: np.ndarray, inner: np.ndarray, recorded: np.ndarray) -> np.ndarray:
+    """(T_all,) smoothed 3-8 kHz dB of the clip, (T,) indices of the span's frames, (T_all,)
+    bool frames of recorded sound (not digital silence; the floor is taken over them) -> (T,)
     silence evidence of that band alone: a voiceless fricative or aspiration is quiet below
     1 kHz but loud above 3 kHz, and is no pause. The band counts as quiet below its floor plus
     FRICATION_RANGE of its range, and always within FRICATION_FLOOR dB of its floor (noisy or
     band-limited recordings, whose range in this band is mostly noise)."""
     band = high[inner]
-    floor = np.percentile(high, 5)
-    threshold = floor + max(FRICATION_RANGE * (np.percentile(band, 95) - floor), FRICATION_FLOOR)
-    return np.clip((threshold - band) / SILENCE_SCALE, -3.0, 1.0)
+    floor = np.percentile(high[recorded] if recorded.mean() >= MIN_RECORDED else high, FLOOR_PERCENTILE)
+    threshold = floor + max(FRICATION_RANGE * (np.percentile(band, LOUD_PERCENTILE) - floor), FRICATION_FLOOR)
+    return np.clip((threshold - band) / SILENCE_SCALE, *SILENCE_CLIP)
 
 
 def _confidence(margins: np.ndarray, quality: float) -> np.ndarray:

@@ -16,6 +16,7 @@ from scipy.signal import resample_poly
 RATE = 16000
 HOP = 0.010          # seconds between frames
 WINDOW = 400         # samples (25 ms at 16 kHz)
+WINDOW_SECONDS = WINDOW / RATE
 NFFT = 512
 MELS = 40
 CEPSTRA = 13

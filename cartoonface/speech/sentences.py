@@ -24,7 +24,7 @@ import numpy as np
 from scipy import signal
 
 from cartoonface.errors import OptionError
-from cartoonface.speech.audio import Audio
+from cartoonface.speech.audio import Audio, digital_silence
 
 # thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
 C1 = 0.95
@@ -37,6 +37,7 @@ C2 = 1.45
 HOP = 0.01  # seconds per energy frame
 HIGH_PASS_HZ = 80.0  # damps rumble and the 50/60 Hz fundamental of mains hum in the energy
 # Automatic mode: frames louder than floor + max(MIN_CONTRAST_DB, SHARE * (speech - floor)) are sound.
+# The floor is a percentile of the frames that hold recorded sound (not digital silence).
 FLOOR_PERCENTILE = 5.0
 SPEECH_PERCENTILE = 98.0
 MIN_CONTRAST_DB = 6.0
@@ -62,6 +63,10 @@ PAD = 0.05
 # Thesis mode: a selected pause whose noise level V * c2 reaches this share of the speech peaks
 # (99th percentile of frame RMS) holds speech, not silence, and is refused.
 LOUD_PAUSE = 0.5
+# Frames with less sound than this share of recorded (non-digital-silence) frames: the floor is
+# taken over all frames (a recording that is nearly all digital silence).
+MIN_RECORDED = 0.05
+POWER_EPSILON = 1e-12  # added to a frame's mean square before taking dB (-120 dB: digital silence)
 # Parts shorter than this are clicks, not speech (both modes).
 MIN_PART = 0.06
 
@@ -138,8 +143,8 @@ def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -
 
 def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
     """Speaking parts with the noise floor, speech level and pause length learned from the recording."""
-    level = 10 * np.log10(power + 1e-12)
-    floor = float(np.percentile(level, FLOOR_PERCENTILE))
+    level = 10 * np.log10(power + POWER_EPSILON)
+    floor = float(np.percentile(_recorded(audio, level), FLOOR_PERCENTILE))
     loud = float(np.percentile(level, SPEECH_PERCENTILE))
     threshold = floor + max(MIN_CONTRAST_DB, THRESHOLD_SHARE * (loud - floor))
     runs = _runs(level > threshold)
@@ -166,6 +171,16 @@ def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
         end = min(last + round(PAD / HOP), (last + after) // 2 if index + 1 < len(parts) else len(level)) * HOP
         spans.append(Span(round(start, 3), round(min(end, audio.duration), 3)))
     return tuple(span for span in spans if span.duration >= MIN_PART)
+
+
+def _recorded(audio: Audio, level: np.ndarray) -> np.ndarray:
+    """The frame levels (frames,) of `audio` without its digital silence (audio.DIGITAL_SILENCE):
+    exact zeros, a gate's near-zero or a constant are no noise floor. All of them when fewer
+    than MIN_RECORDED of the frames hold recorded sound."""
+    dead = np.zeros(len(level), dtype=bool)
+    blocks = digital_silence(audio.samples, audio.rate, HOP)[: len(level)]
+    dead[: len(blocks)] = blocks
+    return level if np.mean(~dead) < MIN_RECORDED else level[~dead]
 
 
 def learn_pause(gaps: np.ndarray) -> float:
