@@ -133,36 +133,31 @@ def gated(audio: Audio) -> Audio:
     return Audio(samples, audio.rate, "gated")
 
 
-def as_16bit(samples: np.ndarray) -> np.ndarray:
-    """Samples rounded to the 16-bit grid (as a file would store them)."""
-    return (np.round(np.clip(samples, -1, 1) * 32767) / 32767).astype(np.float32)
-
-
-def eight_bit(audio: Audio, folder: Path) -> Audio:
-    """`audio` written as an 8-bit unsigned WAV and read back by load_audio."""
-    path = folder / "eight_bit.wav"
+def stored(samples: np.ndarray, rate: int, subtype: str, folder: Path) -> Audio:
+    """`samples` written as a WAV of `subtype` (FLOAT, PCM_16, PCM_U8) and read back by load_audio."""
+    path = folder / "condition.wav"
     buffer = io.BytesIO()
-    soundfile.write(buffer, audio.samples, audio.rate, subtype="PCM_U8", format="WAV")
+    soundfile.write(buffer, np.clip(samples, -1, 1), rate, subtype=subtype, format="WAV")
     path.write_bytes(buffer.getvalue())
     return load_audio(path)
 
 
 def conditions(items: list[Sentence], folder: Path) -> dict[str, Joined]:
-    natural = join(items, zeros=False)
-    audio = natural.audio
-    peak = float(np.abs(audio.samples).max())
-    def like(samples_or_audio) -> Joined:
-        new = samples_or_audio if isinstance(samples_or_audio, Audio) else Audio(samples_or_audio, audio.rate, "joined")
-        return Joined(new, natural.text, natural.references)
-    return {
-        "natural": natural,
-        "zeros": join(items, zeros=True),
-        "gate": like(gated(audio)),
-        "dc": like(np.clip(audio.samples + DC, -1, 1).astype(np.float32)),
-        "-40 dB": like(as_16bit(audio.samples * (10 ** (QUIET_DB / 20) / peak))),
-        "clipped": like(np.clip(audio.samples * CLIP_GAIN, -1, 1).astype(np.float32)),
-        "8-bit": like(eight_bit(audio, folder)),
+    """Every condition of the module docstring, each stored as a WAV file and read back by load_audio."""
+    natural, zeros = join(items, zeros=False), join(items, zeros=True)
+    samples, rate = natural.audio.samples, natural.audio.rate
+    peak = float(np.abs(samples).max())
+    made = {
+        "natural": (natural, samples, "FLOAT"),
+        "zeros": (zeros, zeros.audio.samples, "FLOAT"),
+        "gate": (natural, gated(natural.audio).samples, "FLOAT"),
+        "dc": (natural, samples + DC, "FLOAT"),
+        "-40 dB": (natural, samples * (10 ** (QUIET_DB / 20) / peak), "PCM_16"),
+        "clipped": (natural, samples * CLIP_GAIN, "FLOAT"),
+        "8-bit": (natural, samples, "PCM_U8"),
     }
+    return {label: Joined(stored(x, rate, subtype, folder), joined.text, joined.references)
+            for label, (joined, x, subtype) in made.items()}
 
 
 def onset_share(alignment: Alignment, joined: Joined) -> tuple[float, int, int]:

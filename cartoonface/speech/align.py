@@ -153,11 +153,14 @@ SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pa
 SILENCE_CLIP = (-3.0, 1.0)  # pause evidence per frame is kept within these bounds (a loud frame
                             # costs at most 3 units, a quiet one earns at most 1)
 # The part's level range: its loud level is this percentile of its 100-1000 Hz frames, its floor
-# this percentile of the frames of the part and its margins that hold recorded sound (digital
-# silence, audio.DIGITAL_SILENCE, is no noise floor: exact zeros between joined sentences would
-# put the floor 40 dB under the real one, and the pauses inside the part would count as speech).
+# this percentile of the frames of the part and its margins. Digital silence (audio.DIGITAL_SILENCE)
+# is no noise floor: exact zeros between joined sentences would put the floor 40 dB under the real
+# one, and the pauses inside the part would count as speech; its frames are set to the floor of
+# the recorded frames first (_lift_digital_silence).
 LOUD_PERCENTILE = 95.0
 FLOOR_PERCENTILE = 5.0
+NOISE_RANGE_DB = 60.0      # digital silence is set no higher than this below the loud level (a
+                           # gate also silences the quietest speech, which is then no floor)
 MIN_RECORDED = 0.05        # share of recorded frames below which the floor is taken over all frames
 SILENCE_SHARE = 0.3        # frames below floor + this share of the range are silent
 MIN_RANGE_DB = 10.0        # a part with a smaller range is noise or silence: duration-prior split
@@ -362,23 +365,23 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     clip = np.asarray(audio.samples[max(first, 0):max(last, 0)], dtype=np.float64)
     clip = np.concatenate([np.zeros(max(-first, 0)), clip, np.zeros(max(last - max(first, 0) - clip.size - max(-first, 0), 0))])
     feats = frames(clip, audio.rate)
-    low = _smooth(feats.low)
+    recorded = ~_dead_frames(clip, audio.rate, feats.low.size)
+    low, mid, high = (_smooth(_lift_digital_silence(band, recorded)) for band in (feats.low, feats.mid, feats.high))
     # boundary k (time span.start + k * HOP) sits at the centre of feature frame MARGIN + k - 1.
     index = np.clip(MARGIN + np.arange(total + 1) - 1, 0, low.size - 1)
     inner = low[index[:-1]]
-    recorded = ~_dead_frames(clip, audio.rate, low.size)
     loud = np.percentile(inner, LOUD_PERCENTILE)
-    floor = np.percentile(low[recorded] if recorded.mean() >= MIN_RECORDED else low, FLOOR_PERCENTILE)
+    floor = np.percentile(low, FLOOR_PERCENTILE)
     if not np.isfinite(loud) or loud - floor < MIN_RANGE_DB:
         return prior_split(span, syllables, LOW_CONFIDENCE)
     threshold = floor + SILENCE_SHARE * (loud - floor)
     silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, *SILENCE_CLIP),
-                         _high_band_silence(_smooth(feats.high), index[:-1], recorded))
+                         _high_band_silence(high, index[:-1]))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
-    by_class = onset_evidence(low, _smooth(feats.mid))
+    by_class = onset_evidence(low, mid)
     evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
-    edges = edge_evidence(low, _smooth(feats.high))[:, index]
+    edges = edge_evidence(low, high)[:, index]
     evidence[0] = 0.0
     lattice = _forward(evidence, silence, edges, means)
     starts, ends = _best_cut(lattice)
@@ -391,6 +394,18 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
 
 
+def _lift_digital_silence(band: np.ndarray, recorded: np.ndarray) -> np.ndarray:
+    """(T,) dB of one band, (T,) bool frames of recorded sound -> the band with its digital-silence
+    frames set to the FLOOR_PERCENTILE of the recorded ones, as if the gap held the recording's own
+    noise (a faint dither in the gaps gives the same timing as natural pauses). Unchanged when
+    fewer than MIN_RECORDED of the frames are recorded."""
+    if recorded.all() or recorded.mean() < MIN_RECORDED:
+        return band
+    kept = band[recorded]
+    floor = min(np.percentile(kept, FLOOR_PERCENTILE), np.percentile(kept, LOUD_PERCENTILE) - NOISE_RANGE_DB)
+    return np.where(recorded, band, floor)
+
+
 def _dead_frames(clip: np.ndarray, rate: int, count: int) -> np.ndarray:
     """(count,) bool: feature frame i (25 ms from i * HOP s of the (n,) `clip` at `rate` Hz) holds
     only digital silence (audio.DIGITAL_SILENCE); frames past the clip's end count as silent."""
@@ -400,15 +415,14 @@ def _dead_frames(clip: np.ndarray, rate: int, count: int) -> np.ndarray:
     return np.all(np.lib.stride_tricks.sliding_window_view(padded, covered)[:count], axis=1)
 
 
-def _high_band_silence(high: np.ndarray, inner: np.ndarray, recorded: np.ndarray) -> np.ndarray:
-    """(T_all,) smoothed 3-8 kHz dB of the clip, (T,) indices of the span's frames, (T_all,)
-    bool frames of recorded sound (not digital silence; the floor is taken over them) -> (T,)
+def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """(T_all,) smoothed 3-8 kHz dB of the clip, (T,) indices of the span's frames -> (T,)
     silence evidence of that band alone: a voiceless fricative or aspiration is quiet below
     1 kHz but loud above 3 kHz, and is no pause. The band counts as quiet below its floor plus
     FRICATION_RANGE of its range, and always within FRICATION_FLOOR dB of its floor (noisy or
     band-limited recordings, whose range in this band is mostly noise)."""
     band = high[inner]
-    floor = np.percentile(high[recorded] if recorded.mean() >= MIN_RECORDED else high, FLOOR_PERCENTILE)
+    floor = np.percentile(high, FLOOR_PERCENTILE)
     threshold = floor + max(FRICATION_RANGE * (np.percentile(band, LOUD_PERCENTILE) - floor), FRICATION_FLOOR)
     return np.clip((threshold - band) / SILENCE_SCALE, *SILENCE_CLIP)
 
