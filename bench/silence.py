@@ -55,6 +55,7 @@ FPS = 30
 QUIET_MARGIN = 0.12       # seconds: frames closer than this to a reference syllable may be moving
 LIMIT = 0.05              # seconds: an onset within this of the reference is right
 SILENCE = {"sil", "sp", ""}
+OPENNESS = ("a", "o", "h", "n", "u", "h'", "r", "e", "z", "i")  # by lip gap dn - up (MNS0), face/mouth.py MOUTH_SHAPES
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,7 @@ class Sentence:
     rate: int
     text: str
     syllables: tuple[tuple[float, float, str], ...]
+    final: tuple[float, float]  # reference start and end of the last syllable's final (vowel)
 
 
 def sentences(ids: range) -> list[Sentence]:
@@ -76,7 +78,9 @@ def sentences(ids: range) -> list[Sentence]:
         audio = load_audio(folder / "wav" / f"{row['id']}.wav")
         tier = read_tiers(folder / "TextGrid" / f"{row['id']}.TextGrid")["syllables_pinyin"]
         syllables = tuple((a, b, t) for a, b, t in tier if t not in SILENCE)
-        out.append(Sentence(audio.samples, audio.rate, row["hanzi_meta"].rstrip(".") + "。", syllables))
+        phones = read_tiers(folder / "TextGrid" / f"{row['id']}.TextGrid")["phones"]
+        final = next((a, b) for a, b, t in reversed(phones) if t not in SILENCE)
+        out.append(Sentence(audio.samples, audio.rate, row["hanzi_meta"].rstrip(".") + "。", syllables, final))
     return out
 
 
@@ -87,12 +91,13 @@ class Joined:
     audio: Audio
     text: str
     references: tuple[tuple[tuple[float, float, str], ...], ...]
+    finals: tuple[tuple[float, float], ...]
 
 
 def join(items: list[Sentence], zeros: bool) -> Joined:
     """The sentences end to end as recorded, or cut to their speech and separated by GAP s of zeros."""
     rate = items[0].rate
-    pieces, references, position = [], [], 0.0
+    pieces, references, finals, position = [], [], [], 0.0
     gap = np.zeros(round(GAP * rate), dtype=np.float32)
     if zeros:
         pieces.append(gap)
@@ -105,13 +110,14 @@ def join(items: list[Sentence], zeros: bool) -> Joined:
             last = min(len(samples), int((item.syllables[-1][1] + EDGE) * rate))
             samples, offset = samples[first:last], first / rate
         references.append(tuple((a - offset + position, b - offset + position, p) for a, b, p in item.syllables))
+        finals.append((item.final[0] - offset + position, item.final[1] - offset + position))
         pieces.append(samples)
         position += len(samples) / rate
         if zeros:
             pieces.append(gap)
             position += GAP
     audio = Audio(np.concatenate(pieces).astype(np.float32), rate, "joined")
-    return Joined(audio, "".join(item.text for item in items), tuple(references))
+    return Joined(audio, "".join(item.text for item in items), tuple(references), tuple(finals))
 
 
 def gated(audio: Audio) -> Audio:
@@ -156,7 +162,7 @@ def conditions(items: list[Sentence], folder: Path) -> dict[str, Joined]:
         "clipped": (natural, samples * CLIP_GAIN, "FLOAT"),
         "8-bit": (natural, samples, "PCM_U8"),
     }
-    return {label: Joined(stored(x, rate, subtype, folder), joined.text, joined.references)
+    return {label: Joined(stored(x, rate, subtype, folder), joined.text, joined.references, joined.finals)
             for label, (joined, x, subtype) in made.items()}
 
 
@@ -206,6 +212,24 @@ def mouth_figures(alignment: Alignment, joined: Joined) -> tuple[int, int, int]:
     return int(np.sum(quiet & ~closed)), int(np.sum(quiet)), min(shortest, default=0)
 
 
+def final_vowels(alignment: Alignment, joined: Joined) -> tuple[int, int, float]:
+    """(late, count, median ms): over the sentence-final syllables whose widest shape (the first
+    of its shapes in OPENNESS order) is not their first shape, how many reach it (its key frame
+    on the timeline's mouth track) after the middle of the reference final (the vowel), how many
+    such syllables there are, and the median time from the middle of the final to that key."""
+    mouth = build_timeline(alignment, ()).track("mouth")
+    late, offsets = 0, []
+    for sentence, (first, last) in zip(alignment.sentences, joined.finals, strict=True):
+        syllable = sentence.syllables[-1]
+        wide = next((shape for shape in OPENNESS if shape in syllable.shapes), None)
+        if wide is None or wide == syllable.shapes[0]:
+            continue
+        key = next(k.t / 1000 for k in mouth.keys if k.value == wide and k.t / 1000 >= syllable.start - 1e-3)
+        offsets.append(1000 * (key - (first + last) / 2))
+        late += offsets[-1] > 0
+    return late, len(offsets), float(np.median(offsets)) if offsets else float("nan")
+
+
 def report(name: str, ids: range, folder: Path) -> None:
     items = sentences(ids)
     print(f"{name} (Biaobei {ids.start:06d}-{ids.stop - 1:06d}): onsets within {LIMIT * 1000:.0f} ms, "
@@ -218,9 +242,11 @@ def report(name: str, ids: range, folder: Path) -> None:
         share, count, left_out = onset_share(alignment, joined)
         base = share if base is None else base
         opened, quiet, shortest = mouth_figures(alignment, joined)
+        late, finals, offset = final_vowels(alignment, joined)
         print(f"  {label:<8} {100 * share:5.1f}% ({100 * (share - base):+5.1f}) of {count} onsets"
               f" ({left_out} sentences left out); open {opened}/{quiet} silent frames; "
-              f"b/p/m closed >= {shortest} frames; {joined.audio.duration / seconds:.0f}x real time", flush=True)
+              f"b/p/m closed >= {shortest} frames; sentence-final widest shape after the vowel's middle "
+              f"{late}/{finals} (median {offset:+.0f} ms); {joined.audio.duration / seconds:.0f}x real time", flush=True)
 
 
 def main() -> None:
