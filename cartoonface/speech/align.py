@@ -55,8 +55,13 @@ if TYPE_CHECKING:
 
 
 class SpanLike(Protocol):
-    start: float
-    end: float
+    """Anything with a start and an end in seconds (sentences.Span)."""
+
+    @property
+    def start(self) -> float: ...
+
+    @property
+    def end(self) -> float: ...
 
 
 @dataclass(frozen=True)
@@ -129,7 +134,7 @@ _LAST_FACTOR = 1.40              # last syllable of the part (phrase-final lengt
 
 def relative_durations(syllables: Sequence[str]) -> np.ndarray:
     """(N,) relative duration weights of the syllables of one part (mean 1)."""
-    weights = []
+    weights: list[float] = []
     for k, pinyin in enumerate(syllables):
         t = syllable_type(pinyin)
         w = _INITIAL_FACTOR[initial_class(t.initial)] * _TONE_FACTOR[t.tone]
@@ -138,8 +143,8 @@ def relative_durations(syllables: Sequence[str]) -> np.ndarray:
         w *= _ERHUA_FACTOR if t.erhua else 1.0
         w *= _LAST_FACTOR if k == len(syllables) - 1 else 1.0
         weights.append(w)
-    weights = np.array(weights, dtype=float)
-    return weights / weights.mean() if weights.size else weights
+    relative = np.array(weights, dtype=float)
+    return relative / relative.mean() if relative.size else relative
 
 
 # Tuned on Biaobei 000001-000035 (bench/align.py).

@@ -33,6 +33,9 @@ SILENT_PEAK = 10 ** (-70 / 20)
 # joined files, noise gates and TTS put such stretches between sentences; they are no noise
 # floor (thesis 002, 3.2.1: silence is normally *not* zero, because of environment noise).
 DIGITAL_SILENCE = 2 * 2 / 65536
+# A mean (DC offset) larger than this (-60 dBFS) is subtracted from the samples when reading:
+# a faulty converter or sound card adds it; smaller means are what speech itself averages to.
+DC_OFFSET = 1e-3
 # Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
 _SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
 # Formats every current browser plays in an <audio> element, kept as they are by browser_copy.
@@ -98,7 +101,9 @@ def load_audio(path: str | os.PathLike[str]) -> Audio:
         )
     # Float files may hold NaN or infinities (a broken encoder): read them as silence / full scale.
     np.nan_to_num(samples, copy=False, nan=0.0, posinf=1.0, neginf=-1.0)
-    samples -= np.float32(np.mean(samples, dtype=np.float64))  # a DC offset is no sound
+    offset = float(np.mean(samples, dtype=np.float64))
+    if abs(offset) > DC_OFFSET:
+        samples -= np.float32(offset)  # a DC offset is no sound: it would hide a silent file
     np.clip(samples, -1.0, 1.0, out=samples)
     peak = float(np.max(np.abs(samples)))
     if peak < SILENT_PEAK:
