@@ -164,3 +164,19 @@ def test_a_lengthened_final_reaches_its_widest_shape_in_its_first_part(length):
     assert key - 0.7 < 0.5 * length
     # the last shape holds to the end of the sound
     assert _dominant(states_at(timeline, [0.7 + length])[0]) == "u"
+
+
+@pytest.mark.parametrize("gap", [0.10, 0.12, 0.15])
+def test_a_short_pause_closes_the_mouth_for_an_instant(gap):
+    syllables = (_syllable(("a",), 0.5, 0.8), _syllable(("a",), 0.8 + gap, 1.1 + gap))
+    timeline = build_timeline(Alignment((Sentence("s", 0.5, 1.1 + gap, syllables),), 2.0, ()), ())
+    lag_share = LAG_MS / (LAG_MS + LEAD_MS)
+    closed, before, after = states_at(timeline, [0.8 + gap * lag_share, 0.8, 0.8 + gap])
+    assert closed.mouth == ((REST, 1.0),)
+    assert before.mouth == (("a", 1.0),) and after.mouth == (("a", 1.0),)
+
+
+def test_a_gap_shorter_than_a_pause_blends_straight_on():
+    syllables = (_syllable(("a",), 0.5, 0.8), _syllable(("i",), 0.86, 1.1))
+    timeline = build_timeline(Alignment((Sentence("s", 0.5, 1.1, syllables),), 2.0, ()), ())
+    assert all(dict(s.mouth).get(REST, 0) == 0 for s in states_at(timeline, [0.8 + k * 0.01 for k in range(7)]))

@@ -27,6 +27,10 @@ REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: sh
 # at 30 fps: the mouth visibly opens ahead of the syllable without looking early.
 LEAD_MS = 80
 LAG_MS = 80
+# A pause shorter than LAG_MS + LEAD_MS but at least this long (the aligner's shortest pause
+# inside a speaking part, speech/align.py MIN_PAUSE) still closes the mouth, for an instant:
+# lag and lead shrink in proportion. Shorter gaps blend straight on.
+SHORT_PAUSE_MS = 100
 # Lips closed for b, p, m (thesis 002, 5.2.2: their shape is m): held this long from the
 # syllable's start, the stop closure or nasal murmur (bilabial closures of read Mandarin last
 # about 50-100 ms). 70 ms holds the closed mouth over at least 2 frames at 30 fps.
@@ -118,17 +122,24 @@ def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
     end for that when needed, as far as the syllable allows (_closure_times). Where
     the gap to the next syllable leaves room for LAG_MS + LEAD_MS, the mouth
     holds the last shape to the end of the sound, closes to REST within
-    LAG_MS, and reopens from REST LEAD_MS before the next syllable; shorter
-    gaps blend straight from one syllable into the next. `duration` in ms.
+    LAG_MS, and reopens from REST LEAD_MS before the next syllable; a gap of
+    SHORT_PAUSE_MS up to that closes it at one instant (lag and lead shrunk
+    in proportion); shorter gaps blend straight from one syllable into the
+    next. `duration` in ms.
     """
     keys = [Keyframe(0, REST)]
     previous_end = None
     for index, syllable in enumerate(syllables):
         start, end = _ms(syllable.start), _ms(syllable.end)
-        if previous_end is None or start - previous_end >= LAG_MS + LEAD_MS:
+        gap = None if previous_end is None else start - previous_end
+        if gap is None or gap >= SHORT_PAUSE_MS:
+            lag, lead = LAG_MS, LEAD_MS
+            if gap is not None and gap < LAG_MS + LEAD_MS:
+                lag = round(gap * LAG_MS / (LAG_MS + LEAD_MS))
+                lead = gap - lag
             if previous_end is not None:
-                keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + LAG_MS, REST)]
-            keys.append(Keyframe(max(start - LEAD_MS, 0), REST))
+                keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + lag, REST)]
+            keys.append(Keyframe(max(start - lead, 0), REST))
         following = syllables[index + 1] if index + 1 < len(syllables) else None
         paused = following is None or _ms(following.start) - end >= LAG_MS + LEAD_MS
         shaped = round((end - start) / FINAL_LENGTHENING) if paused else end - start
