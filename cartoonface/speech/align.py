@@ -181,6 +181,13 @@ PAUSE_PENALTY = 3.0        # per pause, in units of evidence
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
 MIN_FRAMES = 3             # frames: the shortest syllable
+LONGEST_SHARE = 4          # a syllable lasts at most this many times its expected duration
+SMOOTH_FRAMES = 3          # band levels are smoothed over this many frames (30 ms)
+CHANGE_FRAMES = 2          # a fall or rise is measured from this many frames before to as many after
+CHANGE_CAP_DB = 30.0       # larger falls and rises count as this (a step into digital silence is no likelier)
+DIP_REACH = 12             # frames (120 ms) either side whose highest level a dip is measured against
+MINIMUM_REACH = 3          # frames either side within which a dip must be the (near) lowest
+MINIMUM_TOLERANCE_DB = 1.0  # dB above the nearby minimum still counted as the minimum
 MARGIN = 20                # frames of context read on each side of the span
 SURE_DISTANCE = 5          # frames: an onset moved further than this counts as a different answer
 MARGIN_SCALE = 0.5         # score margin (units of evidence) of confidence 1 - 1/e; on Biaobei
@@ -198,7 +205,8 @@ FRICATION_FLOOR = 10.0     # dB above the 3-8 kHz floor that is always tolerated
                            # (no effect on Biaobei; checked on Chao 1922, whose high band is noise)
 
 
-def _smooth(x: np.ndarray, width: int = 3) -> np.ndarray:
+def _smooth(x: np.ndarray, width: int = SMOOTH_FRAMES) -> np.ndarray:
+    """(T,) values -> (T,) their moving mean over `width` frames (edges repeated)."""
     return np.convolve(np.pad(x, width // 2, mode="edge"), np.ones(width) / width, mode="valid")
 
 
@@ -206,10 +214,10 @@ def edge_evidence(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(T,) smoothed dB of 100-1000 Hz and 3000-8000 Hz -> (2, T): evidence that a pause
     starts at each position (the low band falls) and that one ends (either band rises)."""
     def change(x):
-        pad = np.pad(x, 2, mode="edge")
-        return pad[4:] - pad[:-4]
+        pad = np.pad(x, CHANGE_FRAMES, mode="edge")
+        return pad[2 * CHANGE_FRAMES:] - pad[:-2 * CHANGE_FRAMES]
     rise = np.maximum(change(low), change(high))
-    return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, 30.0)
+    return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, CHANGE_CAP_DB)
 
 
 def _earlier(x: np.ndarray, frames: int) -> np.ndarray:
@@ -226,22 +234,23 @@ def _earlier(x: np.ndarray, frames: int) -> np.ndarray:
 
 def _dip(band: np.ndarray) -> np.ndarray:
     """(T,) smoothed dB of one band -> (T,) dB depth of the dip at each local minimum (0 elsewhere),
-    below the lower of the highest levels within 120 ms before and after, capped at DIP_CAP."""
-    pad = np.pad(band, 12, mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
-    left, right = windows[:-13].max(axis=1), windows[13:].max(axis=1)
+    below the lower of the highest levels within DIP_REACH frames before and after, capped at DIP_CAP."""
+    pad = np.pad(band, DIP_REACH, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(pad, DIP_REACH)
+    left, right = windows[:-DIP_REACH - 1].max(axis=1), windows[DIP_REACH + 1:].max(axis=1)
     dip = np.minimum(left, right) - band
     # only at (near) local minima: a flat quiet stretch is one dip, not many
-    nearby = np.lib.stride_tricks.sliding_window_view(pad[9:-9], 7).min(axis=1)
-    return np.clip(np.where(band <= nearby + 1.0, dip, 0.0), 0.0, DIP_CAP)
+    inner = pad[DIP_REACH - MINIMUM_REACH:-(DIP_REACH - MINIMUM_REACH)]
+    nearby = np.lib.stride_tricks.sliding_window_view(inner, 2 * MINIMUM_REACH + 1).min(axis=1)
+    return np.clip(np.where(band <= nearby + MINIMUM_TOLERANCE_DB, dip, 0.0), 0.0, DIP_CAP)
 
 
 def onset_evidence(low: np.ndarray, mid: np.ndarray) -> dict[str, np.ndarray]:
     """(T,) smoothed 100-1000 Hz and 1000-3000 Hz dB per boundary position -> for each initial
     class, (T,) evidence that a syllable of that class starts there (higher is likelier), each
     moved by the class's ONSET_LEAD."""
-    pad = np.pad(low, 2, mode="edge")
-    fall = FALL_WEIGHT * np.clip(pad[:-4] - pad[4:], 0.0, 30.0)   # dB fall, 2 frames before to 2 after
+    pad = np.pad(low, CHANGE_FRAMES, mode="edge")
+    fall = FALL_WEIGHT * np.clip(pad[:-2 * CHANGE_FRAMES] - pad[2 * CHANGE_FRAMES:], 0.0, CHANGE_CAP_DB)
     dip = DIP_WEIGHT * np.maximum(_dip(low), MID_DIP_SHARE * _dip(mid))
     measure = {"closure": fall, "aspirated": fall, "frication": fall, "sonorant": dip, "glide": dip, "none": dip}
     return {c: _earlier(x, ONSET_LEAD[c]) for c, x in measure.items()}
@@ -298,7 +307,7 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             break
         start_score = np.maximum(after_syllable[i] + evidence[i], after_pause[i])
         start_pause = after_pause[i] > after_syllable[i] + evidence[i]
-        longest = min(total, int(4 * means[i]) + MIN_FRAMES)
+        longest = min(total, int(LONGEST_SHARE * means[i]) + MIN_FRAMES)
         d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
         starts = k[:, None] - d[None, :]
         cand = np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG) + _duration_score(d, means[i])[None, :]
