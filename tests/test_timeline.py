@@ -6,7 +6,7 @@ import pytest
 
 from cartoonface.animate.behaviour import Action
 from cartoonface.animate.frames import states_at
-from cartoonface.animate.timeline import FINAL_LENGTHENING, LAG_MS, LEAD_MS, REST, build_timeline
+from cartoonface.animate.timeline import CLOSURE_MS, FINAL_LENGTHENING, LAG_MS, LEAD_MS, REST, build_timeline
 from cartoonface.speech.alignment import Alignment, Sentence, Syllable
 from cartoonface.speech.mouth_shapes import shape_onsets
 
@@ -180,3 +180,13 @@ def test_a_gap_shorter_than_a_pause_blends_straight_on():
     syllables = (_syllable(("a",), 0.5, 0.8), _syllable(("i",), 0.86, 1.1))
     timeline = build_timeline(Alignment((Sentence("s", 0.5, 1.1, syllables),), 2.0, ()), ())
     assert all(dict(s.mouth).get(REST, 0) == 0 for s in states_at(timeline, [0.8 + k * 0.01 for k in range(7)]))
+
+
+def test_a_long_bilabial_syllable_opens_after_its_closure():
+    # ba of 400 ms: closed lips for CLOSURE_MS, then the mouth opens towards a (at 81 % of it)
+    syllables = (_syllable(("a",), 0.6, 0.8), _syllable(("m", "a"), 0.8, 1.2), _syllable(("a",), 1.2, 1.4))
+    timeline = build_timeline(Alignment((Sentence("s", 0.6, 1.4, syllables),), 2.0, ()), ())
+    closed, opening, opened = states_at(timeline, [0.8 + CLOSURE_MS / 1000, 1.0, 0.8 + shape_onsets(2)[1] * 0.4])
+    assert closed.mouth == ((REST, 1.0),)
+    assert 0 < dict(opening.mouth)["a"] < 1
+    assert opened.mouth == (("a", 1.0),)

@@ -148,8 +148,9 @@ def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
             times = _closure_times(times, start + shaped)
         for shape, t in zip(syllable.shapes, times, strict=True):
             keys.append(Keyframe(t, shape))
-        if syllable.shapes[0] == REST and len(times) > 1 and times[1] - RELEASE_MS > start:
-            keys.insert(len(keys) - len(times) + 1, Keyframe(times[1] - RELEASE_MS, REST))
+        hold = min(CLOSURE_MS, times[1] - RELEASE_MS - start) if len(times) > 1 else 0
+        if syllable.shapes[0] == REST and hold > 0:
+            keys.insert(len(keys) - len(times) + 1, Keyframe(start + hold, REST))
         previous_end = end
     if previous_end is not None:
         keys += [Keyframe(previous_end, keys[-1].value), Keyframe(min(previous_end + LAG_MS, duration), REST)]
