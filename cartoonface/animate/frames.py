@@ -15,6 +15,8 @@ writer can merge them: angles to 0.1 degree, amounts and mouth weights to 0.01.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from cartoonface.animate.timeline import Timeline, Track
@@ -47,7 +49,7 @@ def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
     return states_at(timeline, np.arange(count) / fps)
 
 
-def states_at(timeline: Timeline, times: np.ndarray) -> tuple[FaceState, ...]:
+def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[FaceState, ...]:
     """The face state at each of `times` ((n,) seconds), interpolated between key frames."""
     t = np.asarray(times, dtype=float) * 1000.0
     mouth = _mouth(timeline.track("mouth"), t)
