@@ -159,7 +159,8 @@ def _ms(t: float) -> float:
 
 def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
     length = _ms(BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN)
-    blinks, end = [], 0.0
+    blinks: list[Action] = []
+    end = 0.0
     while True:
         start = _ms(end + blink_interval(rng))
         if start + length > duration:
@@ -169,7 +170,8 @@ def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
 
 
 def _brows(duration: float, rng: np.random.Generator) -> list[Action]:
-    brows, end = [], 0.0
+    brows: list[Action] = []
+    end = 0.0
     while True:
         start = _ms(end + _uniform2(rng, BROW_INTERVAL))
         length = _uniform2(rng, BROW_DURATION)
@@ -196,7 +198,8 @@ def _moves(
     A move that would overlap a nod (`busy` spans) is put off: its interval is
     counted again from the end of that nod.
     """
-    moves, end = [], 0.0
+    moves: list[Action] = []
+    end = 0.0
     side = 1.0 if rng.random() < 0.5 else -1.0
     while True:
         gap, span = _uniform2(rng, interval), _uniform2(rng, length)
