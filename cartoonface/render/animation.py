@@ -41,9 +41,7 @@ own plays silently; the pages drive its clock from the audio (static/cartoonface
 
 from __future__ import annotations
 
-import dataclasses
 import html
-import math
 import re
 from collections import Counter
 from collections.abc import Sequence
@@ -54,7 +52,7 @@ from lxml import etree
 
 from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
-from cartoonface.face.pose import PosedFace, pose_face, rig
+from cartoonface.face.pose import pose_face, rig, unroll, unrolled
 from cartoonface.face.state import FaceState
 from cartoonface.render.pathdata import compact_paths
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
@@ -443,31 +441,6 @@ def _share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]
                                      else tidy[part])]
                      for drawing in track_drawings]
             for track, track_drawings in drawings.items()}
-
-
-def unrolled(state: FaceState) -> FaceState:
-    """`state` with no roll."""
-    if not state.pose.roll:
-        return state
-    return dataclasses.replace(state, pose=dataclasses.replace(state.pose, roll=0.0))
-
-
-def unroll(posed: PosedFace, roll: float, origin: np.ndarray) -> PosedFace:
-    """`posed` (a face posed with `roll` degrees) turned back by the roll about the rig's
-    `origin` (2,) pixels. pose_face rolls last, in the image plane about that origin
-    (face/pose.py: Rz @ Rx @ Ry, y flipped: x' = cos x + sin y, y' = -sin x + cos y), so
-    this is the face posed without roll, except the pupils, which keep gazing at the fixed
-    focus (up to 0.05 px per degree of roll apart); drawn and turned by `rotate(-roll)` (SVG
-    angles turn clockwise on screen) it is the posed face exactly."""
-    if not roll:
-        return posed
-    c, s = math.cos(math.radians(roll)), math.sin(math.radians(roll))
-    back = np.array([[c, s], [-s, c]])  # row vectors: (x', y') @ back = (c x' - s y', s x' + c y')
-
-    def turn(points: np.ndarray) -> np.ndarray:
-        return (points - origin) @ back + origin
-
-    return dataclasses.replace(posed, xy=turn(posed.xy), hair=turn(posed.hair), pupils=turn(posed.pupils))
 
 
 def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, centre: str) -> None:
