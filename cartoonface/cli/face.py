@@ -18,7 +18,8 @@ from cartoonface.face.model import load_face
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
 from cartoonface.files import write_bytes_atomic
-from cartoonface.render.svg import diagram_svg, face_svg, sheet_svg, svg_bytes, svg_to_png
+from cartoonface.render.elements import svg_bytes
+from cartoonface.render.svg import diagram_svg, face_svg, sheet_svg, svg_to_png
 
 # The contact sheet: one row per pose and expression, one column per basic mouth shape.
 # Rows: label, (tilt, turn, roll), blink, smile, brow.

@@ -45,7 +45,8 @@ def run_from_photo(args: argparse.Namespace) -> int:
     from cartoonface.face.photo import face_from_photo, load_photo, overlay_png
     from cartoonface.face.state import FaceState
     from cartoonface.files import write_bytes_atomic
-    from cartoonface.render.svg import face_svg, svg_bytes, svg_to_png
+    from cartoonface.render.elements import svg_bytes
+    from cartoonface.render.svg import face_svg, svg_to_png
 
     photo = load_photo(args.photo)
     result = face_from_photo(photo, name)

@@ -54,12 +54,12 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll, unrolled
 from cartoonface.face.state import FaceState
+from cartoonface.render.elements import SVG, element, svg_root
+from cartoonface.render.numbers import decimal_text
 from cartoonface.render.pathdata import compact_paths
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 from cartoonface.render.svg import face_defs, face_group
 
-SVG = "http://www.w3.org/2000/svg"
-NSMAP = {None: SVG}
 # The track of each part of render/svg.py's face_group (by its class), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
 # The mouth moves with the jaw, so it shares the track of the face outline: it is then drawn
@@ -112,7 +112,7 @@ def frame_ms(index: int, fps: int) -> int:
 
 def clock(ms: int) -> str:
     """A SMIL clock value (seconds, no unit) for `ms` milliseconds: 1234 -> '1.234', 500 -> '0.5', 0 -> '0'."""
-    return f"{ms // 1000}.{ms % 1000:03d}".rstrip("0").rstrip(".")
+    return decimal_text(ms / 1000, 3)  # exact: ms / 1000 is the double nearest a 3-decimal number
 
 
 def runs(keys: Sequence[int]) -> tuple[Run, ...]:
@@ -132,11 +132,6 @@ def figure_of(face: FaceModel, box: tuple[float, float, float, float]) -> Figure
     chin = face.point("2.1")
     return Figure(box=box, chin_x=float(chin[0]), chin_y=float(chin[1]),
                   face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
-
-
-def _el(parent: etree._Element, tag: str, **attrs: str) -> etree._Element:
-    """Append the SVG element `tag` with attributes `attrs` (underscores become hyphens) to `parent`."""
-    return etree.SubElement(parent, f"{{{SVG}}}{tag}", {k.replace("_", "-"): v for k, v in attrs.items()})
 
 
 def track_of(part: etree._Element) -> str:
@@ -280,7 +275,7 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
         if definition is None or set(node.attrib) - {"d", "class"}:
             continue
         definition[0].set("id", definition.get("id") + "_")
-        use = etree.Element(f"{{{SVG}}}use", href=f"#{definition.get('id')}_")
+        use = element(None, "use", href=f"#{definition.get('id')}_")
         if node.get("class"):
             use.set("class", node.get("class"))
         elements[index] = use
@@ -397,7 +392,7 @@ def _show(frame: etree._Element, spans: Sequence[tuple[int, int]]) -> etree._Ele
     lengths = {end - begin for begin, end in spans}
     timing = ({"dur": clock(lengths.pop())} if len(lengths) == 1
               else {"end": ";".join(clock(end) for _, end in spans)})
-    return _el(frame, "set", attributeName="visibility", to="visible", begin=begins, **timing)
+    return element(frame, "set", attributeName="visibility", to="visible", begin=begins, **timing)
 
 
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
@@ -405,11 +400,11 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
     """Write one track into `parent`: its drawing as is if it never changes, else one
     `<g visibility="hidden">` per distinct drawing, shown by `<set>`s (_show) over the runs of
     frames showing it."""
-    holder = _el(parent, "g", data_part=track)
+    holder = element(parent, "g", data_part=track)
     if len(drawings) == 1:
         holder.extend(drawings[0])
         return
-    frames = [_el(holder, "g", visibility="hidden") for _ in drawings]
+    frames = [element(holder, "g", visibility="hidden") for _ in drawings]
     all_runs = runs(keys)
     shown: list[list[tuple[int, int]]] = [[] for _ in drawings]  # (begin, end) ms of each drawing's runs
     for run in all_runs[:-1]:
@@ -435,10 +430,10 @@ def _share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]
     for part, count in uses.items():
         if count > 1:
             names[part] = short_id("g", len(names))
-            _el(defs, "g", id=names[part]).extend(tidy[part])
-    return {track: [[element for part in drawing
-                     for element in ([etree.Element(f"{{{SVG}}}use", href=f"#{names[part]}")] if part in names
-                                     else tidy[part])]
+            element(defs, "g", id=names[part]).extend(tidy[part])
+    return {track: [[node for part in drawing
+                     for node in ([element(None, "use", href=f"#{names[part]}")] if part in names
+                                  else tidy[part])]
                      for drawing in track_drawings]
             for track, track_drawings in drawings.items()}
 
@@ -454,9 +449,9 @@ def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, cent
     total = frame_ms(len(rolls), fps)
     values = ";".join(f"{-rolls[run.first] / 10 ** ROLL_DECIMALS:g} {centre}" for run in all_runs)
     # fractions of the whole, 9 decimals (never an exponent): within 0.01 ms for up to 10^4 s
-    times = ";".join(f"{frame_ms(run.first, fps) / total:.9f}".rstrip("0").rstrip(".") for run in all_runs)
+    times = ";".join(decimal_text(frame_ms(run.first, fps) / total, 9) for run in all_runs)
     for layer in layers:
-        layer.insert(0, etree.Element(f"{{{SVG}}}animateTransform", {
+        layer.insert(0, element(None, "animateTransform", {
             "attributeName": "transform", "type": "rotate", "calcMode": "discrete", "values": values,
             "keyTimes": times, "dur": clock(total), "fill": "freeze"}))
 
@@ -476,14 +471,12 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     box_height = height * STAGE_DEPTH if wide else height
     box_width = max(width, box_height * WIDE) if wide else width
     box = ((width - box_width) / 2, 0.0, box_width, box_height)
-    root = etree.Element(f"{{{SVG}}}svg", nsmap=NSMAP)
-    for name, value in (("id", "cf-face"), ("width", f"{box_width:g}"), ("height", f"{box_height:g}"),
-                        ("viewBox", " ".join(f"{v:g}" for v in box)), ("data-fps", str(fps))):
-        root.set(name, value)
+    root = svg_root({"id": "cf-face", "width": f"{box_width:g}", "height": f"{box_height:g}",
+                     "viewBox": " ".join(f"{v:g}" for v in box), "data-fps": str(fps)})
     if title:
-        _el(root, "title").text = title
-    style = _el(root, "style")
-    defs = _el(root, "defs")
+        element(root, "title").text = title
+    style = element(root, "style")
+    defs = element(root, "defs")
     defs.extend(face_defs(face))
     figure = figure_of(face, box)
     root.append(background_layer(background, figure, defs))
@@ -512,11 +505,11 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     tracks = _tracks(frames, [part.track for part in writer.raw], mapping)
     elements = _share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
     style.text = writer.style_sheet()
-    hair = _el(root, "g", id="hair")
+    hair = element(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
     if dressed is not None:
         root.append(dressed)
-    layer = _el(root, "g", id="face")
+    layer = element(root, "g", id="face")
     for name, track in tracks.items():
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
     _roll((hair, layer), rolls, fps,

@@ -31,11 +31,11 @@ from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
-from cartoonface.render.geometry import face_shapes, number_text
+from cartoonface.render.elements import SVG, element, svg_root
+from cartoonface.render.geometry import face_shapes
+from cartoonface.render.numbers import number_text
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 
-SVG = "http://www.w3.org/2000/svg"
-NSMAP = {None: SVG}
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
 # face of any size is drawn alike. Our own choice, tuned by eye on the sample faces.
@@ -68,16 +68,11 @@ def _mix(colour: str, other: str, t: float) -> str:
     return "#" + "".join(f"{v:02x}" for v in mixed)
 
 
-def _el(parent: etree._Element, tag: str, attrs: dict[str, str]) -> etree._Element:
-    """Append SVG element `tag` with string attributes `attrs` to `parent`; return it."""
-    return etree.SubElement(parent, f"{{{SVG}}}{tag}", attrs)
-
-
 def _gradient(kind: str, gid: str, stops: tuple[tuple[float, str, float], ...], **attrs: str) -> etree._Element:
     """A linear/radial gradient `gid` with (offset, colour, opacity) stops."""
-    grad = etree.Element(f"{{{SVG}}}{kind}Gradient", {"id": gid, **attrs})
+    grad = element(None, f"{kind}Gradient", {"id": gid, **attrs})
     for offset, colour, opacity in stops:
-        stop = _el(grad, "stop", {"offset": f"{offset:g}", "stop-color": colour})
+        stop = element(grad, "stop", {"offset": f"{offset:g}", "stop-color": colour})
         if opacity < 1:
             stop.set("stop-opacity", f"{opacity:g}")
     return grad
@@ -151,16 +146,16 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     style = _styles(face)
     shapes = face_shapes(posed)
     points = posed.xy[_ROWS].tolist()
-    group = etree.Element(f"{{{SVG}}}g", {"class": "cf-face"})
-    defs = _el(group, "defs", {})
-    _el(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
+    group = element(None, "g", {"class": "cf-face"})
+    defs = element(group, "defs", {})
+    element(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
     for side in "lr":
-        _el(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
-    _el(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
+        element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
+    element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
     _cheeks(group, points, face.fapu.d, style)
-    _el(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
+    element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
     for side in "lr":
-        _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
+        element(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
     for side, eyeball in zip("lr", _eyeballs(posed, points)):
         _eye(group, defs, shapes, side, eyeball, face, uid, style)
     _mouth(group, defs, shapes, uid, style, face.fapu.d, points[10:14])
@@ -170,12 +165,12 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
 def _cheeks(group: etree._Element, points: list[list[float]], d: float, style: dict[str, dict[str, str]]) -> None:
     """Blush under each eye, between the eye's lower lid and the mouth corner on its side.
     `points`: the posed rows _ROWS as [x, y] lists."""
-    cheeks = _el(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
+    cheeks = element(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
     for first, mouth_corner in ((0, points[8]), (4, points[9])):
         (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
         width = math.hypot(ox - ix, oy - iy) / (0.46 * d)  # foreshortening: narrower when turned away
         cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - 0.08 * d
-        _el(cheeks, "ellipse", {"cx": number_text(0.55 * ox + 0.45 * ix), "cy": number_text(cy),
+        element(cheeks, "ellipse", {"cx": number_text(0.55 * ox + 0.45 * ix), "cy": number_text(cy),
                                 "rx": number_text(CHEEK[0] * d * min(width, 1.2)), **style["cheek_ry"]})
 
 
@@ -197,19 +192,23 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
     upper lid."""
     outline = shapes[f"eye_{side}"]
     clip_id = f"cf-eye-{side}-{uid}"
-    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
-    eye = _el(group, "g", {"class": f"eye-{side}"})
-    _el(eye, "path", {"d": outline, **style["white"]})
-    ball = _el(eye, "g", {"clip-path": f"url(#{clip_id})"})
+    element(element(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
+    eye = element(group, "g", {"class": f"eye-{side}"})
+    element(eye, "path", {"d": outline, **style["white"]})
+    ball = element(eye, "g", {"clip-path": f"url(#{clip_id})"})
     x, y, r = eyeball
     cx, cy = number_text(x), number_text(y)
-    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
-    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
-    _el(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
-    _el(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
+    element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
+    element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
+    element(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
+    element(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
                          "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": "0.9"})
-    _el(eye, "path", {"d": outline, **style["eye_line"]})
-    _el(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
+    element(eye, "path", {"d": outline, **style["eye_line"]})
+    element(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
+
+
+# _mouth (being redrawn on branch mouth) calls the element helper by its old name.
+_el = element
 
 
 def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
@@ -242,9 +241,8 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
     """
     width, height = float(face.width), float(face.height)
-    root = etree.Element(f"{{{SVG}}}svg", {"width": f"{width:g}", "height": f"{height:g}",
-                                            "viewBox": f"0 0 {width:g} {height:g}"}, nsmap=NSMAP)
-    defs = _el(root, "defs", {})
+    root = svg_root({"width": f"{width:g}", "height": f"{height:g}", "viewBox": f"0 0 {width:g} {height:g}"})
+    defs = element(root, "defs", {})
     defs.extend(face_defs(face))
     chin = face.point("2.1")
     # the face width as render/animation.py measures it, so stills and animations match
@@ -252,18 +250,13 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
                     face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
     root.append(background_layer(background, figure, defs))
     group = face_group(face, pose_face(lift(face), state), "0")
-    hair = _el(root, "g", {"id": "hair"})
+    hair = element(root, "g", {"id": "hair"})
     hair.extend(group.findall(f"{{{SVG}}}path[@class='hair']"))
     dressed = clothes_layer(clothes, figure, defs)
-    root.append(dressed if dressed is not None else etree.Element(f"{{{SVG}}}g", {"id": "clothes"}))
+    root.append(dressed if dressed is not None else element(None, "g", {"id": "clothes"}))
     group.set("id", "face")
     root.append(group)
     return root
-
-
-def svg_bytes(root: etree._Element) -> bytes:
-    """The document `root` as UTF-8 SVG bytes with an XML declaration."""
-    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
 
 
 def svg_to_png(data: bytes, palette: bool = False) -> bytes:
@@ -296,9 +289,8 @@ def _neck(face: FaceModel, bottom: float) -> etree._Element:
     top = float(chin[1]) - 0.6 * face.fapu.d
     corners = ((chin[0] - half, bottom), (chin[0] - half, top), (chin[0] + half, top), (chin[0] + half, bottom))
     d = "M" + "L".join(f"{number_text(x)} {number_text(y)}" for x, y in corners)  # open: no line at the bottom
-    return etree.Element(f"{{{SVG}}}path", {"class": "neck", "d": d, "fill": face.palette.skin,
-                                             "stroke": face.palette.outline,
-                                             "stroke-width": number_text(OUTLINE * face.fapu.d)})
+    return element(None, "path", {"class": "neck", "d": d, "fill": face.palette.skin, "stroke": face.palette.outline,
+                                  "stroke-width": number_text(OUTLINE * face.fapu.d)})
 
 
 def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns: list[str],
@@ -316,27 +308,27 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
     pitch_x, pitch_y = cell_width + gap, cell_height + gap
     width = left_margin + len(columns) * pitch_x + gap
     height = top_margin + len(rows) * pitch_y + gap
-    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(width), "height": number_text(height),
-                                            "viewBox": f"0 0 {number_text(width)} {number_text(height)}"}, nsmap=NSMAP)
-    _el(root, "defs", {}).extend(face_defs(face))
-    _el(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
+    root = svg_root({"width": number_text(width), "height": number_text(height),
+                     "viewBox": f"0 0 {number_text(width)} {number_text(height)}"})
+    element(root, "defs", {}).extend(face_defs(face))
+    element(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
     text_style = {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font), "fill": "#333333"}
     for j, label in enumerate(columns):
-        _el(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
+        element(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
                            "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
     lifted = lift(face)
     neck = _neck(face, y0 + h)
     for i, (label, states) in enumerate(rows):
         top = top_margin + i * pitch_y
         lines = label.split("\n")
-        caption = _el(root, "text", {"text-anchor": "end", **text_style})
+        caption = element(root, "text", {"text-anchor": "end", **text_style})
         for k, line in enumerate(lines):
-            _el(caption, "tspan", {"x": number_text(left_margin - gap * 2),
+            element(caption, "tspan", {"x": number_text(left_margin - gap * 2),
                                    "y": number_text(top + cell_height / 2 + font * (1.25 * k - 0.6 * len(lines) + 1))
                                    }).text = line
         for j, state in enumerate(states):
             left = left_margin + j * pitch_x
-            _el(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
+            element(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
                                "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
                                "fill": "#f1ede6"})
             head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
@@ -369,16 +361,15 @@ def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
         colour.setdefault(key, ink)
     x0, y0, w, h = _head_box(face)
     x0, y0, w, h = x0 - 4 * font, y0 - 2 * font, w + 8 * font, h + 4 * font
-    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(w * scale), "height": number_text(h * scale),
-                                            "viewBox": " ".join(number_text(v) for v in (x0, y0, w, h))},
-                         nsmap=NSMAP)
-    _el(root, "defs", {}).extend(face_defs(face))
-    _el(root, "rect", {"x": number_text(x0), "y": number_text(y0), "width": "100%", "height": "100%",
+    root = svg_root({"width": number_text(w * scale), "height": number_text(h * scale),
+                     "viewBox": " ".join(number_text(v) for v in (x0, y0, w, h))})
+    element(root, "defs", {}).extend(face_defs(face))
+    element(root, "rect", {"x": number_text(x0), "y": number_text(y0), "width": "100%", "height": "100%",
                        "fill": "#ffffff"})
     drawing = face_group(face, posed, "d")
     drawing.set("opacity", "0.35")
     root.append(drawing)
-    marks = _el(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font)})
+    marks = element(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font)})
     taken = [(x - dot, y - dot, x + dot, y + dot) for x, y in groups]
     centre = posed.xy.mean(axis=0)
     for (x, y), names in groups.items():
@@ -386,12 +377,12 @@ def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
         box, anchor, (tx, ty) = _place_label(text, np.array([x, y]), centre, font, taken)
         taken.append(box)
         if np.hypot(tx - x, ty + 0.35 * font - y) > 1.6 * font:
-            _el(marks, "line", {"x1": number_text(x), "y1": number_text(y), "x2": number_text(tx),
+            element(marks, "line", {"x1": number_text(x), "y1": number_text(y), "x2": number_text(tx),
                                 "y2": number_text(ty - 0.35 * font), "stroke": colour[(x, y)],
                                 "stroke-width": number_text(dot * 0.25), "opacity": "0.6"})
-        _el(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(dot),
+        element(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(dot),
                               "fill": colour[(x, y)]})
-        _el(marks, "text", {"x": number_text(tx), "y": number_text(ty), "text-anchor": anchor,
+        element(marks, "text", {"x": number_text(tx), "y": number_text(ty), "text-anchor": anchor,
                             "fill": colour[(x, y)]}).text = text
     return root
 

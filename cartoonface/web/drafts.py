@@ -35,7 +35,8 @@ from cartoonface.face.model import POINT_INDEX, POINT_NAMES, FaceModel, face_fro
 from cartoonface.face.photo import PhotoFace, face_from_photo, load_photo
 from cartoonface.face.state import FaceState
 from cartoonface.files import atomic_directory, write_text_atomic
-from cartoonface.render.svg import face_svg, svg_bytes
+from cartoonface.render.elements import svg_bytes
+from cartoonface.render.svg import face_svg
 from cartoonface.web.store import delete_job, valid_id
 
 # The picture the points are shown and edited on: long side in pixels, JPEG quality.
