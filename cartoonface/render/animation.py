@@ -23,7 +23,8 @@ We keep that form and make it small:
 - every frame's state is drawn (no pose held over frames); the head's roll is
   not drawn into the parts but is a rotation of the hair and face layers (one
   discrete `<animateTransform>` each), so a sideways lean redraws nothing;
-- coordinates are whole pixels in relative path commands (render/pathdata.py);
+- the part drawings are written by the compactor of render/compact.py:
+  coordinates are whole pixels in relative path commands (render/pathdata.py);
 - a part shown in several drawings of its track (the face outline under
   different mouths) is defined once and drawn with `<use>`; a path with the
   outline of its part's clip path (the mouth's opening, an eye's white and
@@ -41,9 +42,6 @@ own plays silently; the pages drive its clock from the audio (static/cartoonface
 
 from __future__ import annotations
 
-import html
-import re
-from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -54,9 +52,9 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll, unrolled
 from cartoonface.face.state import FaceState
-from cartoonface.render.elements import SVG, element, svg_root
+from cartoonface.render.compact import Writer, share
+from cartoonface.render.elements import element, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.pathdata import compact_paths
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 from cartoonface.render.svg import face_defs, face_group
 
@@ -70,21 +68,6 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "c
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
-# Elements that only define something referenced by id: a part's own ones (per state, from
-# face_group) go with the part, renamed so each distinct part drawing has its own.
-DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
-                                                  "pattern", "filter", "marker", "symbol"))
-# Attributes that place an element (rounded to whole pixels, kept on it). Every other
-# attribute but KEPT ones and references to per-state definitions is style: a CSS class.
-POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
-KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
-                  "offset", "id"))
-# Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
-# with no other attribute can be dissolved into its children. Not opacity, which applies to
-# the group as a whole.
-INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-width", "stroke-linecap",
-                       "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
-                       "stroke-dashoffset", "color"))
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
@@ -92,8 +75,6 @@ STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders sh
 # layers, in steps of this many decimals of a degree: 0.01 degree moves a point 250 px from
 # the centre by 0.04 px.
 ROLL_DECIMALS = 2
-_REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_PATH_DATA = re.compile(rb' d="([^"]*)"')
 
 
 @dataclass(frozen=True)
@@ -140,192 +121,6 @@ def track_of(part: etree._Element) -> str:
     return TRACK_OF.get(name[0], name[0]) if name else "face"
 
 
-@dataclass(frozen=True)
-class _RawPart:
-    """A part as face_group drew it (serialized: a drawing of every state would not fit in
-    memory as lxml trees), with the per-state definitions it references."""
-
-    track: str
-    element: bytes
-    definitions: tuple[bytes, ...]
-
-
-class _Writer:
-    """Collects the drawn states, then writes the distinct part drawings compactly."""
-
-    def __init__(self, defs: etree._Element) -> None:
-        self.defs = defs
-        self.raw_ids: dict[bytes, int] = {}
-        self.raw: list[_RawPart] = []
-        self.styles: dict[tuple[tuple[str, str], ...], str] = {}
-
-    def collect(self, group: etree._Element) -> tuple[int, ...]:
-        """Take one face_group drawing; return the raw part numbers, in drawing order."""
-        definitions = {node.get("id"): node for node in group.iter(*DEFINITIONS) if node.get("id")}
-        numbers = []
-        for part in group:
-            if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
-                continue
-            raw = etree.tostring(part)
-            used = tuple(etree.tostring(node) for name, node in definitions.items() if f"#{name})".encode() in raw)
-            key = raw + b"".join(used)
-            number = self.raw_ids.get(key)
-            if number is None:
-                number = self.raw_ids[key] = len(self.raw)
-                self.raw.append(_RawPart(track_of(part), raw, used))
-            numbers.append(number)
-        return tuple(numbers)
-
-    def finish(self) -> tuple[list[int], list[list[etree._Element]]]:
-        """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
-        and the tidy drawings (each a list of elements)."""
-        compact = compact_paths(_text(d) for part in self.raw
-                                for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
-        self.raw_ids.clear()
-        tidy_ids: dict[bytes, int] = {}
-        tidy: list[list[etree._Element]] = []
-        mapping = []
-        for part in self.raw:
-            elements = self._tidy_part(part, compact)
-            key = b"".join(etree.tostring(element) for element in elements)
-            number = tidy_ids.get(key)
-            if number is None:
-                number = tidy_ids[key] = len(tidy)
-                tidy.append(_own_ids(elements, short_id("k", number)))
-            mapping.append(number)
-        self._short_classes(tidy)
-        return mapping, tidy
-
-    def _short_classes(self, tidy: list[list[etree._Element]]) -> None:
-        """Rename the style classes of the `tidy` drawings (each written once in the document) by
-        how often they are used: the most used ones get one letter ("a".."z", "A".."Z")."""
-        nodes = [node for elements in tidy for top in elements for node in top.iter() if node.get("class")]
-        counts = Counter(node.get("class") for node in nodes)
-        names = {label: _letters(rank) for rank, (label, _) in enumerate(counts.most_common())}
-        for node in nodes:
-            node.set("class", names[node.get("class")])
-        self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
-
-    def _tidy_part(self, part: _RawPart, compact: dict[str, str]) -> list[etree._Element]:
-        """The part with compact paths, groups that only pass on style dissolved, style as
-        classes: its definitions (ids "c0", "c1", ...), then its elements in drawing order."""
-        element = etree.fromstring(part.element)
-        definitions = [etree.fromstring(raw) for raw in part.definitions]
-        tops = (element, *definitions)
-        paths = [node for top in tops for node in top.iter() if node.get("d")]
-        for node in paths:
-            node.set("d", compact[node.get("d")])
-        renamed = {}
-        for number, definition in enumerate(definitions):
-            renamed[definition.get("id")] = f"c{number}"
-            definition.set("id", f"c{number}")
-            for node in definition.iter():
-                node.attrib.pop("class", None)
-        elements = _dissolve(element)
-        for top in elements:
-            for node in top.iter():
-                self._tidy_node(node, renamed)
-        _reuse_clip_outlines(definitions, elements)
-        return [*definitions, *elements]
-
-    def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
-        """Round `node`'s position, point its references at hoisted definitions, move its style to a class."""
-        attrib = node.attrib
-        attrib.pop("class", None)
-        style = []
-        for name, value in attrib.items():
-            if name in POSITIONS:
-                attrib[name] = str(round(float(value)))
-            elif "url(#" in value and renamed:
-                target = value[5:-1] if value.startswith("url(#") and value.endswith(")") else None
-                if target in renamed:
-                    attrib[name] = f"url(#{renamed[target]})"
-                elif target is None:
-                    attrib[name] = _REFERENCE.sub(lambda m: f"url(#{renamed.get(m.group(1), m.group(1))})", value)
-                elif name not in KEPT:
-                    style.append((name, value))
-            elif name not in KEPT:
-                style.append((name, value))
-        for name, _ in style:
-            del attrib[name]
-        attrib.pop("id", None)
-        if style:
-            key = tuple(sorted(style))
-            label = self.styles.get(key)
-            if label is None:
-                label = self.styles[key] = f"s{len(self.styles)}"
-            attrib["class"] = label
-
-    def style_sheet(self) -> str:
-        """The CSS of the style classes, one rule each."""
-        return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
-
-
-def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
-    """Draw a top-level path of `elements` whose outline is that of a clip path's only path in
-    `definitions` (the mouth's opening clipping the teeth, an eye's outline clipping the eyeball)
-    as a `<use>` of it: the clip path's path gets the id of its clip path plus "_". The `<use>`
-    carries the style (class) and the path none, so the shown copy inherits it."""
-    outlines = {}
-    for definition in definitions:
-        if definition.tag == f"{{{SVG}}}clipPath" and len(definition) == 1 and definition[0].get("d"):
-            outlines.setdefault(definition[0].get("d"), definition)
-    for index, node in enumerate(elements):
-        definition = outlines.get(node.get("d")) if node.tag == f"{{{SVG}}}path" else None
-        if definition is None or set(node.attrib) - {"d", "class"}:
-            continue
-        definition[0].set("id", definition.get("id") + "_")
-        use = element(None, "use", href=f"#{definition.get('id')}_")
-        if node.get("class"):
-            use.set("class", node.get("class"))
-        elements[index] = use
-
-
-def _letters(number: int) -> str:
-    """A CSS class name for `number` >= 0 made of letters only: 0 -> "a", 51 -> "Z", 52 -> "aa"."""
-    alphabet = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-    name = alphabet[number % 52]
-    while number >= 52:
-        number = number // 52 - 1
-        name = alphabet[number % 52] + name
-    return name
-
-
-def short_id(letter: str, number: int) -> str:
-    """An id for drawing `number` (>= 0): `letter` and the number in base 36 ("k", 1295 -> "kzz")."""
-    digits = ""
-    while True:
-        number, digit = divmod(number, 36)
-        digits = "0123456789abcdefghijklmnopqrstuvwxyz"[digit] + digits
-        if not number:
-            return letter + digits
-
-
-def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
-    """`elements` with their local definition ids ("c0", "c1", ...) made unique: `prefix`,
-    `prefix`-1, ..., and the references to them."""
-    def own(local: str) -> str:  # "c0" -> prefix, "c0_" -> prefix + "_", "c1" -> prefix + "-1"
-        number, rest = re.fullmatch(r"c(\d+)(\D*)", local).groups()
-        return prefix + ("" if number == "0" else f"-{number}") + rest
-
-    for top in elements:
-        for node in top.iter():
-            for name, value in node.attrib.items():
-                if name == "id":
-                    node.set(name, own(value))
-                elif value.startswith("url(#c"):
-                    node.set(name, f"url(#{own(value[5:-1])})")
-                elif name == "href" and value.startswith("#c"):
-                    node.set(name, f"#{own(value[1:])}")
-    return elements
-
-
-def _text(value: bytes) -> str:
-    """An attribute value as serialized by lxml, back to its text."""
-    text = value.decode()
-    return html.unescape(text) if "&" in text else text
-
-
 @dataclass
 class _Track:
     """One track being filled: its distinct drawings (tidy part numbers), the drawing number of
@@ -357,31 +152,6 @@ def _tracks(frames: Sequence[tuple[FaceState, tuple[int, ...]]], raw_tracks: Seq
                     track.shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
             track.keys.append(number)
     return tracks
-
-
-def _dissolve(element: etree._Element) -> list[etree._Element]:
-    """Hand the INHERITED style of every `<g>` in `element` down to its children (each child
-    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children;
-    returns `element`, or its children if `element` itself dissolved. Fewer elements and
-    classes for the browser, fewer bytes per frame (a clipped group keeps only its clip)."""
-    groups = list(element.iter(f"{{{SVG}}}g"))
-    for group in groups:  # outermost first, so handed-down style goes on down
-        style = {name: value for name, value in group.attrib.items() if name in INHERITED}
-        for child in group:
-            for name, value in style.items():
-                if name not in child.attrib:
-                    child.set(name, value)
-        for name in style:
-            del group.attrib[name]
-    empty = [group for group in groups if all(name == "class" for name in group.attrib)]
-    for group in reversed(empty):  # innermost first
-        parent = group.getparent()
-        if parent is not None:
-            index = parent.index(group)
-            parent[index : index + 1] = list(group)
-    if empty and empty[0] is element:
-        return list(element)
-    return [element]
 
 
 def _show(frame: etree._Element, spans: Sequence[tuple[int, int]]) -> etree._Element:
@@ -419,23 +189,6 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
         if track == MOUTH_TRACK:
             frame.set("data-shape", shapes[number])
         frame.extend(drawings[number])
-
-
-def _share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
-           defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
-    """The elements of every drawing: a part drawn in one drawing only is itself; a part in
-    several is put once into `defs` as `<g id="gN">` and each drawing shows it with `<use>`."""
-    uses = Counter(part for track in drawings.values() for drawing in track for part in drawing)
-    names: dict[int, str] = {}
-    for part, count in uses.items():
-        if count > 1:
-            names[part] = short_id("g", len(names))
-            element(defs, "g", id=names[part]).extend(tidy[part])
-    return {track: [[node for part in drawing
-                     for node in ([element(None, "use", href=f"#{names[part]}")] if part in names
-                                  else tidy[part])]
-                     for drawing in track_drawings]
-            for track, track_drawings in drawings.items()}
 
 
 def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, centre: str) -> None:
@@ -480,7 +233,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     defs.extend(face_defs(face))
     figure = figure_of(face, box)
     root.append(background_layer(background, figure, defs))
-    writer = _Writer(defs)
+    writer = Writer(track_of)
     lifted = lift(face)
     origin = rig(lifted).origin
     by_state: dict[FaceState, tuple[int, ...]] = {}
@@ -502,8 +255,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
             by_state[state] = parts
         frames.append((state, parts))
     mapping, tidy = writer.finish()
-    tracks = _tracks(frames, [part.track for part in writer.raw], mapping)
-    elements = _share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
+    tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
+    elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)

@@ -44,11 +44,14 @@ from cartoonface.render.numbers import number_texts
 CHAIKIN_ROUNDS = 3
 
 class Posed(Protocol):
-    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace`."""
+    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace` (read-only)."""
 
-    xy: np.ndarray
-    hair: np.ndarray
-    nose_side: int
+    @property
+    def xy(self) -> np.ndarray: ...
+    @property
+    def hair(self) -> np.ndarray: ...
+    @property
+    def nose_side(self) -> int: ...
 
 
 def arc(points: np.ndarray, before: np.ndarray | None = None, after: np.ndarray | None = None) -> np.ndarray:
