@@ -19,7 +19,10 @@ from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
 from cartoonface.files import write_bytes_atomic
 from cartoonface.render.elements import svg_bytes
-from cartoonface.render.svg import diagram_svg, face_svg, sheet_svg, svg_to_png
+from cartoonface.render.diagram import diagram_svg
+from cartoonface.render.png import svg_to_png
+from cartoonface.render.sheet import sheet_svg
+from cartoonface.render.svg import face_svg
 
 # The contact sheet: one row per pose and expression, one column per basic mouth shape.
 # Rows: label, (tilt, turn, roll), blink, smile, brow.

@@ -46,7 +46,8 @@ def run_from_photo(args: argparse.Namespace) -> int:
     from cartoonface.face.state import FaceState
     from cartoonface.files import write_bytes_atomic
     from cartoonface.render.elements import svg_bytes
-    from cartoonface.render.svg import face_svg, svg_to_png
+    from cartoonface.render.png import svg_to_png
+    from cartoonface.render.svg import face_svg
 
     photo = load_photo(args.photo)
     result = face_from_photo(photo, name)

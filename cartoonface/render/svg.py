@@ -13,19 +13,18 @@ no area left and nothing of the eyeball shows. Then the outline and a bolder upp
 gives one state's drawing as a `<g>` whose children are the parts, each with a class
 naming it ("hair", "ear-l", "face", "eye-l", "mouth", ...), and whose own clip paths carry
 the caller's `uid` so many states can share one document (render/animation.py). Colours
-are written as hex: cairosvg paints hsl() black (shared DEPENDENCIES.md).
+are written as hex (#rrggbb), the form `_mix` reads and every renderer paints alike
+(docs/drawing.md). The contact sheet, the point diagram and PNG output are in
+render/sheet.py, render/diagram.py and render/png.py.
 """
 
 from __future__ import annotations
 
 import functools
-import io
 import math
 
 import numpy as np
-import resvg_py
 from lxml import etree
-from PIL import Image
 
 from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
@@ -257,152 +256,3 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     group.set("id", "face")
     root.append(group)
     return root
-
-
-def svg_to_png(data: bytes, palette: bool = False) -> bytes:
-    """Rasterise SVG bytes at their own size with resvg; returns PNG bytes (RGBA). With
-    `palette`, the picture (drawn on an opaque background) is stored with a 256-colour
-    palette instead: a third of the size, for large sheets."""
-    png = bytes(resvg_py.svg_to_bytes(svg_string=data.decode("utf-8")))
-    if not palette:
-        return png
-    with Image.open(io.BytesIO(png)) as image:
-        out = io.BytesIO()
-        image.convert("RGB").quantize(256).save(out, "PNG", optimize=True)
-    return out.getvalue()
-
-
-def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
-    """(x, y, width, height) around the hair and the head of `face`, with room for a head
-    turned, tilted or rolled by 15 degrees."""
-    points = np.concatenate([face.points, face.hair])
-    low, high = points.min(axis=0), points.max(axis=0)
-    margin = 0.55 * face.fapu.d
-    return low[0] - margin, low[1] - margin, high[0] - low[0] + 2 * margin, high[1] - low[1] + 2 * margin
-
-
-def _neck(face: FaceModel, bottom: float) -> etree._Element:
-    """A plain neck under the chin down to `bottom` (the sheet's heads have no body): the
-    width of render/scenery.py's neck, its top hidden behind the jaw in every pose."""
-    chin = face.point("2.1")
-    half = 0.22 * float(np.ptp(face.points[:, 0]))
-    top = float(chin[1]) - 0.6 * face.fapu.d
-    corners = ((chin[0] - half, bottom), (chin[0] - half, top), (chin[0] + half, top), (chin[0] + half, bottom))
-    d = "M" + "L".join(f"{number_text(x)} {number_text(y)}" for x, y in corners)  # open: no line at the bottom
-    return element(None, "path", {"class": "neck", "d": d, "fill": face.palette.skin, "stroke": face.palette.outline,
-                                  "stroke-width": number_text(OUTLINE * face.fapu.d)})
-
-
-def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns: list[str],
-              cell_width: float) -> etree._Element:
-    """A contact sheet: a grid of heads (hair and face layers), one row per (label, states)
-    of `rows` (a label may hold several lines, split at "\n"), each column headed by its label
-    in `columns`, cells `cell_width` pixels wide. Returns the SVG root."""
-    x0, y0, w, h = _head_box(face)
-    scale = cell_width / w
-    cell_height = h * scale
-    font = max(11.0, cell_width * 0.12)
-    gap = cell_width * 0.05
-    longest = max(len(line) for label, _ in rows for line in label.split("\n"))
-    left_margin, top_margin = font * (0.62 * longest + 1), font * 2
-    pitch_x, pitch_y = cell_width + gap, cell_height + gap
-    width = left_margin + len(columns) * pitch_x + gap
-    height = top_margin + len(rows) * pitch_y + gap
-    root = svg_root({"width": number_text(width), "height": number_text(height),
-                     "viewBox": f"0 0 {number_text(width)} {number_text(height)}"})
-    element(root, "defs", {}).extend(face_defs(face))
-    element(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
-    text_style = {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font), "fill": "#333333"}
-    for j, label in enumerate(columns):
-        element(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
-                           "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
-    lifted = lift(face)
-    neck = _neck(face, y0 + h)
-    for i, (label, states) in enumerate(rows):
-        top = top_margin + i * pitch_y
-        lines = label.split("\n")
-        caption = element(root, "text", {"text-anchor": "end", **text_style})
-        for k, line in enumerate(lines):
-            element(caption, "tspan", {"x": number_text(left_margin - gap * 2),
-                                   "y": number_text(top + cell_height / 2 + font * (1.25 * k - 0.6 * len(lines) + 1))
-                                   }).text = line
-        for j, state in enumerate(states):
-            left = left_margin + j * pitch_x
-            element(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
-                               "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
-                               "fill": "#f1ede6"})
-            head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
-            head.insert(2, etree.fromstring(etree.tostring(neck)))  # after the <defs> and the hair
-            head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
-                                  f"scale({scale:.5g})")
-            root.append(head)
-    return root
-
-
-def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
-    """The labelled point diagram of `face` (docs/face-model.md): the frontal drawing faded,
-    every model point (black), additional point A..S (red, thesis 002 Alg. 2.1) and hair
-    point (blue, numbered from 0) with its name; points at the same place share a label.
-    Labels are placed greedily where they overlap no other label or point, with a leader
-    line when pushed away. The picture shows the head `scale` times its model size.
-    Returns the SVG root."""
-    from cartoonface.face.lift import LIFTED_NAMES
-    from cartoonface.face.model import POINT_NAMES
-
-    posed = pose_face(lift(face), FaceState())
-    font, dot = 0.042 * face.fapu.d, 0.011 * face.fapu.d
-    groups: dict[tuple[float, float], list[str]] = {}
-    colour: dict[tuple[float, float], str] = {}
-    named = [(n, xy, "#000000" if n in POINT_NAMES else "#c62828") for n, xy in zip(LIFTED_NAMES, posed.xy)]
-    named += [(str(i), xy, "#1565c0") for i, xy in enumerate(posed.hair)]
-    for name, xy, ink in named:
-        key = (round(float(xy[0]), 1), round(float(xy[1]), 1))
-        groups.setdefault(key, []).append(name)
-        colour.setdefault(key, ink)
-    x0, y0, w, h = _head_box(face)
-    x0, y0, w, h = x0 - 4 * font, y0 - 2 * font, w + 8 * font, h + 4 * font
-    root = svg_root({"width": number_text(w * scale), "height": number_text(h * scale),
-                     "viewBox": " ".join(number_text(v) for v in (x0, y0, w, h))})
-    element(root, "defs", {}).extend(face_defs(face))
-    element(root, "rect", {"x": number_text(x0), "y": number_text(y0), "width": "100%", "height": "100%",
-                       "fill": "#ffffff"})
-    drawing = face_group(face, posed, "d")
-    drawing.set("opacity", "0.35")
-    root.append(drawing)
-    marks = element(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font)})
-    taken = [(x - dot, y - dot, x + dot, y + dot) for x, y in groups]
-    centre = posed.xy.mean(axis=0)
-    for (x, y), names in groups.items():
-        text = "/".join(names)
-        box, anchor, (tx, ty) = _place_label(text, np.array([x, y]), centre, font, taken)
-        taken.append(box)
-        if np.hypot(tx - x, ty + 0.35 * font - y) > 1.6 * font:
-            element(marks, "line", {"x1": number_text(x), "y1": number_text(y), "x2": number_text(tx),
-                                "y2": number_text(ty - 0.35 * font), "stroke": colour[(x, y)],
-                                "stroke-width": number_text(dot * 0.25), "opacity": "0.6"})
-        element(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(dot),
-                              "fill": colour[(x, y)]})
-        element(marks, "text", {"x": number_text(tx), "y": number_text(ty), "text-anchor": anchor,
-                            "fill": colour[(x, y)]}).text = text
-    return root
-
-
-def _place_label(text: str, at: np.ndarray, centre: np.ndarray, font: float,
-                 taken: list[tuple[float, float, float, float]]) -> tuple[tuple[float, float, float, float], str,
-                                                                          tuple[float, float]]:
-    """Where the label `text` of the point `at` goes: the first candidate position (directions
-    starting away from `centre`, growing distances) whose box overlaps none of `taken`.
-    Returns (box (x1, y1, x2, y2), text-anchor, baseline position)."""
-    width, height = 0.62 * font * len(text), font
-    away = np.degrees(np.arctan2(*(at - centre)[::-1]))
-    for distance in (1.0, 1.8, 2.8, 4.0, 5.5, 7.5):
-        for turn in (0, 30, -30, 60, -60, 90, -90, 135, -135, 180):
-            angle = np.radians(away + turn)
-            ux, uy = np.cos(angle), np.sin(angle)
-            cx, cy = at[0] + ux * distance * font, at[1] + uy * distance * font
-            left = cx if ux > 0.3 else cx - width if ux < -0.3 else cx - width / 2
-            box = (left, cy - height / 2, left + width, cy + height / 2)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in taken):
-                anchor = "start" if ux > 0.3 else "end" if ux < -0.3 else "middle"
-                return box, anchor, (cx, cy + 0.35 * font)
-    return box, anchor, (cx, cy + 0.35 * font)
