@@ -55,7 +55,7 @@ from cartoonface.face.state import FaceState
 from cartoonface.render.compact import Writer, share
 from cartoonface.render.elements import element, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.scenery import Figure, background_layer, clothes_layer
+from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
 from cartoonface.render.svg import face_defs, face_group
 
 # The track of each part of render/svg.py's face_group (by its class), in drawing order.
@@ -105,14 +105,6 @@ def runs(keys: Sequence[int]) -> tuple[Run, ...]:
         else:
             merged.append(Run(key, index, 1))
     return tuple(merged)
-
-
-def figure_of(face: FaceModel, box: tuple[float, float, float, float]) -> Figure:
-    """Where the neck and shoulders go for `face` inside the picture `box` (the face is as wide as
-    its widest feature points, the contour)."""
-    chin = face.point("2.1")
-    return Figure(box=box, chin_x=float(chin[0]), chin_y=float(chin[1]),
-                  face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
 
 
 def track_of(part: etree._Element) -> str:

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 from lxml import etree
 
 from cartoonface.errors import OptionError
+from cartoonface.face.model import FaceModel
 from cartoonface.render.elements import DECIMALS, element
 from cartoonface.render.numbers import decimal_text
 
@@ -34,6 +36,15 @@ class Figure:
     chin_y: float
     face_width: float
     skin: str
+
+
+def figure_of(face: FaceModel, box: tuple[float, float, float, float]) -> Figure:
+    """Where the neck and shoulders go for `face` inside the picture `box` (x, y, width,
+    height in pixels): under its chin 2.1, the face as wide as its widest feature points
+    (the contour). The one place a Figure is made, so stills and animations match."""
+    chin = face.point("2.1")
+    return Figure(box=box, chin_x=float(chin[0]), chin_y=float(chin[1]),
+                  face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
 
 
 def _num(value: float) -> str:

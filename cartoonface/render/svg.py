@@ -33,7 +33,7 @@ from cartoonface.face.state import FaceState
 from cartoonface.render.elements import SVG, element, svg_root
 from cartoonface.render.geometry import face_shapes
 from cartoonface.render.numbers import number_text
-from cartoonface.render.scenery import Figure, background_layer, clothes_layer
+from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -243,10 +243,7 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     root = svg_root({"width": f"{width:g}", "height": f"{height:g}", "viewBox": f"0 0 {width:g} {height:g}"})
     defs = element(root, "defs", {})
     defs.extend(face_defs(face))
-    chin = face.point("2.1")
-    # the face width as render/animation.py measures it, so stills and animations match
-    figure = Figure(box=(0.0, 0.0, width, height), chin_x=float(chin[0]), chin_y=float(chin[1]),
-                    face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
+    figure = figure_of(face, (0.0, 0.0, width, height))
     root.append(background_layer(background, figure, defs))
     group = face_group(face, pose_face(lift(face), state), "0")
     hair = element(root, "g", {"id": "hair"})
