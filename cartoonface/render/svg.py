@@ -50,6 +50,23 @@ GLOSS = 0.14      # half-width of the gloss on the lower lip / width of the mout
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
 CHEEK = (0.2, 0.12)  # blush ellipse radii / d
+BROW_LINE = 0.006  # the eyebrow's outline, which rounds its corner-cut polygon
+EYE_LINE = 0.8    # the eye outline's width / OUTLINE
+# Shades and opacities, our own choice like the widths.
+HAIR_LINE_SHADE = 0.35   # the hair's outline: its colour this far towards black
+LID_SHADOW_OPACITY = "0.18"
+# The blush (_cheeks), in d: an eye this wide (corner to corner) seen
+# frontally gives the full CHEEK[0] width; a wider-looking eye widens it up to CHEEK_STRETCH times.
+CHEEK_EYE_WIDTH = 0.46
+CHEEK_STRETCH = 1.2
+# the blush centre's x: these weights of the outer and the inner eye corner
+CHEEK_OUTER, CHEEK_INNER = 0.55, 0.45
+CHEEK_LIFT = 0.08   # the blush centre above the midpoint of the lower lid and the mouth corner
+# The highlight on the iris: its centre left and up of the iris centre by these fractions
+# of the iris radius (the light comes from the upper left), and its opacity.
+GLINT_LEFT = 0.3
+GLINT_UP = 0.34
+GLINT_OPACITY = "0.9"
 
 # Eye outline points (thesis 002, Alg. 2.2 steps 9-10) by drawn eye.
 EYES = {"l": ("3.12", "3.2", "3.8", "3.4"), "r": ("3.7", "3.1", "3.11", "3.3")}
@@ -109,17 +126,18 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
     line = {"fill": "none", "stroke": p.outline, **round_}
     skin = {**line, "fill": "url(#cf-skin)", "stroke-width": number_text(OUTLINE * d)}
     return {
-        "hair": {"fill": "url(#cf-hair)", "stroke": _mix(p.hair, "#000000", 0.35),
+        "hair": {"fill": "url(#cf-hair)", "stroke": _mix(p.hair, "#000000", HAIR_LINE_SHADE),
                  "stroke-width": number_text(HAIR_LINE * d), "stroke-linejoin": "round"},
         "skin": skin,
         "nose": {**line, "stroke": "url(#cf-nose)", "stroke-width": number_text(FEATURE * d)},
-        "brow": {"fill": p.brow, "stroke": p.brow, "stroke-width": number_text(0.006 * d), "stroke-linejoin": "round"},
+        "brow": {"fill": p.brow, "stroke": p.brow, "stroke-width": number_text(BROW_LINE * d),
+                 "stroke-linejoin": "round"},
         "cheek_ry": {"ry": number_text(CHEEK[1] * d)},
         "white": {"fill": p.eye_white},
-        "eye_line": {**line, "stroke-width": number_text(OUTLINE * d * 0.8)},
+        "eye_line": {**line, "stroke-width": number_text(OUTLINE * d * EYE_LINE)},
         "lid": {**line, "stroke-width": number_text(LID * d)},
         # the upper lid's shadow on the eyeball, inside the eye clip
-        "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": "0.18",
+        "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": LID_SHADOW_OPACITY,
                        "stroke-width": number_text(LID_SHADOW * d)},
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
         "opening": {"fill": p.mouth},
@@ -167,10 +185,10 @@ def _cheeks(group: etree._Element, points: list[list[float]], d: float, style: d
     cheeks = element(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
     for first, mouth_corner in ((0, points[8]), (4, points[9])):
         (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
-        width = math.hypot(ox - ix, oy - iy) / (0.46 * d)  # foreshortening: narrower when turned away
-        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - 0.08 * d
-        element(cheeks, "ellipse", {"cx": number_text(0.55 * ox + 0.45 * ix), "cy": number_text(cy),
-                                "rx": number_text(CHEEK[0] * d * min(width, 1.2)), **style["cheek_ry"]})
+        width = math.hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
+        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - CHEEK_LIFT * d
+        element(cheeks, "ellipse", {"cx": number_text(CHEEK_OUTER * ox + CHEEK_INNER * ix), "cy": number_text(cy),
+                                    "rx": number_text(CHEEK[0] * d * min(width, CHEEK_STRETCH)), **style["cheek_ry"]})
 
 
 def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
@@ -200,8 +218,8 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
     element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
     element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
     element(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
-    element(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
-                         "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": "0.9"})
+    element(ball, "circle", {"cx": number_text(x - GLINT_LEFT * r), "cy": number_text(y - GLINT_UP * r),
+                             "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": GLINT_OPACITY})
     element(eye, "path", {"d": outline, **style["eye_line"]})
     element(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
 
