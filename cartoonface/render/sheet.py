@@ -12,6 +12,7 @@ from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.render.elements import element, svg_root
 from cartoonface.render.numbers import number_text
+from cartoonface.render.scenery import NECK
 from cartoonface.render.svg import OUTLINE, face_defs, face_group
 
 
@@ -28,7 +29,7 @@ def _neck(face: FaceModel, bottom: float) -> etree._Element:
     """A plain neck under the chin down to `bottom` (the sheet's heads have no body): the
     width of render/scenery.py's neck, its top hidden behind the jaw in every pose."""
     chin = face.point("2.1")
-    half = 0.22 * float(np.ptp(face.points[:, 0]))
+    half = NECK * float(np.ptp(face.points[:, 0]))
     top = float(chin[1]) - 0.6 * face.fapu.d
     corners = ((chin[0] - half, bottom), (chin[0] - half, top), (chin[0] + half, top), (chin[0] + half, bottom))
     d = "M" + "L".join(f"{number_text(x)} {number_text(y)}" for x, y in corners)  # open: no line at the bottom
