@@ -103,7 +103,7 @@ def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
     keys = [Keyframe(0, REST)]
     previous_end = None
     for syllable in syllables:
-        start, end = _ms(syllable.start), _ms(syllable.end)
+        start, end = _seconds_to_ms(syllable.start), _seconds_to_ms(syllable.end)
         if previous_end is None or start - previous_end >= LAG_MS + LEAD_MS:
             if previous_end is not None:
                 keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + LAG_MS, REST)]
@@ -125,11 +125,11 @@ def envelope_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
     """
     keys = [Keyframe(0, 0.0)]
     for action in actions:
-        start, end = _ms(action.start), _ms(action.end)
+        start, end = _seconds_to_ms(action.start), _seconds_to_ms(action.end)
         keys += [
             Keyframe(start, 0.0),
-            Keyframe(start + _ms(action.attack), action.amplitude),
-            Keyframe(end - _ms(action.release), action.amplitude),
+            Keyframe(start + _seconds_to_ms(action.attack), action.amplitude),
+            Keyframe(end - _seconds_to_ms(action.release), action.amplitude),
             Keyframe(end, 0.0),
         ]
     return _monotonic(keys)
@@ -144,12 +144,12 @@ def move_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
     """
     keys = [Keyframe(0, 0.0)]
     for action in actions:
-        keys += [Keyframe(_ms(action.start), keys[-1].value), Keyframe(_ms(action.end), action.amplitude)]
+        keys += [Keyframe(_seconds_to_ms(action.start), keys[-1].value), Keyframe(_seconds_to_ms(action.end), action.amplitude)]
     return _monotonic(keys)
 
 
-def _ms(seconds: float) -> int:
-    """Seconds to whole milliseconds."""
+def _seconds_to_ms(seconds: float) -> int:
+    """`seconds` as a whole number of milliseconds (an int)."""
     return round(seconds * 1000)
 
 
