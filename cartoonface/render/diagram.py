@@ -38,7 +38,7 @@ def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
                      "viewBox": " ".join(number_text(v) for v in (x0, y0, w, h))})
     element(root, "defs", {}).extend(face_defs(face))
     element(root, "rect", {"x": number_text(x0), "y": number_text(y0), "width": "100%", "height": "100%",
-                       "fill": "#ffffff"})
+                           "fill": "#ffffff"})
     drawing = face_group(face, posed, "d")
     drawing.set("opacity", "0.35")
     root.append(drawing)
@@ -51,12 +51,12 @@ def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
         taken.append(box)
         if np.hypot(tx - x, ty + 0.35 * font - y) > 1.6 * font:
             element(marks, "line", {"x1": number_text(x), "y1": number_text(y), "x2": number_text(tx),
-                                "y2": number_text(ty - 0.35 * font), "stroke": colour[(x, y)],
-                                "stroke-width": number_text(dot * 0.25), "opacity": "0.6"})
+                                    "y2": number_text(ty - 0.35 * font), "stroke": colour[(x, y)],
+                                    "stroke-width": number_text(dot * 0.25), "opacity": "0.6"})
         element(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(dot),
-                              "fill": colour[(x, y)]})
+                                  "fill": colour[(x, y)]})
         element(marks, "text", {"x": number_text(tx), "y": number_text(ty), "text-anchor": anchor,
-                            "fill": colour[(x, y)]}).text = text
+                                "fill": colour[(x, y)]}).text = text
     return root
 
 

@@ -59,7 +59,7 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
     text_style = {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font), "fill": "#333333"}
     for j, label in enumerate(columns):
         element(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
-                           "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
+                               "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
     lifted = lift(face)
     neck = _neck(face, y0 + h)
     for i, (label, states) in enumerate(rows):
@@ -68,13 +68,13 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
         caption = element(root, "text", {"text-anchor": "end", **text_style})
         for k, line in enumerate(lines):
             element(caption, "tspan", {"x": number_text(left_margin - gap * 2),
-                                   "y": number_text(top + cell_height / 2 + font * (1.25 * k - 0.6 * len(lines) + 1))
-                                   }).text = line
+                                       "y": number_text(top + cell_height / 2 + font * (1.25 * k - 0.6 * len(lines) + 1))
+                                       }).text = line
         for j, state in enumerate(states):
             left = left_margin + j * pitch_x
             element(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
-                               "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
-                               "fill": "#f1ede6"})
+                                   "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
+                                   "fill": "#f1ede6"})
             head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
             head.insert(2, etree.fromstring(etree.tostring(neck)))  # after the <defs> and the hair
             head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
