@@ -115,7 +115,8 @@ def _state(args: argparse.Namespace) -> FaceState:
         amounts[name] = _number(getattr(args, name), name)
         if not 0 <= amounts[name] <= 1:
             raise OptionError(f"--{name} {amounts[name]:g}: out of range; expected 0 to 1")
-    return FaceState(pose=Pose(**angles), **amounts).with_mouth(args.mouth)
+    return FaceState(pose=Pose(**angles), blink=amounts["blink"], smile=amounts["smile"],
+                     brow=amounts["brow"]).with_mouth(args.mouth)
 
 
 def _write(root: etree._Element, args: argparse.Namespace, palette: bool = False) -> int:
