@@ -1,5 +1,5 @@
 # make demo : generate the sample audio book from samples/ into out/demo/
-# make test : run the test suite
+# make test : lint (ruff), type-check (mypy), then run the test suite
 # make bench: print speed / size / accuracy figures (see docs/BENCHMARKS.md)
 # Each target sets up .venv (and Debian packages, as root) first when needed.
 
@@ -18,6 +18,8 @@ demo: $(STAMP)
 	$(PY) -m cartoonface.demo
 
 test: $(STAMP)
+	.venv/bin/ruff check .
+	.venv/bin/mypy
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

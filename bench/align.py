@@ -19,7 +19,6 @@ onset has to be found too.
 from __future__ import annotations
 
 import csv
-import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,8 +27,9 @@ import numpy as np
 import soundfile
 
 from cartoonface.speech.align import align_syllables, initial_class, syllable_type
+from cartoonface.speech import textgrid
 from cartoonface.speech.audio import Audio
-from cartoonface.speech.espeak import synthesize
+from tests.espeak import synthesize
 from cartoonface.speech.features import HOP, frames
 from cartoonface.speech.sentences import Span, find_speech_parts
 
@@ -57,18 +57,9 @@ class Recording:
 
 
 def read_tiers(path: Path) -> dict[str, list[tuple[float, float, str]]]:
-    """Interval tiers of a Praat TextGrid (long or short text format): name -> [(xmin, xmax, text)]."""
-    text = re.sub(r"\[\d+\]", "", path.read_text(encoding="utf-8"))
-    tokens = re.findall(r'"((?:[^"]|"")*)"|(?<![\w.])(-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)', text)
-    values = [q if q or not n else n for q, n in tokens]
-    tiers: dict[str, list[tuple[float, float, str]]] = {}
-    i = values.index("IntervalTier")
-    while i < len(values) and values[i] == "IntervalTier":
-        name, count = values[i + 1], int(values[i + 4])
-        rows = values[i + 5:i + 5 + 3 * count]
-        tiers[name] = [(float(rows[k]), float(rows[k + 1]), rows[k + 2]) for k in range(0, len(rows), 3)]
-        i += 5 + 3 * count
-    return tiers
+    """Interval tiers of a Praat TextGrid file (speech/textgrid.py's reader): name -> [(xmin, xmax, text)]."""
+    _, tiers = textgrid.read_tiers(path.read_text(encoding="utf-8"), str(path))
+    return {name: [(i.start, i.end, i.text) for i in items] for name, items in tiers.items()}
 
 
 def load_audio(path: Path) -> Audio:
@@ -78,7 +69,8 @@ def load_audio(path: Path) -> Audio:
 
 def parts_from_intervals(intervals: list[tuple[float, float, str | None]]) -> tuple[Part, ...]:
     """Speaking parts from (xmin, xmax, pinyin or None for a gap) runs between silences (None text = sil)."""
-    parts, run = [], []
+    parts: list[Part] = []
+    run: list[tuple[float, float, str | None]] = []
     for xmin, xmax, label in intervals + [(0.0, 0.0, "sil")]:
         if label in SILENCE:
             syll = [(a, b, s) for a, b, s in run if s]
@@ -200,12 +192,34 @@ def equal_split(part: Part) -> np.ndarray:
     return part.start + (part.end - part.start) * np.arange(n) / n
 
 
-def evaluate(recordings: list[Recording], with_dtw: bool = False) -> dict[str, object]:
-    """Onset errors (s, rounded to 1 us: references and onsets on a 10 ms grid give errors of
-    exactly 50 ms that float arithmetic would put either side of the limit) of the aligner and
-    of the baseline, signed aligner errors, initial class per onset, inner-onset mask, aligner
-    seconds, speech seconds."""
-    signed, classes, base, warped, inner, seconds, speech, confidence = [], [], [], [], [], 0.0, 0.0, []
+@dataclass(frozen=True, eq=False)
+class Result:
+    """Per onset (N,): absolute `errors` of the aligner, of the equal-split `base` and of
+    espeak+DTW `dtw` (empty when not run), in s rounded to 1 us (references and onsets on a
+    10 ms grid give errors of exactly 50 ms that float arithmetic would put either side of
+    the limit); `inner` mask (not the first onset of a part); `signed` aligner errors (s);
+    initial `classes`; aligner `confidence`. Aligner CPU `seconds`, `speech` seconds."""
+
+    errors: np.ndarray
+    base: np.ndarray
+    dtw: np.ndarray
+    inner: np.ndarray
+    signed: np.ndarray
+    classes: np.ndarray
+    seconds: float
+    speech: float
+    confidence: np.ndarray
+
+
+def evaluate(recordings: list[Recording], with_dtw: bool = False) -> Result:
+    """Onset errors of the aligner, the baseline and (`with_dtw`) espeak+DTW over every part."""
+    signed: list[float] = []
+    classes: list[str] = []
+    base: list[float] = []
+    warped: list[float] = []
+    inner: list[bool] = []
+    confidence: list[float] = []
+    seconds = speech = 0.0
     for rec in recordings:
         for part in rec.parts:
             started = time.process_time()
@@ -220,22 +234,21 @@ def evaluate(recordings: list[Recording], with_dtw: bool = False) -> dict[str, o
                 warped.extend(np.abs(espeak_dtw(rec.audio, part) - reference))
             inner.extend([False] + [True] * (len(part.onsets) - 1))
             confidence.extend(t.confidence for t in timings)
-    def rounded(x):
+    def rounded(x: list[float] | np.ndarray) -> np.ndarray:
         return np.round(np.array(x), 6)
-    return {"errors": rounded(np.abs(signed)), "base": rounded(base), "dtw": rounded(warped), "inner": np.array(inner),
-            "signed": np.array(signed), "classes": np.array(classes), "seconds": seconds, "speech": speech,
-            "confidence": np.array(confidence)}
+    return Result(rounded(np.abs(signed)), rounded(base), rounded(warped), np.array(inner), np.array(signed),
+                  np.array(classes), seconds, speech, np.array(confidence))
 
 
-def by_class(result: dict[str, object]) -> str:
+def by_class(result: Result) -> str:
     """Per initial class over the inner onsets: count, median signed error (ms; positive = the
     aligner's onset is later than the reference) and share within 50 ms."""
     cells = []
     for name in ("closure", "aspirated", "frication", "sonorant", "glide", "none"):
-        mask = (result["classes"] == name) & result["inner"]
+        mask = (result.classes == name) & result.inner
         if mask.any():
-            cells.append(f"{name} n={mask.sum()} {1000 * np.median(result['signed'][mask]):+.0f} ms "
-                         f"{100 * np.mean(result['errors'][mask] <= 0.05):.0f}%")
+            cells.append(f"{name} n={mask.sum()} {1000 * np.median(result.signed[mask]):+.0f} ms "
+                         f"{100 * np.mean(result.errors[mask] <= 0.05):.0f}%")
     return "  by initial (inner onsets: n, median signed error, within 50 ms): " + ", ".join(cells)
 
 
@@ -272,17 +285,17 @@ def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
 
 def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_landmarks: bool = False) -> None:
     result = evaluate(recordings, with_dtw)
-    print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result['speech']:.1f} s of speech, "
-          f"aligner {result['speech'] / max(result['seconds'], 1e-9):.0f}x real time (CPU time)")
-    print(row("aligner", result["errors"], result["inner"]))
-    print(row("equal split", result["base"], result["inner"]))
+    print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result.speech:.1f} s of speech, "
+          f"aligner {result.speech / max(result.seconds, 1e-9):.0f}x real time (CPU time)")
+    print(row("aligner", result.errors, result.inner))
+    print(row("equal split", result.base, result.inner))
     if with_dtw:
-        print(row("espeak+DTW", result["dtw"], result["inner"]))
+        print(row("espeak+DTW", result.dtw, result.inner))
     print(by_class(result))
     if with_landmarks:
         print(landmarks(recordings))
-    bad = result["errors"] > 0.05
-    conf = result["confidence"]
+    bad = result.errors > 0.05
+    conf = result.confidence
     if bad.any() and (~bad).any():
         print(f"  mean confidence: onsets within 50 ms {conf[~bad].mean():.2f}, beyond {conf[bad].mean():.2f}")
 

@@ -10,19 +10,17 @@ from __future__ import annotations
 import statistics
 import time
 from collections.abc import Callable
-from pathlib import Path
-
 import numpy as np
 
+from cartoonface.data import SAMPLE_FACES
 from cartoonface.face.lift import lift
-from cartoonface.face.model import load_face
+from cartoonface.face.model import FaceModel, load_face
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.geometry import face_shapes
 from cartoonface.render.svg import face_group
 
-FACES = Path(__file__).resolve().parent.parent / "samples" / "faces"
 STATES = 1000
 PASSES = 9  # the machine is shared: many short passes, median and best reported
 
@@ -56,15 +54,19 @@ def main() -> None:
     """Print states per second for each step on the sample faces."""
     states = varied_states(STATES)
     for name in ("female", "male"):
-        face = load_face(FACES / f"{name}.json")
-        lifted = lift(face)
-        posed = [pose_face(lifted, s) for s in states]
-        geometry = rate(lambda: [pose_face(lifted, s) for s in states], STATES)
-        paths = rate(lambda: [face_shapes(p) for p in posed], STATES)
-        both = rate(lambda: [face_shapes(pose_face(lifted, s)) for s in states], STATES)
-        drawing = rate(lambda: [face_group(face, pose_face(lifted, s), "u") for s in states[:300]], 300)
-        print(f"{name}: pose_face {geometry}; face_shapes {paths}; pose_face + face_shapes {both} (target 5,000/s); "
-              f"pose_face + face_group (lxml <g>) {drawing}")
+        print_rates(name, load_face(SAMPLE_FACES / f"{name}.json"), states)
+
+
+def print_rates(name: str, face: FaceModel, states: list[FaceState]) -> None:
+    """Print the states per second of each step for one face."""
+    lifted = lift(face)
+    posed = [pose_face(lifted, s) for s in states]
+    geometry = rate(lambda: [pose_face(lifted, s) for s in states], STATES)
+    paths = rate(lambda: [face_shapes(p) for p in posed], STATES)
+    both = rate(lambda: [face_shapes(pose_face(lifted, s)) for s in states], STATES)
+    drawing = rate(lambda: [face_group(face, pose_face(lifted, s), "u") for s in states[:300]], 300)
+    print(f"{name}: pose_face {geometry}; face_shapes {paths}; pose_face + face_shapes {both} (target 5,000/s); "
+          f"pose_face + face_group (lxml <g>) {drawing}")
 
 
 if __name__ == "__main__":

@@ -31,11 +31,11 @@ from pathlib import Path
 import numpy as np
 import soundfile
 
-from cartoonface.pipeline import Options, generate
+from cartoonface.data import SAMPLE_FACES
+from cartoonface.pipeline import Options, Result, generate
 
 ROOT = Path(__file__).resolve().parents[1]
 THCHS = ROOT.parent / "shared" / "bench" / "zh" / "thchs30_mfa_example"
-FACES = ROOT / "samples" / "faces"
 TARGET_SECONDS = 180.0
 GAP = 0.4  # seconds of silence between utterances
 RUNS = 3
@@ -62,7 +62,7 @@ def build_input(folder: Path) -> tuple[Path, Path, float]:
     return audio, transcript, total
 
 
-def timed_run(face: Path, audio: Path, transcript: Path, out: Path) -> tuple[float, float, dict[str, float], object]:
+def timed_run(face: Path, audio: Path, transcript: Path, out: Path) -> tuple[float, float, dict[str, float], Result]:
     """One generate(); return wall seconds, CPU seconds of this process, wall seconds per stage, the Result.
 
     The machine is shared: CPU time shows the work done even when other jobs stretch the wall time.
@@ -129,7 +129,7 @@ def bytes_by_track(svg: bytes, minutes: float) -> str:
 
 def main() -> None:
     """Build the input, run generate RUNS times, print the figures."""
-    face = sorted(FACES.glob("*.json"))[0]
+    face = sorted(SAMPLE_FACES.glob("*.json"))[0]
     with tempfile.TemporaryDirectory(prefix="cartoonface-bench-") as tmp:
         folder = Path(tmp)
         audio, transcript, seconds = build_input(folder)

@@ -1,7 +1,8 @@
 """Face from a photo: detection rate, landmark error, speed (docs/BENCHMARKS.md, docs/photo.md).
 
-Data: ../shared/bench/faces/dlib_examples/ (9 PASCAL VOC photos, 43 faces annotated with
-the 68 iBUG points, themselves predicted by dlib's model). The faces are 37-109 px wide,
+Data: dlib's example photos (9 PASCAL VOC photos, 43 faces annotated with the 68 iBUG
+points, themselves predicted by dlib's model), beside the repository as docs/BENCHMARKS.md
+("Face from a photo") says. The faces are 37-109 px wide,
 mostly under the 64 px the photo reader accepts, so each face is cut out with context
 (a square CROP_CONTEXT times its box) and scaled up so its box is BOX_PX wide, as a user
 would crop a group photo; the points are scaled back to the photo to be compared.
@@ -25,6 +26,7 @@ import numpy as np
 from lxml import etree
 from PIL import Image
 
+# The benchmark data lives beside the repository, not in it (docs/BENCHMARKS.md).
 DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "bench" / "faces" / "dlib_examples"
 CROP_CONTEXT = 2.0
 BOX_PX = 160
@@ -44,7 +46,7 @@ LOAD_RUNS = 3
 WHOLE_UPSCALE = 2
 
 
-def annotations() -> list[tuple[Path, np.ndarray, np.ndarray]]:
+def annotated_faces() -> list[tuple[Path, np.ndarray, np.ndarray]]:
     """(photo, box (4,) x0 y0 x1 y1, points (68, 2)) for every annotated face."""
     faces = []
     for xml in ("training_with_face_landmarks.xml", "testing_with_face_landmarks.xml"):
@@ -65,14 +67,15 @@ def crop(photo: Image.Image, box: np.ndarray) -> tuple[Image.Image, np.ndarray, 
     side = CROP_CONTEXT * max(box[2] - box[0], box[3] - box[1])
     origin = centre - side / 2
     scale = BOX_PX / (box[2] - box[0])
-    area = tuple(int(round(v)) for v in (*origin, *(origin + side)))
+    x0, y0 = origin
+    area = (round(x0), round(y0), round(x0 + side), round(y0 + side))
     size = int(round(side * scale))
     return photo.crop(area).resize((size, size), Image.Resampling.BICUBIC), np.round(origin), scale
 
 
 def load_seconds() -> list[float]:
     """Model load times (import + detector + face mesh) in fresh processes."""
-    code = ("import time; t = time.perf_counter(); from cartoonface.face.landmarks import landmarker; "
+    code = ("import time; t = time.perf_counter(); from cartoonface.photo.landmarks import landmarker; "
             "landmarker(); print(time.perf_counter() - t)")
     return [float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                  check=True).stdout.strip()) for _ in range(LOAD_RUNS)]
@@ -81,15 +84,15 @@ def load_seconds() -> list[float]:
 def main() -> None:
     """Print the figures."""
     from cartoonface.errors import InputError
-    from cartoonface.face.landmarks import IBUG68, landmarker
     from cartoonface.face.model import POINT_INDEX
-    from cartoonface.face.photo import face_from_photo, photo_from_image
+    from cartoonface.photo.landmarks import IBUG68, landmarker
+    from cartoonface.photo.model_from_photo import face_from_photo, photo_from_image
 
     loads = load_seconds()
     print(f"model load (import + detector + mesh, fresh process): median {statistics.median(loads):.2f} s "
           f"over {LOAD_RUNS} runs")
     marker = landmarker()
-    faces = annotations()
+    faces = annotated_faces()
     found, nme_named, nme_68, seconds, widths = 0, [], [], [], []
     for path, box, truth in faces:
         with Image.open(path) as image:

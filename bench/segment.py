@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from bench.align import read_tiers
-from cartoonface.speech.alignment import analyse, reconcile
+from cartoonface.speech.analyse import analyse
+from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import Span, find_speech_parts
 from cartoonface.speech.transcript import parse_transcript

@@ -37,11 +37,13 @@ import urllib.parse
 import urllib.request
 import zipfile
 from collections import Counter
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import soundfile
 
+from cartoonface.data import SAMPLE_FACES
 from tests.synthetic import wav_bytes
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -113,7 +115,7 @@ class Client:
 
     def token(self) -> str:
         _status, page = self.get("/")
-        return re.search(rb'name="csrf_token" value="([^"]+)"', page).group(1).decode()
+        return csrf_token(page)
 
     def submit(self, title: str, transcript: str, wav: bytes) -> str:
         """Send a complete form; return the job id (the form must be accepted)."""
@@ -136,7 +138,15 @@ class Client:
         return json.loads(body)
 
 
-def multipart(fields: dict[str, object], boundary: str | None = None) -> tuple[bytes, str]:
+def csrf_token(page: bytes) -> str:
+    """The CSRF token in a form page; RuntimeError when the page has none."""
+    found = re.search(rb'name="csrf_token" value="([^"]+)"', page)
+    if found is None:
+        raise RuntimeError(f"no csrf_token in the form page: {page[:200]!r}")
+    return found.group(1).decode()
+
+
+def multipart(fields: Mapping[str, object], boundary: str | None = None) -> tuple[bytes, str]:
     """Encode `fields` (name -> str, or (filename, bytes, type)) as multipart/form-data."""
     boundary = boundary or secrets.token_hex(16)
     parts = []
@@ -234,22 +244,23 @@ def load_round(server: Server, sentences: list, round_no: int) -> tuple[float, f
     for thread in threads:
         thread.join()
     accepted = time.monotonic() - begun
-    finished = wait_all(client, [i for i in ids if i], timeout=3600)
+    sent = {i: job_id for i, job_id in enumerate(ids) if job_id}
+    finished = wait_all(client, list(sent.values()), timeout=3600)
     wall = time.monotonic() - begun
-    done = [i for i, job_id in enumerate(ids) if job_id and finished.get(job_id, ({},))[0].get("state") == "done"]
-    failed = {job_id: finished[job_id][0]["error"] for job_id in ids if job_id in finished
+    done = {i: job_id for i, job_id in sent.items() if finished.get(job_id, ({},))[0].get("state") == "done"}
+    failed = {job_id: finished[job_id][0]["error"] for job_id in sent.values() if job_id in finished
               and finished[job_id][0]["state"] == "failed"}
     lost = sum(1 for job_id in ids if job_id not in finished)
-    matched = sum(result_matches(client, ids[i], jobs[i][0], jobs[i][1]) for i in done)
-    times = np.array([finished[ids[i]][1] - started[i] for i in done])
+    matched = sum(result_matches(client, job_id, jobs[i][0], jobs[i][1]) for i, job_id in done.items())
+    times = np.array([finished[job_id][1] - started[i] for i, job_id in done.items()])
     print(f"load {round_no}: all {LOAD_JOBS} accepted in {accepted:.1f} s; done {len(done)}, failed {len(failed)}, "
           f"lost {lost}, results matching their own input {matched}/{len(done)}")
     for job_id, error in failed.items():
         print(f"load {round_no}: failed {job_id}: {error}")
     if not len(times):
         return float("nan"), float("nan")
-    inside = [json.loads((server.instance / "jobs" / ids[i] / "status.json").read_text())["result"]["seconds"]
-              for i in done]
+    inside = [json.loads((server.instance / "jobs" / job_id / "status.json").read_text())["result"]["seconds"]
+              for job_id in done.values()]
     p50, p95 = float(np.percentile(times, 50)), float(np.percentile(times, 95))
     print(f"load {round_no}: time to done p50 {p50:.1f} s, p95 {p95:.1f} s, all done after {wall:.1f} s "
           f"({wall / len(times):.2f} s per job); pipeline.generate inside a job: median {np.median(inside):.2f} s")
@@ -317,7 +328,12 @@ def restart_run(work: Path, sentences: list) -> None:
         server.stop()
 
 
-def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face: bytes, photo: bytes) -> list:
+# A fuzz request: method, path, body (bytes, None, or ("huge", size) for a streamed body), headers.
+FuzzRequest = tuple[str, str, bytes | tuple[str, int] | None, dict[str, str]]
+
+
+def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face: bytes,
+                  photo: bytes) -> list[FuzzRequest]:
     """FUZZ_REQUESTS (method, path, body, headers) built from `rng`."""
 
     def junk(n: int) -> bytes:
@@ -361,7 +377,7 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
         "transcript_file": lambda: ("t.txt", rng.choice([junk(300), "好".encode() * 30000, b"\xff\xfe" + junk(40)]),
                                     "text/plain"),
     }
-    requests = []
+    requests: list[FuzzRequest] = []
     while len(requests) < FUZZ_REQUESTS:
         kind = rng.randrange(6)
         headers = {"Cookie": cookie}
@@ -440,11 +456,11 @@ def fuzz_run(work: Path, sentences: list) -> None:
         connection.request("GET", "/")
         answer = connection.getresponse()
         page = answer.read()
-        cookie = answer.getheader("Set-Cookie").split(";", 1)[0]
+        cookie = (answer.getheader("Set-Cookie") or "").split(";", 1)[0]
         connection.close()
-        token = re.search(rb'name="csrf_token" value="([^"]+)"', page).group(1).decode()
+        token = csrf_token(page)
         wav, _text = recording(sentences, 0, 3.0)
-        face = (ROOT / "samples" / "faces" / f"{SAMPLE_FACE}.json").read_bytes()
+        face = (SAMPLE_FACES / f"{SAMPLE_FACE}.json").read_bytes()
         photo = (ROOT / "docs" / "photo-astronaut.png").read_bytes()
         requests = fuzz_requests(random.Random(20261121), token, cookie, wav, face, photo)
         counts: dict[str, int] = {}

@@ -20,6 +20,13 @@ UPLOADS = 6
 UPDATES = 30
 
 
+def found(pattern: str, html: str) -> str:
+    """The first group of `pattern` in the page `html`; AssertionError naming the pattern when absent."""
+    match = re.search(pattern, html)
+    assert match is not None, f"the page has no {pattern!r}"
+    return match.group(1)
+
+
 def main() -> None:
     """Print the figures (photo: skimage.data.astronaut() as JPEG; Flask test client, one process)."""
     from skimage import data
@@ -31,7 +38,7 @@ def main() -> None:
         try:
             client = app.test_client()
             page = client.get("/photos").get_data(as_text=True)
-            token = re.search(r'name="csrf_token" value="([^"]+)"', page).group(1)
+            token = found(r'name="csrf_token" value="([^"]+)"', page)
             buffer = io.BytesIO()
             Image.fromarray(data.astronaut()).save(buffer, "JPEG", quality=90)
             uploads = []
@@ -43,7 +50,7 @@ def main() -> None:
                 assert answer.status_code == 303, answer.status_code
             editor = answer.headers["Location"]
             html = client.get(editor).get_data(as_text=True)
-            points = json.loads(re.search(r'id="points" value="([^"]+)"', html).group(1).replace("&#34;", '"'))
+            points = json.loads(found(r'id="points" value="([^"]+)"', html).replace("&#34;", '"'))
             updates = []
             for _ in range(UPDATES):
                 points["2.1"][1] += 0.5

@@ -1,6 +1,6 @@
 """`make demo` (`python -m cartoonface.demo`): the sample audio book from samples/ into out/demo/.
 
-Uses the first face model in samples/faces/ (sorted by name), the speech
+Uses the first sample face model (cartoonface/data/faces, sorted by name), the speech
 samples/speech/story.wav and its transcript story.txt (made by
 samples/speech/make_speech.py), and prints the page to open.
 """
@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from cartoonface.cli.generate import summary
+from cartoonface.data import SAMPLE_FACES
 from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import InputError
 from cartoonface.pipeline import Options, generate
@@ -23,9 +24,9 @@ TITLE = "小白兔和月亮"  # the sample story: "The little white rabbit and t
 
 def main() -> int:
     """Generate out/demo/ and print its index.html as a file:// URL; 2 on bad samples."""
-    faces = sorted((SAMPLES / "faces").glob("*.json"))
+    faces = sorted(SAMPLE_FACES.glob("*.json"))
     if not faces:
-        print(f"cartoonface demo: no face model in {SAMPLES / 'faces'}", file=sys.stderr)
+        print(f"cartoonface demo: no face model in {SAMPLE_FACES}", file=sys.stderr)
         return 2
     speech = SAMPLES / "speech"
     options = Options(page="audiobook", title=TITLE,

@@ -89,3 +89,16 @@ def read_user_text(path: str | os.PathLike[str], error: type[InputError], what: 
         raise error(f"{path}: not UTF-8 text; expected a {what} saved as UTF-8") from None
     except OSError as exc:
         raise error(f"{path}: cannot read the {what} ({exc.strerror})") from None
+
+
+def folder_size(folder: str | os.PathLike[str]) -> int:
+    """Total bytes of the files under `folder` (symbolic links counted as themselves, not
+    followed); files removed while it counts are left out."""
+    total = 0
+    for base, _dirs, names in os.walk(folder):
+        for name in names:
+            try:
+                total += os.lstat(os.path.join(base, name)).st_size
+            except FileNotFoundError:
+                continue
+    return total

@@ -23,11 +23,12 @@ from cartoonface.animate.frames import FPS_RANGE, sample_frames
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
 from cartoonface.face.model import FaceModel, load_face
-from cartoonface.files import atomic_directory, read_user_text
+from cartoonface.files import atomic_directory, folder_size, read_user_text
 from cartoonface.render.animation import animation_svg
-from cartoonface.render.pages import PAGES, check_links, copy_audio, folder_size, page_html, write_site
+from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
-from cartoonface.speech.alignment import Alignment, analyse
+from cartoonface.speech.analyse import analyse
+from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 

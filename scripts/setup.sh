@@ -25,7 +25,9 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
+# A .venv made before the photo extra switched to opencv-contrib-python holds
+# opencv-python-headless: remove it first so that only one package provides cv2.
+if .venv/bin/python -m pip show -q opencv-python-headless >/dev/null 2>&1; then
+  .venv/bin/python -m pip uninstall -q -y opencv-python-headless
+fi
 .venv/bin/python -m pip install -q -e ".[dev,photo]"
-# Face from a photo (docs/photo.md): mediapipe 0.10.14 ships its face models in the wheel;
-# installed without its requirements, which pin packages the photo extra replaces.
-.venv/bin/python -m pip install -q --no-deps "mediapipe==0.10.14"

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import io
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -12,6 +14,7 @@ from pathlib import Path
 
 import pytest
 from flask.testing import FlaskClient
+from PIL import Image
 
 from cartoonface.web import create_app
 
@@ -131,3 +134,41 @@ def app(tmp_path_factory: pytest.TempPathFactory):
 def client(app):
     """A test client of the module's app."""
     return app.test_client()
+
+
+# Web form helpers shared by tests/test_web.py and tests/test_web_photo.py.
+TRANSCRIPT = "你好，世界。"
+SPOKEN = "ni3 hao3, shi4 jie4."
+
+
+def csrf(client) -> str:
+    """The CSRF token of the client's session, read from the form."""
+    page = client.get("/").get_data(as_text=True)
+    token = re.search(r'name="csrf_token" value="([^"]+)"', page)
+    assert token is not None, "the form has no csrf_token field"
+    return token.group(1)
+
+
+def form(client, speech: bytes, sample: str, **fields) -> dict:
+    """A complete, valid form submission; `fields` replace or (None) remove entries."""
+    data = {"csrf_token": csrf(client), "face_sample": sample, "page": "audiobook", "title": "Hello",
+            "background": client.application.extensions["cartoonface"].limits.backgrounds[0],
+            "clothes": client.application.extensions["cartoonface"].limits.clothes[0],
+            "transcript": TRANSCRIPT, "audio": (io.BytesIO(speech), "speech.wav")}
+    for key, value in fields.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = value
+    return data
+
+
+def post(client, data: dict):
+    return client.post("/jobs", data=data, content_type="multipart/form-data")
+
+
+def png_bytes(width: int, height: int, colour: tuple[int, int, int]) -> bytes:
+    """A plain PNG of one colour (no face in it)."""
+    buffer = io.BytesIO()
+    Image.new("RGB", (width, height), colour).save(buffer, format="PNG")
+    return buffer.getvalue()

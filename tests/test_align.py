@@ -9,7 +9,7 @@ import pytest
 
 from cartoonface.speech.align import LOW_CONFIDENCE, align_syllables, onset_evidence, relative_durations, syllable_type
 from cartoonface.speech.audio import Audio
-from cartoonface.speech.espeak import synthesize
+from tests.espeak import synthesize
 
 RATE = 16000
 

@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from cartoonface.errors import TranscriptError
-from cartoonface.speech.alignment import FAST_RATE, MAX_PIECE, MAX_RATE, analyse, reconcile, sentence_pieces
+from cartoonface.speech.analyse import FAST_RATE, MAX_PIECE, MAX_RATE, analyse, sentence_pieces
+from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import find_speech_parts
 from cartoonface.speech.transcript import parse_transcript
-from tests.test_sentences import noisy, recording
 from tests.conftest import speak
+from tests.synthetic import noisy, recording
 
 
 def test_one_part_per_sentence_is_kept():

@@ -8,7 +8,7 @@ from scipy import stats
 
 from cartoonface.animate import behaviour
 from cartoonface.animate.behaviour import Action, schedule, speech_pauses
-from cartoonface.speech.alignment import Alignment, Sentence
+from cartoonface.speech.records import Alignment, Sentence
 
 DURATION = 600.0
 
@@ -153,9 +153,13 @@ def test_schedule_is_sorted(plan):
     assert [a.start for a in plan] == sorted(a.start for a in plan)
 
 
-def test_short_audio_gets_a_valid_schedule():
-    plan = schedule(0.5, ((0.2, 0.4),), 0)
-    assert all(0 <= a.start and a.end <= 0.5 for a in plan)
+@pytest.mark.parametrize("seed", range(5))
+def test_short_audio_gets_a_valid_schedule(seed):
+    """2 s of speech with a pause at 1.2 s: room for a nod before it, so the schedule is not
+    empty, and every action stays inside the audio."""
+    plan = schedule(2.0, ((1.2, 1.6),), seed)
+    assert plan, "a 2 s recording with a pause gets at least one action"
+    assert all(0 <= a.start and a.end <= 2.0 for a in plan)
 
 
 def test_speech_pauses_from_sentences():

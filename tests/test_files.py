@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import os
+import random
 import stat
 
 import pytest
 
-from cartoonface.files import atomic_directory, write_bytes_atomic, write_text_atomic
+from cartoonface.files import atomic_directory, folder_size, write_bytes_atomic, write_text_atomic
 
 
 def test_write_replaces_whole_file_and_leaves_no_temp(tmp_path):
@@ -47,3 +48,17 @@ def test_directory_gets_ordinary_permissions(tmp_path):
     finally:
         os.umask(mask)
     assert stat.S_IMODE((tmp_path / "o").stat().st_mode) == 0o755
+
+
+def test_folder_size_counts_every_file_below_once(tmp_path):
+    rng = random.Random(7)
+    sizes = [rng.randrange(0, 5000) for _ in range(6)]
+    for i, size in enumerate(sizes):
+        path = tmp_path / "site" / ("deep/er" if i % 2 else "") / f"f{i}.bin"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(bytes(size))
+    big = tmp_path / "outside.bin"
+    big.write_bytes(bytes(100_000))
+    link = tmp_path / "site" / "link"
+    link.symlink_to(big)
+    assert folder_size(tmp_path / "site") == sum(sizes) + link.lstat().st_size

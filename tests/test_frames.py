@@ -13,7 +13,7 @@ from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import InputError, OptionError
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.state import FaceState
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.records import Alignment, Sentence, Syllable
 from tests.synthetic import synthetic_talk
 
 

@@ -7,8 +7,9 @@ import pytest
 from cartoonface.errors import TranscriptError
 from cartoonface.speech import mouth_shapes as ms
 from cartoonface.speech.mouth_shapes import (
-    MOUTH_SYMBOLS, shape_onsets, shapes_for, syllable_parts,
+    MOUTH_SYMBOLS, shape_onsets, shapes_for,
 )
+from cartoonface.speech.pinyin import syllable_parts
 
 INITIALS = ("b", "p", "m", "f", "d", "t", "n", "l", "g", "k", "h", "j", "q", "x",
             "zh", "ch", "sh", "r", "z", "c", "s")

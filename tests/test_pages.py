@@ -9,7 +9,7 @@ from lxml import etree, html
 
 from cartoonface.errors import OptionError
 from cartoonface.render.pages import AudioSource, copy_audio, page_html, write_site
-from cartoonface.speech.alignment import Alignment, Sentence
+from cartoonface.speech.records import Alignment, Sentence
 
 HOSTILE = '<script>alert("x")</script> & <b>bold</b>'
 SVG = "http://www.w3.org/2000/svg"

@@ -1,4 +1,4 @@
-"""Face from a photo (cartoonface.face.photo, `cartoonface face from-photo`).
+"""Face from a photo (cartoonface.photo.model_from_photo, `cartoonface face from-photo`).
 
 The photos are skimage.data.astronaut() (a 512 x 512 portrait shipped by scikit-image)
 and pictures the tests make from it. Needs the photo extra (mediapipe, OpenCV,
@@ -15,6 +15,9 @@ from importlib.util import find_spec
 
 import numpy as np
 import pytest
+from lxml import etree
+
+from tests.conftest import run_cli
 
 MISSING = [name for name in ("mediapipe", "cv2", "skimage") if find_spec(name) is None]
 pytestmark = pytest.mark.skipif(
@@ -28,11 +31,7 @@ if not MISSING:
     from cartoonface.cli import main
     from cartoonface.errors import InputError
     from cartoonface.face.model import POINT_INDEX, POINT_NAMES, load_face
-    from cartoonface.face.photo import face_from_photo, load_photo, photo_from_image
-
-from lxml import etree
-
-from tests.conftest import run_cli
+    from cartoonface.photo.model_from_photo import face_from_photo, load_photo, photo_from_image
 
 # Where the astronaut's features are in the 512 x 512 photo (x0, y0, x1, y1), read off
 # the picture by eye; generous boxes that do not overlap.
@@ -262,14 +261,15 @@ def test_cli_writes_face_preview_and_overlay(tmp_path):
 def test_turned_head_is_warned_and_turned_back(original):
     from dataclasses import replace
 
-    from cartoonface.face.landmarks import landmarker
-    from cartoonface.face.photo import face_from_landmarks
+    from cartoonface.photo.landmarks import landmarker
+    from cartoonface.photo.landmarks_map import eyes
+    from cartoonface.photo.model_from_photo import face_from_landmarks
 
     photo = photo_from_image(astronaut(), "turned")
     found = landmarker().find(photo.rgb)
     # turn the mesh 25 degrees about the vertical axis through the eyes (nose to the image right)
     mesh = found.points.copy()
-    centre = (mesh[468] + mesh[473]) / 2
+    centre, _d = eyes(mesh)
     a = np.radians(25)
     rel = mesh - centre
     mesh[:, 0] = centre[0] + np.cos(a) * rel[:, 0] - np.sin(a) * rel[:, 2]
@@ -285,7 +285,7 @@ def test_turned_head_is_warned_and_turned_back(original):
 def test_missing_photo_extra_is_a_clear_error(monkeypatch):
     import sys
 
-    from cartoonface.face.landmarks import Landmarker, PhotoExtraMissing, landmarker
+    from cartoonface.photo.landmarks import Landmarker, PhotoExtraMissing, landmarker
 
     landmarker()  # mediapipe fully imported first, so hiding one module leaves no half import behind
     monkeypatch.setitem(sys.modules, "mediapipe.python.solutions", None)

@@ -12,48 +12,7 @@ from cartoonface.errors import OptionError
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import Span, dips, find_speech_parts, learn_pause
 from tests.conftest import speak
-
-RATE = 16000
-
-
-def syllables(count: int, seed: int, level: float = 0.3) -> np.ndarray:
-    """`count` speech-like syllables: voiced harmonic tones 0.16-0.26 s with 30-60 ms gaps; float32 samples."""
-    rng = np.random.default_rng(seed)
-    pieces = []
-    for _ in range(count):
-        length = rng.uniform(0.16, 0.26)
-        t = np.arange(int(length * RATE)) / RATE
-        f0 = rng.uniform(110, 230) * (1 + 0.15 * t / length * rng.choice([-1, 1]))
-        phase = 2 * np.pi * np.cumsum(f0) / RATE
-        tone = sum(np.sin(k * phase) / k for k in range(1, 8))
-        envelope = np.sin(np.pi * t / length) ** 0.5
-        pieces.append(level * rng.uniform(0.5, 1.0) * tone / 2.6 * envelope)
-        pieces.append(np.zeros(int(rng.uniform(0.03, 0.06) * RATE)))
-    return np.concatenate(pieces[:-1]).astype(np.float32)
-
-
-def recording(counts: list[int], pauses: list[float], lead: float = 0.5, tail: float = 0.5, seed: int = 1):
-    """Sentences of `counts` syllables separated by `pauses` seconds; returns (samples, true spans)."""
-    parts = [np.zeros(int(lead * RATE), np.float32)]
-    truth = []
-    position = lead
-    for index, count in enumerate(counts):
-        sentence = syllables(count, seed + index)
-        truth.append(Span(position, position + len(sentence) / RATE))
-        parts.append(sentence)
-        position += len(sentence) / RATE
-        gap = pauses[index] if index < len(pauses) else tail
-        parts.append(np.zeros(int(gap * RATE), np.float32))
-        position += int(gap * RATE) / RATE
-    return np.concatenate(parts), truth
-
-
-def noisy(samples: np.ndarray, snr_db: float = 40.0, seed: int = 0) -> Audio:
-    """`samples` plus white noise `snr_db` below their RMS over the loud parts, as an Audio."""
-    rng = np.random.default_rng(seed)
-    loud = np.sqrt(np.mean(samples[np.abs(samples) > 0.01] ** 2))
-    noise = rng.normal(0, loud * 10 ** (-snr_db / 20), len(samples))
-    return Audio((samples + noise).astype(np.float32), RATE, "synthetic")
+from tests.synthetic import RATE, noisy, recording
 
 
 def assert_matches(found: tuple[Span, ...], truth: list[Span], tolerance: float = 0.12) -> None:

@@ -7,7 +7,7 @@ import re
 import pytest
 
 from cartoonface.errors import AlignmentError
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.mouth_shapes import shape_onsets, shapes_for
 from cartoonface.speech.textgrid import TIERS, load_textgrid, read_textgrid, write_textgrid
 

@@ -6,7 +6,8 @@ import pytest
 from pypinyin import Style, lazy_pinyin
 
 from cartoonface.errors import InputError, TranscriptError
-from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shapes_for, syllable_parts
+from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shapes_for
+from cartoonface.speech.pinyin import syllable_parts
 from cartoonface.speech.transcript import SentenceText, parse_transcript
 
 

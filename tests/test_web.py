@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from markupsafe import escape
-from PIL import Image
 
 from cartoonface.errors import OptionError
 from cartoonface.face.model import face_from_dict
@@ -27,12 +26,10 @@ from cartoonface.web.runner import STOPPED, Runner
 from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, valid_id, write_status)
-from tests.conftest import ROOT, Client, make_app, run_cli, speak
+from tests.conftest import ROOT, SPOKEN, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli, speak
 from tests.synthetic import wav_bytes
 
 SAMPLES = ROOT / "samples" / "faces"
-TRANSCRIPT = "你好，世界。"
-SPOKEN = "ni3 hao3, shi4 jie4."
 XSS = "<script>alert('x')</script>"
 
 
@@ -51,30 +48,6 @@ def sample_name() -> str:
 
 
 
-
-
-def csrf(client) -> str:
-    """The CSRF token of the client's session, read from the form."""
-    page = client.get("/").get_data(as_text=True)
-    return re.search(r'name="csrf_token" value="([^"]+)"', page).group(1)
-
-
-def form(client, speech: bytes, sample: str, **fields) -> dict:
-    """A complete, valid form submission; `fields` replace or (None) remove entries."""
-    data = {"csrf_token": csrf(client), "face_sample": sample, "page": "audiobook", "title": "Hello",
-            "background": client.application.extensions["cartoonface"].limits.backgrounds[0],
-            "clothes": client.application.extensions["cartoonface"].limits.clothes[0],
-            "transcript": TRANSCRIPT, "audio": (io.BytesIO(speech), "speech.wav")}
-    for key, value in fields.items():
-        if value is None:
-            data.pop(key, None)
-        else:
-            data[key] = value
-    return data
-
-
-def post(client, data: dict):
-    return client.post("/jobs", data=data, content_type="multipart/form-data")
 
 
 def wait_done(client, url: str, timeout: float = 240) -> list[dict]:
@@ -404,13 +377,6 @@ def test_uploaded_face_model_is_used_instead_of_the_sample(app, client, speech, 
 
 
 PHOTO = ROOT / "docs" / "photo-astronaut.png"
-
-
-def png_bytes(width: int, height: int, colour: tuple[int, int, int]) -> bytes:
-    """A plain PNG of one colour (no face in it)."""
-    buffer = io.BytesIO()
-    Image.new("RGB", (width, height), colour).save(buffer, format="PNG")
-    return buffer.getvalue()
 
 
 def test_a_photo_becomes_the_face_model_with_its_notes(app, client, speech, sample_name):

@@ -18,12 +18,11 @@ from PIL import Image
 
 from cartoonface.face.model import POINT_NAMES, face_from_dict
 from cartoonface.web import photo_views
-from cartoonface.web.drafts import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts_root, linear_map, load_draft,
-                                    sweep_drafts)
+from cartoonface.web.draft_store import (DELETED_PREFIX, DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, delete_draft,
+                                         drafts_root, linear_map, load_draft, sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
-from tests.test_web import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post
-from tests.conftest import speak
+from tests.conftest import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post, speak
 
 pytest.importorskip("mediapipe", reason="needs the photo extra (scripts/setup.sh)")
 
@@ -294,6 +293,22 @@ def test_old_and_surplus_drafts_are_swept(tmp_path):
     deleted = sweep_drafts(tmp_path, now)
     assert set(deleted) == {stale, *ids[MAX_DRAFTS:]}
     assert sorted(p.name for p in root.iterdir()) == sorted(ids[:MAX_DRAFTS])
+
+
+def test_a_deleted_draft_is_gone_and_a_half_deleted_one_is_cleared_by_the_next_sweep(tmp_path):
+    root = drafts_root(tmp_path)
+    kept, gone = new_id(), new_id()
+    for draft_id in (kept, gone):
+        (root / draft_id).mkdir(parents=True)
+        (root / draft_id / EDIT_FILE).write_text("{}", encoding="utf-8")
+    delete_draft(root / gone)
+    delete_draft(root / gone)  # a second delete finds nothing and says nothing
+    assert [p.name for p in root.iterdir()] == [kept]
+    leftover = root / f"{DELETED_PREFIX}{new_id()}"
+    leftover.mkdir()
+    (leftover / EDIT_FILE).write_text("{}", encoding="utf-8")
+    assert sweep_drafts(tmp_path) == []
+    assert [p.name for p in root.iterdir()] == [kept]
 
 
 def test_linear_map_recovers_an_affine_map():

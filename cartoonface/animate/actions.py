@@ -19,8 +19,9 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, MAX_ANGLE, Action
+from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, Action
 from cartoonface.errors import ActionsError
+from cartoonface.face.state import MAX_ANGLE
 from cartoonface.files import read_user_text, write_text_atomic
 
 FORMAT = "cartoonface-actions"
@@ -121,7 +122,7 @@ def _action(row: object, where: str, duration: float) -> Action:
         for key in OPTIONAL:
             if key in row:
                 raise ActionsError(f"{where}.{key}: a {kind} moves over its whole duration; remove {key!r}")
-        return Action(kind, round(start, 3), round(length, 3), amplitude)
+        return _made(where, kind, round(start, 3), round(length, 3), amplitude)
     ramps = [_number(row, key, where) if key in row else round(DEFAULT_RAMP * length, 3) for key in OPTIONAL]
     for key, value in zip(OPTIONAL, ramps, strict=True):
         if value < 0:
@@ -130,7 +131,16 @@ def _action(row: object, where: str, duration: float) -> Action:
         raise ActionsError(
             f"{where}.release: attack + release ({ramps[0] + ramps[1]:g} s) exceed the duration ({length:g} s)"
         )
-    return Action(kind, round(start, 3), round(length, 3), amplitude, round(ramps[0], 3), round(ramps[1], 3))
+    return _made(where, kind, round(start, 3), round(length, 3), amplitude, round(ramps[0], 3), round(ramps[1], 3))
+
+
+def _made(where: str, kind: str, start: float, length: float, amplitude: float,
+          attack: float = 0.0, release: float = 0.0) -> Action:
+    """The Action of these fields; its own check's ValueError becomes an ActionsError prefixed by `where`."""
+    try:
+        return Action(kind, start, length, amplitude, attack, release)
+    except ValueError as exc:
+        raise ActionsError(f"{where}: {exc}") from None
 
 
 def _number(row: dict, key: str, where: str) -> float:

@@ -30,10 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model
+
 KINDS = ("blink", "brow", "tilt", "turn", "nod")
 ENVELOPE_KINDS = ("blink", "brow", "nod")
 ANGLE_KINDS = ("tilt", "turn", "nod")
-MAX_ANGLE = 15.0  # degrees: the pose limit of the face model (ARCHITECTURE.md, Pose)
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
 # The thesis measures a behaviour's interval from the end of one to the start of
@@ -75,6 +76,9 @@ NOD_ANGLE = (3.0, 6.0)  # nod depth in degrees, head down
 BROW_RAMP = 0.3  # a brow raise rises over 30 % of its duration and falls over 30 %
 
 
+RAMP_SLACK = 0.0005  # seconds: attack + release may pass the duration by this much (times kept to the ms)
+
+
 @dataclass(frozen=True)
 class Action:
     """One facial behaviour: `kind` in KINDS, `start` and `duration` in seconds.
@@ -92,6 +96,29 @@ class Action:
     amplitude: float
     attack: float = 0.0
     release: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field unless the action is one the timeline can play."""
+        if self.kind not in KINDS:
+            raise ValueError(f"action kind {self.kind!r}; expected one of {', '.join(KINDS)}")
+        for name in ("start", "duration", "amplitude", "attack", "release"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{self.kind} {name} {getattr(self, name)!r}; expected a finite number")
+        if self.start < 0:
+            raise ValueError(f"{self.kind} start {self.start:g} s; expected 0 or later")
+        if self.duration <= 0:
+            raise ValueError(f"{self.kind} duration {self.duration:g} s; expected more than 0")
+        if self.attack < 0 or self.release < 0:
+            raise ValueError(f"{self.kind} attack {self.attack:g} s, release {self.release:g} s; expected 0 or more")
+        if self.kind in ENVELOPE_KINDS and self.attack + self.release > self.duration + RAMP_SLACK:
+            raise ValueError(f"{self.kind} attack + release {self.attack + self.release:g} s exceed the duration "
+                             f"{self.duration:g} s")
+        if self.kind not in ENVELOPE_KINDS and (self.attack or self.release):
+            raise ValueError(f"{self.kind} moves over its whole duration; expected attack and release 0")
+        if self.kind in ANGLE_KINDS and abs(self.amplitude) > MAX_ANGLE:
+            raise ValueError(f"{self.kind} angle {self.amplitude:g} degrees; expected -{MAX_ANGLE:g} to {MAX_ANGLE:g}")
+        if self.kind not in ANGLE_KINDS and not 0.0 <= self.amplitude <= 1.0:
+            raise ValueError(f"{self.kind} amplitude {self.amplitude:g}; expected an amount from 0 to 1")
 
     @property
     def end(self) -> float:
@@ -159,7 +186,8 @@ def _round_to_ms(t: float) -> float:
 
 def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
     length = _round_to_ms(BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN)
-    blinks, end = [], 0.0
+    blinks: list[Action] = []
+    end = 0.0
     while True:
         start = _round_to_ms(end + blink_interval(rng))
         if start + length > duration:
@@ -169,7 +197,8 @@ def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
 
 
 def _brows(duration: float, rng: np.random.Generator) -> list[Action]:
-    brows, end = [], 0.0
+    brows: list[Action] = []
+    end = 0.0
     while True:
         start = _round_to_ms(end + _uniform2(rng, BROW_INTERVAL))
         length = _uniform2(rng, BROW_DURATION)
@@ -196,7 +225,8 @@ def _moves(
     A move that would overlap a nod (`busy` spans) is put off: its interval is
     counted again from the end of that nod.
     """
-    moves, end = [], 0.0
+    moves: list[Action] = []
+    end = 0.0
     side = 1.0 if rng.random() < 0.5 else -1.0
     while True:
         gap, span = _uniform2(rng, interval), _uniform2(rng, length)

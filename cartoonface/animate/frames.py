@@ -15,6 +15,8 @@ writer can merge them: angles to 0.1 degree, amounts and mouth weights to 0.01.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from cartoonface.animate.timeline import Timeline, Track
@@ -47,7 +49,7 @@ def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
     return states_at(timeline, np.arange(count) / fps)
 
 
-def states_at(timeline: Timeline, times: np.ndarray) -> tuple[FaceState, ...]:
+def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[FaceState, ...]:
     """The face state at each of `times` ((n,) seconds), interpolated between key frames."""
     t = np.asarray(times, dtype=float) * 1000.0
     mouth = _mouth(timeline.track("mouth"), t)
@@ -55,14 +57,16 @@ def states_at(timeline: Timeline, times: np.ndarray) -> tuple[FaceState, ...]:
     tilt, turn, nod = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod"))
     pitch = NOD_SIGN * nod + 0.0
     columns = zip(blink.tolist(), brow.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(), mouth, strict=True)
-    states, previous, state = [], None, None
+    states: list[FaceState] = []
+    previous = None
     for values in columns:
         if values != previous:
             eyes, brows, down, sideways, lean, mix = values
             pose = Pose(tilt=down, turn=sideways, roll=lean)
-            state = FaceState(pose=pose, blink=eyes, smile=SMILE, brow=brows, mouth=mix)
+            states.append(FaceState(pose=pose, blink=eyes, smile=SMILE, brow=brows, mouth=mix))
             previous = values
-        states.append(state)
+        else:
+            states.append(states[-1])
     return tuple(states)
 
 
@@ -101,7 +105,7 @@ def _mouth(track: Track, t: np.ndarray) -> list[tuple[tuple[str, float], ...]]:
     shapes = np.array([MOUTH_SYMBOLS.index(key.value) for key in track.keys])
     before, after, eased = _segments(track, t)
     hundredths = np.round(eased * 100).astype(int)
-    mixes = []
+    mixes: list[tuple[tuple[str, float], ...]] = []
     for a, b, k in zip(shapes[before].tolist(), shapes[after].tolist(), hundredths.tolist(), strict=True):
         if a == b or k == 0:
             mixes.append(((MOUTH_SYMBOLS[a], 1.0),))

@@ -27,6 +27,25 @@ REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: sh
 # at 30 fps: the mouth visibly opens ahead of the syllable without looking early.
 LEAD_MS = 80
 LAG_MS = 80
+# A pause shorter than LAG_MS + LEAD_MS but at least this long (the aligner's shortest pause
+# inside a speaking part, speech/align.py MIN_PAUSE) still closes the mouth, for an instant:
+# lag and lead shrink in proportion. Shorter gaps blend straight on.
+SHORT_PAUSE_MS = 100
+# Lips closed for b, p, m (thesis 002, 5.2.2: their shape is m): held this long from the
+# syllable's start, the stop closure or nasal murmur (bilabial closures of read Mandarin last
+# about 50-100 ms). 70 ms holds the closed mouth over at least 2 frames at 30 fps.
+CLOSURE_MS = 70
+# The lips part quickly at the release of a bilabial: the next shape is reached within this
+# (our choice: under one frame at 30 fps); a syllable too short for CLOSURE_MS + RELEASE_MS
+# before its next shape holds the closure for what is left.
+RELEASE_MS = 20
+# Phrase-final lengthening: the last syllable before a pause lasts about 1.4 times as long
+# (speech/align.py's duration prior, fitted on Biaobei 000001-000035). The extra length is the
+# final vowel held; the 5.3 onsets are taken of the unlengthened syllable.
+FINAL_LENGTHENING = 1.4
+# A b/p/m syllable whose next shape comes too early for the closure moves its later shapes
+# (towards its end), keeping at least this share of their time (our choice).
+CLOSURE_KEEP = 0.5
 MOUTH_EASING = "smoothstep"
 AMOUNT_EASING = "smoothstep"
 ANGLE_EASING = "cosine"
@@ -69,7 +88,7 @@ class Timeline:
 
 
 def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
-    """Key frames for an Alignment (speech/alignment.py) and behaviour `actions`.
+    """Key frames for an Alignment (speech/records.py) and behaviour `actions`.
 
     Returns a Timeline of alignment.duration (rounded to ms) with the tracks
     mouth, blink, brow, tilt, turn and nod.
@@ -94,27 +113,61 @@ def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
     """Mouth key frames for `syllables` (with start, end in s and shapes) sorted by start.
 
     Each shape of a syllable is a key frame at start + onset * (end - start),
-    onsets from speech.mouth_shapes.shape_onsets (thesis 002, 5.3). Where the
-    gap to the next syllable leaves room for LAG_MS + LEAD_MS, the mouth
+    onsets from speech.mouth_shapes.shape_onsets (thesis 002, 5.3); before a
+    pause (or at the end) the onsets are taken of the syllable without its
+    phrase-final lengthening (FINAL_LENGTHENING), so the widest shape comes
+    inside the vowel and the last shape holds through the lengthened end.
+    A syllable that starts with closed lips (b, p, m: shape REST) holds them
+    CLOSURE_MS and opens within RELEASE_MS; its later shapes move towards its
+    end for that when needed, as far as the syllable allows (_closure_times). Where
+    the gap to the next syllable leaves room for LAG_MS + LEAD_MS, the mouth
     holds the last shape to the end of the sound, closes to REST within
-    LAG_MS, and reopens from REST LEAD_MS before the next syllable; shorter
-    gaps blend straight from one syllable into the next. `duration` in ms.
+    LAG_MS, and reopens from REST LEAD_MS before the next syllable; a gap of
+    SHORT_PAUSE_MS up to that closes it at one instant (lag and lead shrunk
+    in proportion); shorter gaps blend straight from one syllable into the
+    next. `duration` in ms.
     """
     keys = [Keyframe(0, REST)]
     previous_end = None
-    for syllable in syllables:
+    for index, syllable in enumerate(syllables):
         start, end = _seconds_to_ms(syllable.start), _seconds_to_ms(syllable.end)
-        if previous_end is None or start - previous_end >= LAG_MS + LEAD_MS:
+        gap = None if previous_end is None else start - previous_end
+        if gap is None or gap >= SHORT_PAUSE_MS:
+            lag, lead = LAG_MS, LEAD_MS
+            if gap is not None and gap < LAG_MS + LEAD_MS:
+                lag = round(gap * LAG_MS / (LAG_MS + LEAD_MS))
+                lead = gap - lag
             if previous_end is not None:
-                keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + LAG_MS, REST)]
-            keys.append(Keyframe(max(start - LEAD_MS, 0), REST))
-        for shape, onset in zip(syllable.shapes, shape_onsets(len(syllable.shapes)), strict=True):
-            keys.append(Keyframe(start + round(onset * (end - start)), shape))
+                keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + lag, REST)]
+            keys.append(Keyframe(max(start - lead, 0), REST))
+        following = syllables[index + 1] if index + 1 < len(syllables) else None
+        paused = following is None or _seconds_to_ms(following.start) - end >= LAG_MS + LEAD_MS
+        shaped = round((end - start) / FINAL_LENGTHENING) if paused else end - start
+        times = [start + round(onset * shaped) for onset in shape_onsets(len(syllable.shapes))]
+        if syllable.shapes[0] == REST and len(times) > 1:
+            times = _closure_times(times, start + shaped)
+        for shape, t in zip(syllable.shapes, times, strict=True):
+            keys.append(Keyframe(t, shape))
+        hold = min(CLOSURE_MS, times[1] - RELEASE_MS - start) if len(times) > 1 else 0
+        if syllable.shapes[0] == REST and hold > 0:
+            keys.insert(len(keys) - len(times) + 1, Keyframe(start + hold, REST))
         previous_end = end
     if previous_end is not None:
         keys += [Keyframe(previous_end, keys[-1].value), Keyframe(min(previous_end + LAG_MS, duration), REST)]
     keys.append(Keyframe(duration, REST))
     return _monotonic(keys)
+
+
+def _closure_times(times: list[int], end: int) -> list[int]:
+    """Key times (ms) of a syllable that starts with closed lips, whose shapes end at `end`:
+    the later keys moved (linearly, towards `end`) so that the second comes CLOSURE_MS +
+    RELEASE_MS after the first, but keep at least half of their time (CLOSURE_KEEP)."""
+    wanted = times[0] + CLOSURE_MS + RELEASE_MS
+    if times[1] >= wanted:
+        return times
+    target = min(wanted, round(times[1] + (1 - CLOSURE_KEEP) * (end - times[1])))
+    scale = (end - target) / max(end - times[1], 1)
+    return [times[0]] + [target + round((t - times[1]) * scale) for t in times[1:]]
 
 
 def envelope_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:

@@ -1,26 +1,30 @@
 """The `cartoonface` command: a thin shell over the library.
 
-Each subcommand lives in its own module in this package and exposes
-`register(subparsers)`, which adds its parser and sets `func` to a function
-taking the parsed arguments and returning an exit code. Bad input raises
+Each subcommand lives in its own module in this package and exposes `HELP`
+(its one-line help) and `register(subparsers)`, which adds its parser and sets
+`func` to a function taking the parsed arguments and returning an exit code.
+Subcommand modules import the library (numpy, scipy, lxml, flask, ...) only in
+`register` and in their command functions, and only the chosen subcommand is
+registered, so `cartoonface --help` starts without them. Bad input raises
 `InputError`; it is printed as one line and the command exits 2.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
 from cartoonface import __version__
+from cartoonface.cli import align, face, generate, serve
 from cartoonface.errors import InputError
 
-# Subcommand modules, in the order they appear in --help.
-SUBCOMMANDS = ("face", "align", "generate", "serve")
+# Subcommand name -> module, in the order they appear in --help.
+SUBCOMMANDS = {"face": face, "align": align, "generate": generate, "serve": serve}
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Return the top-level parser with every available subcommand registered."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """Return the top-level parser. The subcommand named `command` is registered with all
+    its options; the others (all of them for None) only with their name and help line."""
     parser = argparse.ArgumentParser(
         prog="cartoonface",
         description="Turn a face model, a speech recording and its transcript into a "
@@ -28,20 +32,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"cartoonface {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMANDS:
-        try:
-            module = importlib.import_module(f"cartoonface.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"cartoonface.cli.{name}":
-                raise
-            continue
-        module.register(subparsers)
+    for name, module in SUBCOMMANDS.items():
+        if name == command:
+            module.register(subparsers)
+        else:
+            subparsers.add_parser(name, help=module.HELP)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the process exit code (0 ok, 2 bad input)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
+    parser = build_parser(argv[0] if argv else None)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)

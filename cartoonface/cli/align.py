@@ -1,6 +1,6 @@
 """`cartoonface align`: recording + transcript -> Praat TextGrid (and JSON) of sentences, syllables, mouth shapes.
 
-A thin shell over `cartoonface.speech.alignment.analyse`: progress on
+A thin shell over `cartoonface.speech.analyse.analyse`: progress on
 stderr, notes on stderr, a one-line summary on stdout. docs/alignment.md
 describes the outputs.
 """
@@ -12,19 +12,22 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import OptionError, TranscriptError
 from cartoonface.files import read_user_text, write_text_atomic
-from cartoonface.speech.alignment import LOW_CONFIDENCE, Alignment, alignment_to_dict, analyse
-from cartoonface.speech.audio import load_audio
-from cartoonface.speech.textgrid import write_textgrid
+
+if TYPE_CHECKING:
+    from cartoonface.speech.records import Alignment
+
+HELP = "time the sentences, syllables and mouth shapes of a recording (Praat TextGrid)"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `align` subcommand."""
     parser = subparsers.add_parser(
-        "align", help="time the sentences, syllables and mouth shapes of a recording (Praat TextGrid)",
+        "align", help=HELP,
         description="Find when every sentence and syllable of the transcript is spoken in the recording and "
                     "which mouth shapes each syllable uses; write a Praat TextGrid (tiers sentences, syllables, "
                     "mouth shapes) that can be corrected in Praat and given back to `generate --alignment`.")
@@ -41,7 +44,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def parse_pause(text: str | None) -> tuple[float, float] | None:
-    """'START,END' -> (start, end) seconds, None for None; OptionError when it is not two numbers."""
+    """'START,END' -> (start, end) seconds, None for None; OptionError when it is not two numbers.
+    Shared by `align --pause` and `generate --pause`."""
     if text is None:
         return None
     try:
@@ -59,6 +63,8 @@ def check_output(path: Path, option: str) -> None:
 
 def summary(alignment: Alignment, output: Path, seconds: float) -> str:
     """The one-line report of a finished alignment."""
+    from cartoonface.speech.analyse import LOW_CONFIDENCE
+
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
     low = sum(s.confidence < LOW_CONFIDENCE for s in syllables)
     return (
@@ -75,6 +81,11 @@ def _count(number: int, noun: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Align the recording with its transcript and write the outputs; returns 0."""
+    from cartoonface.speech.analyse import analyse
+    from cartoonface.speech.audio import load_audio
+    from cartoonface.speech.records import alignment_to_dict
+    from cartoonface.speech.textgrid import write_textgrid
+
     started = time.perf_counter()
     pause = parse_pause(args.pause)
     check_output(args.output, "-o")

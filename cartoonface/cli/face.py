@@ -9,20 +9,16 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-
-from lxml import etree
+from typing import TYPE_CHECKING
 
 from cartoonface.cli.photo import register_from_photo
 from cartoonface.errors import OptionError
-from cartoonface.face.model import load_face
-from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
 from cartoonface.files import write_bytes_atomic
-from cartoonface.render.elements import svg_bytes
-from cartoonface.render.diagram import diagram_svg
-from cartoonface.render.png import svg_to_png
-from cartoonface.render.sheet import sheet_svg
-from cartoonface.render.svg import face_svg
+
+if TYPE_CHECKING:
+    from lxml import etree
+
+    from cartoonface.face.state import FaceState
 
 # The contact sheet: one row per pose and expression, one column per basic mouth shape.
 # Rows: label, (tilt, turn, roll), blink, smile, brow.
@@ -38,12 +34,17 @@ SHEET_ROWS: tuple[tuple[str, tuple[float, float, float], float, float, float], .
     ("tilt 15 turn -15 roll 15\nsmile 1, brow 1", (15, -15, 15), 0, 1, 1),
 )
 SHEET_CELL = 104.0  # cell width in pixels
+ANGLES = ("tilt", "turn", "roll")  # the pose options, Pose's fields
+HELP = "draw a face model as SVG: one pose and expression, a contact sheet, the point diagram"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    """Add the `face` subcommand with its `render`, `sheet` and `diagram` actions."""
+    """Add the `face` subcommand with its `render`, `sheet`, `diagram` and `from-photo` actions."""
+    from cartoonface.face.mouth import MOUTH_SYMBOLS
+    from cartoonface.face.state import MAX_ANGLE
+
     parser = subparsers.add_parser(
-        "face", help="draw a face model as SVG: one pose and expression, a contact sheet, the point diagram",
+        "face", help=HELP,
         description="Draw a face model (JSON, docs/face-model.md) as SVG, optionally also as PNG.")
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
 
@@ -102,26 +103,34 @@ def _number(text: str, option: str) -> float:
 
 
 def _state(args: argparse.Namespace) -> FaceState:
-    """The FaceState the render options describe (OptionError names a bad one)."""
+    """The FaceState the render options describe (OptionError names a bad one; Pose checks the angles)."""
+    from cartoonface.face.mouth import MOUTH_SYMBOLS
+    from cartoonface.face.state import FaceState, Pose
+
     if args.mouth not in MOUTH_SYMBOLS:
         raise OptionError(f"--mouth {args.mouth!r}: unknown mouth shape; expected one of {' '.join(MOUTH_SYMBOLS)}")
     angles = {}
-    for name in ("tilt", "turn", "roll"):
+    for name in ANGLES:
         angles[name] = _number(getattr(args, name), name)
-        if abs(angles[name]) > MAX_ANGLE:
-            raise OptionError(f"--{name} {angles[name]:g}: out of range; expected -{MAX_ANGLE:g} to {MAX_ANGLE:g} degrees")
+        try:
+            Pose(**{name: angles[name]})
+        except OptionError as exc:
+            raise OptionError(f"--{name} {angles[name]:g}: {exc}") from None
     amounts = {}
     for name in ("blink", "smile", "brow"):
         amounts[name] = _number(getattr(args, name), name)
         if not 0 <= amounts[name] <= 1:
             raise OptionError(f"--{name} {amounts[name]:g}: out of range; expected 0 to 1")
-    return FaceState(pose=Pose(**angles), blink=amounts["blink"], smile=amounts["smile"],
-                     brow=amounts["brow"]).with_mouth(args.mouth)
+    pose = Pose(**angles)
+    return FaceState(pose, amounts["blink"], amounts["smile"], amounts["brow"]).with_mouth(args.mouth)
 
 
 def _write(root: etree._Element, args: argparse.Namespace, palette: bool = False) -> int:
     """Write the SVG (and with --png the PNG, with a 256-colour `palette` if asked) for `root`;
     print what was written; exit code 0."""
+    from cartoonface.render.elements import svg_bytes
+    from cartoonface.render.png import svg_to_png
+
     if args.output.suffix.lower() != ".svg":
         raise OptionError(f"-o {args.output}: expected a file name ending in .svg")
     data = svg_bytes(root)
@@ -142,12 +151,20 @@ def _write(root: etree._Element, args: argparse.Namespace, palette: bool = False
 
 def run_render(args: argparse.Namespace) -> int:
     """`face render`: one state of the face on its canvas."""
+    from cartoonface.face.model import load_face
+    from cartoonface.render.svg import face_svg
+
     state = _state(args)
     return _write(face_svg(load_face(args.face), state), args)
 
 
 def run_sheet(args: argparse.Namespace) -> int:
     """`face sheet`: SHEET_ROWS x MOUTH_SYMBOLS."""
+    from cartoonface.face.model import load_face
+    from cartoonface.face.mouth import MOUTH_SYMBOLS
+    from cartoonface.face.state import FaceState, Pose
+    from cartoonface.render.sheet import sheet_svg
+
     face = load_face(args.face)
     rows = [(label, [FaceState(Pose(*angles), blink, smile, brow).with_mouth(m) for m in MOUTH_SYMBOLS])
             for label, angles, blink, smile, brow in SHEET_ROWS]
@@ -156,4 +173,7 @@ def run_sheet(args: argparse.Namespace) -> int:
 
 def run_diagram(args: argparse.Namespace) -> int:
     """`face diagram`: the labelled point diagram."""
+    from cartoonface.face.model import load_face
+    from cartoonface.render.diagram import diagram_svg
+
     return _write(diagram_svg(load_face(args.face)), args, palette=True)

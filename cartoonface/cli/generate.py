@@ -9,20 +9,27 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from cartoonface.cli.align import parse_pause
 from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import OptionError
-from cartoonface.pipeline import Options, Result, generate
-from cartoonface.render.pages import PAGES
-from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 
+if TYPE_CHECKING:
+    from cartoonface.pipeline import Result
+
+HELP = "make the talking-face pages from a face, a recording and its transcript"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `generate` subcommand."""
+    from cartoonface.pipeline import Options
+    from cartoonface.render.pages import PAGES
+    from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
+
     defaults = Options()
     parser = subparsers.add_parser(
-        "generate", help="make the talking-face pages from a face, a recording and its transcript",
+        "generate", help=HELP,
         description="Make a folder with index.html (audio book or virtual announcer), animation.svg, the "
                     "audio, alignment.TextGrid and actions.json. Open index.html in a browser (docs/output.md).")
     parser.add_argument("--face", type=Path, required=True, metavar="FACE.json", help="face model (docs/face-model.md)")
@@ -51,18 +58,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def parse_pause(text: str | None) -> tuple[float, float] | None:
-    """'S,E' -> (S, E) seconds; OptionError when it is not two numbers."""
-    if text is None:
-        return None
-    parts = text.split(",")
-    try:
-        start, end = (float(part) for part in parts)
-    except ValueError:
-        raise OptionError(f"--pause {text!r}: expected START,END in seconds, e.g. 0.2,0.7") from None
-    return start, end
-
-
 def parse_link(text: str) -> tuple[str, str]:
     """'LABEL=URL' -> (label, url); OptionError without '='."""
     label, sep, url = text.partition("=")
@@ -79,6 +74,8 @@ def summary(result: Result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Generate the folder; print the summary and any notes. Returns 0."""
+    from cartoonface.pipeline import Options, generate
+
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),

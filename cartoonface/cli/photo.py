@@ -1,6 +1,6 @@
 """`cartoonface face from-photo`: a face model from a portrait photo (docs/photo.md).
 
-A thin shell over cartoonface.face.photo. Registered under `face` by cli/face.py
+A thin shell over cartoonface.photo.model_from_photo. Registered under `face` by cli/face.py
 through `register_from_photo`; the photo extra is imported only when the action runs.
 """
 
@@ -42,9 +42,10 @@ def run_from_photo(args: argparse.Namespace) -> int:
         raise OptionError("--name is empty; expected a name for the face")
 
     from cartoonface.face.model import save_face
-    from cartoonface.face.photo import face_from_photo, load_photo, overlay_png
     from cartoonface.face.state import FaceState
     from cartoonface.files import write_bytes_atomic
+    from cartoonface.photo.model_from_photo import face_from_photo, load_photo
+    from cartoonface.photo.pictures import overlay_png
     from cartoonface.render.elements import svg_bytes
     from cartoonface.render.png import svg_to_png
     from cartoonface.render.svg import face_svg

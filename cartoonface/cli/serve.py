@@ -15,6 +15,7 @@ THREADS = 8  # waitress request threads; jobs run in the app's own worker pool
 # Host headers accepted when listening on IPv4 loopback (unless TRUSTED_HOSTS is set): a web
 # page that rebinds its own domain name to 127.0.0.1 then cannot drive the app.
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost")
+HELP = "run the web app (upload, progress, results)"
 
 
 def port_number(text: str) -> int:
@@ -31,7 +32,7 @@ def port_number(text: str) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `serve` subcommand."""
     parser = subparsers.add_parser(
-        "serve", help="run the web app (upload, progress, results)",
+        "serve", help=HELP,
         description="Run the cartoonface web app with waitress. Settings: docs/web.md "
                     "(CARTOONFACE_* environment variables or <instance>/config.py).")
     parser.add_argument("--host", default=DEFAULT_HOST, help=f"address to listen on (default {DEFAULT_HOST})")

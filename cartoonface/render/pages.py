@@ -23,7 +23,7 @@ from markupsafe import Markup
 from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
-from cartoonface.speech.alignment import Alignment
+from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import browser_copy
 
 PAGES = ("audiobook", "announcer")
@@ -170,8 +170,3 @@ def write_site(
     for asset in sorted(STATIC.iterdir()):
         if asset.is_file():
             write_bytes_atomic(target / "static" / asset.name, asset.read_bytes())
-
-
-def folder_size(folder: str | os.PathLike[str]) -> int:
-    """Total bytes of the files under `folder`."""
-    return sum(path.stat().st_size for path in Path(folder).rglob("*") if path.is_file())

@@ -47,15 +47,22 @@ from typing import TYPE_CHECKING, Protocol, Sequence
 
 import numpy as np
 
-from cartoonface.speech.features import HOP, frames
+from cartoonface.speech.audio import digital_silence
+from cartoonface.speech.features import HOP, WINDOW_SECONDS, frames
+from cartoonface.speech.pinyin import split_initial
 
 if TYPE_CHECKING:
     from cartoonface.speech.audio import Audio
 
 
 class SpanLike(Protocol):
-    start: float
-    end: float
+    """Anything with a start and an end in seconds (sentences.Span)."""
+
+    @property
+    def start(self) -> float: ...
+
+    @property
+    def end(self) -> float: ...
 
 
 @dataclass(frozen=True)
@@ -80,9 +87,6 @@ class SyllableType:
     tone: int
     erhua: bool
 
-
-_INITIALS = ("zh", "ch", "sh", "b", "p", "m", "f", "d", "t", "n", "l", "g", "k", "h",
-             "j", "q", "x", "r", "z", "c", "s", "y", "w")
 
 # Initial classes (standard Mandarin phonology): closure = silent stop or affricate onset,
 # frication = voiceless fricative, sonorant = nasal, lateral or r, glide = y/w, none = vowel.
@@ -110,8 +114,8 @@ def syllable_type(pinyin: str) -> SyllableType:
     erhua = len(text) > 2 and text.endswith("r") and text != "er"
     if erhua:
         text = text[:-1]
-    initial = next((i for i in _INITIALS if text.startswith(i) and len(text) > len(i)), "")
-    return SyllableType(initial, text[len(initial):], tone, erhua)
+    initial, final = split_initial(text, glides=True)
+    return SyllableType(initial, final, tone, erhua)
 
 
 # Relative duration of a syllable by type, multiplied together; fitted on Biaobei 000001-000035
@@ -128,7 +132,7 @@ _LAST_FACTOR = 1.40              # last syllable of the part (phrase-final lengt
 
 def relative_durations(syllables: Sequence[str]) -> np.ndarray:
     """(N,) relative duration weights of the syllables of one part (mean 1)."""
-    weights = []
+    weights: list[float] = []
     for k, pinyin in enumerate(syllables):
         t = syllable_type(pinyin)
         w = _INITIAL_FACTOR[initial_class(t.initial)] * _TONE_FACTOR[t.tone]
@@ -137,8 +141,8 @@ def relative_durations(syllables: Sequence[str]) -> np.ndarray:
         w *= _ERHUA_FACTOR if t.erhua else 1.0
         w *= _LAST_FACTOR if k == len(syllables) - 1 else 1.0
         weights.append(w)
-    weights = np.array(weights, dtype=float)
-    return weights / weights.mean() if weights.size else weights
+    relative = np.array(weights, dtype=float)
+    return relative / relative.mean() if relative.size else relative
 
 
 # Tuned on Biaobei 000001-000035 (bench/align.py).
@@ -149,10 +153,39 @@ DIP_CAP = 8.0              # dB: deeper dips are closures or pauses, no likelier
 MID_DIP_SHARE = 0.4        # weight of a 1-3 kHz dip next to a 0.1-1 kHz one (the larger counts):
                            # a nasal's murmur or a glide can keep the low band up while F2/F3 drop
 SILENCE_SCALE = 6.0        # dB below the silence threshold worth one unit of pause evidence
+SILENCE_CLIP = (-3.0, 1.0)  # pause evidence per frame is kept within these bounds (a loud frame
+                            # costs at most 3 units, a quiet one earns at most 1)
+# The part's level range: its loud level is this percentile of its 100-1000 Hz frames, its floor
+# this percentile of the frames of the part and its margins. Digital silence (audio.DIGITAL_SILENCE)
+# is no noise floor: exact zeros between joined sentences would put the floor 40 dB under the real
+# one, and the pauses inside the part would count as speech; its frames are set to the floor of
+# the recorded frames first (_lift_digital_silence).
+LOUD_PERCENTILE = 95.0
+FLOOR_PERCENTILE = 5.0
+# Digital silence is set no higher than this many dB under the loud level of its band (100-1000,
+# 1000-3000, 3000-8000 Hz): a noise gate also silences the quietest speech, whose level is then
+# no noise floor. Natural recordings span 55-75 dB in each band (Biaobei 000001-000035); a noisy
+# one far less in the high band (room noise there at -60 dBFS lies ~35 dB under espeak-ng speech,
+# tests/test_silence.py), so that band's limit is lower. Chosen on Biaobei 000001-000035
+# (bench/silence.py: 45-60 dB tried).
+LOW_NOISE_RANGE_DB = 70.0
+MID_NOISE_RANGE_DB = 60.0
+HIGH_NOISE_RANGE_DB = 50.0
+MIN_RECORDED = 0.05        # share of recorded frames below which the floor is taken over all frames
+SILENCE_SHARE = 0.3        # frames below floor + this share of the range are silent
+MIN_RANGE_DB = 10.0        # a part with a smaller range is noise or silence: duration-prior split
+QUALITY_RANGE_DB = 20.0    # dB of range above MIN_RANGE_DB at which the signal quality reaches 1
 PAUSE_PENALTY = 3.0        # per pause, in units of evidence
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
 MIN_FRAMES = 3             # frames: the shortest syllable
+LONGEST_SHARE = 4          # a syllable lasts at most this many times its expected duration
+SMOOTH_FRAMES = 3          # band levels are smoothed over this many frames (30 ms)
+CHANGE_FRAMES = 2          # a fall or rise is measured from this many frames before to as many after
+CHANGE_CAP_DB = 30.0       # larger falls and rises count as this (a step into digital silence is no likelier)
+DIP_REACH = 12             # frames (120 ms) either side whose highest level a dip is measured against
+MINIMUM_REACH = 3          # frames either side within which a dip must be the (near) lowest
+MINIMUM_TOLERANCE_DB = 1.0  # dB above the nearby minimum still counted as the minimum
 MARGIN = 20                # frames of context read on each side of the span
 SURE_DISTANCE = 5          # frames: an onset moved further than this counts as a different answer
 MARGIN_SCALE = 0.5         # score margin (units of evidence) of confidence 1 - 1/e; on Biaobei
@@ -170,7 +203,8 @@ FRICATION_FLOOR = 10.0     # dB above the 3-8 kHz floor that is always tolerated
                            # (no effect on Biaobei; checked on Chao 1922, whose high band is noise)
 
 
-def _smooth(x: np.ndarray, width: int = 3) -> np.ndarray:
+def _smooth(x: np.ndarray, width: int = SMOOTH_FRAMES) -> np.ndarray:
+    """(T,) values -> (T,) their moving mean over `width` frames (edges repeated)."""
     return np.convolve(np.pad(x, width // 2, mode="edge"), np.ones(width) / width, mode="valid")
 
 
@@ -178,10 +212,10 @@ def edge_evidence(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(T,) smoothed dB of 100-1000 Hz and 3000-8000 Hz -> (2, T): evidence that a pause
     starts at each position (the low band falls) and that one ends (either band rises)."""
     def change(x):
-        pad = np.pad(x, 2, mode="edge")
-        return pad[4:] - pad[:-4]
+        pad = np.pad(x, CHANGE_FRAMES, mode="edge")
+        return pad[2 * CHANGE_FRAMES:] - pad[:-2 * CHANGE_FRAMES]
     rise = np.maximum(change(low), change(high))
-    return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, 30.0)
+    return FALL_WEIGHT * np.clip(np.stack([-change(low), rise]), 0.0, CHANGE_CAP_DB)
 
 
 def _earlier(x: np.ndarray, frames: int) -> np.ndarray:
@@ -198,22 +232,23 @@ def _earlier(x: np.ndarray, frames: int) -> np.ndarray:
 
 def _dip(band: np.ndarray) -> np.ndarray:
     """(T,) smoothed dB of one band -> (T,) dB depth of the dip at each local minimum (0 elsewhere),
-    below the lower of the highest levels within 120 ms before and after, capped at DIP_CAP."""
-    pad = np.pad(band, 12, mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(pad, 12)
-    left, right = windows[:-13].max(axis=1), windows[13:].max(axis=1)
+    below the lower of the highest levels within DIP_REACH frames before and after, capped at DIP_CAP."""
+    pad = np.pad(band, DIP_REACH, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(pad, DIP_REACH)
+    left, right = windows[:-DIP_REACH - 1].max(axis=1), windows[DIP_REACH + 1:].max(axis=1)
     dip = np.minimum(left, right) - band
     # only at (near) local minima: a flat quiet stretch is one dip, not many
-    nearby = np.lib.stride_tricks.sliding_window_view(pad[9:-9], 7).min(axis=1)
-    return np.clip(np.where(band <= nearby + 1.0, dip, 0.0), 0.0, DIP_CAP)
+    inner = pad[DIP_REACH - MINIMUM_REACH:-(DIP_REACH - MINIMUM_REACH)]
+    nearby = np.lib.stride_tricks.sliding_window_view(inner, 2 * MINIMUM_REACH + 1).min(axis=1)
+    return np.clip(np.where(band <= nearby + MINIMUM_TOLERANCE_DB, dip, 0.0), 0.0, DIP_CAP)
 
 
 def onset_evidence(low: np.ndarray, mid: np.ndarray) -> dict[str, np.ndarray]:
     """(T,) smoothed 100-1000 Hz and 1000-3000 Hz dB per boundary position -> for each initial
     class, (T,) evidence that a syllable of that class starts there (higher is likelier), each
     moved by the class's ONSET_LEAD."""
-    pad = np.pad(low, 2, mode="edge")
-    fall = FALL_WEIGHT * np.clip(pad[:-4] - pad[4:], 0.0, 30.0)   # dB fall, 2 frames before to 2 after
+    pad = np.pad(low, CHANGE_FRAMES, mode="edge")
+    fall = FALL_WEIGHT * np.clip(pad[:-2 * CHANGE_FRAMES] - pad[2 * CHANGE_FRAMES:], 0.0, CHANGE_CAP_DB)
     dip = DIP_WEIGHT * np.maximum(_dip(low), MID_DIP_SHARE * _dip(mid))
     measure = {"closure": fall, "aspirated": fall, "frication": fall, "sonorant": dip, "glide": dip, "none": dip}
     return {c: _earlier(x, ONSET_LEAD[c]) for c, x in measure.items()}
@@ -270,7 +305,7 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             break
         start_score = np.maximum(after_syllable[i] + evidence[i], after_pause[i])
         start_pause = after_pause[i] > after_syllable[i] + evidence[i]
-        longest = min(total, int(4 * means[i]) + MIN_FRAMES)
+        longest = min(total, int(LONGEST_SHARE * means[i]) + MIN_FRAMES)
         d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
         starts = k[:, None] - d[None, :]
         cand = np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG) + _duration_score(d, means[i])[None, :]
@@ -349,31 +384,59 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     clip = np.asarray(audio.samples[max(first, 0):max(last, 0)], dtype=np.float64)
     clip = np.concatenate([np.zeros(max(-first, 0)), clip, np.zeros(max(last - max(first, 0) - clip.size - max(-first, 0), 0))])
     feats = frames(clip, audio.rate)
-    low = _smooth(feats.low)
+    recorded = ~_dead_frames(clip, audio.rate, feats.low.size)
+    low = _smooth(_lift_digital_silence(feats.low, recorded, LOW_NOISE_RANGE_DB))
+    mid = _smooth(_lift_digital_silence(feats.mid, recorded, MID_NOISE_RANGE_DB))
+    high = _smooth(_lift_digital_silence(feats.high, recorded, HIGH_NOISE_RANGE_DB))
     # boundary k (time span.start + k * HOP) sits at the centre of feature frame MARGIN + k - 1.
     index = np.clip(MARGIN + np.arange(total + 1) - 1, 0, low.size - 1)
     inner = low[index[:-1]]
-    loud, floor = np.percentile(inner, 95), np.percentile(low, 5)
-    if not np.isfinite(loud) or loud - floor < 10.0:
+    loud = np.percentile(inner, LOUD_PERCENTILE)
+    floor = np.percentile(low, FLOOR_PERCENTILE)
+    if not np.isfinite(loud) or loud - floor < MIN_RANGE_DB:
         return prior_split(span, syllables, LOW_CONFIDENCE)
-    threshold = floor + 0.3 * (loud - floor)
-    silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, -3.0, 1.0),
-                         _high_band_silence(_smooth(feats.high), index[:-1]))
+    threshold = floor + SILENCE_SHARE * (loud - floor)
+    silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, *SILENCE_CLIP),
+                         _high_band_silence(high, index[:-1]))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
-    by_class = onset_evidence(low, _smooth(feats.mid))
+    by_class = onset_evidence(low, mid)
     evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
-    edges = edge_evidence(low, _smooth(feats.high))[:, index]
+    edges = edge_evidence(low, high)[:, index]
     evidence[0] = 0.0
     lattice = _forward(evidence, silence, edges, means)
     starts, ends = _best_cut(lattice)
     margins = _onset_margins(lattice, evidence, silence, edges, means, starts)
-    quality = float(np.clip((loud - floor - 10.0) / 20.0, 0.0, 1.0))
+    quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
     confidence = _confidence(margins, quality)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
     times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
     return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
+
+
+def _lift_digital_silence(band: np.ndarray, recorded: np.ndarray, most_below: float | None) -> np.ndarray:
+    """(T,) dB of one band, (T,) bool frames of recorded sound -> the band with its digital-silence
+    frames set to the FLOOR_PERCENTILE of the recorded ones, as if the gap held the recording's own
+    noise (a faint dither in the gaps gives the same timing as natural pauses), but at least
+    `most_below` dB (None: no limit) under the LOUD_PERCENTILE of the recorded frames. Unchanged
+    when fewer than MIN_RECORDED of the frames are recorded."""
+    if recorded.all() or recorded.mean() < MIN_RECORDED:
+        return band
+    kept = band[recorded]
+    floor = np.percentile(kept, FLOOR_PERCENTILE)
+    if most_below is not None:
+        floor = min(floor, np.percentile(kept, LOUD_PERCENTILE) - most_below)
+    return np.where(recorded, band, floor)
+
+
+def _dead_frames(clip: np.ndarray, rate: int, count: int) -> np.ndarray:
+    """(count,) bool: feature frame i (25 ms from i * HOP s of the (n,) `clip` at `rate` Hz) holds
+    only digital silence (audio.DIGITAL_SILENCE); frames past the clip's end count as silent."""
+    blocks = digital_silence(clip, rate, HOP)
+    covered = int(np.ceil(WINDOW_SECONDS / HOP))
+    padded = np.concatenate([blocks, np.ones(count + covered, dtype=bool)])
+    return np.all(np.lib.stride_tricks.sliding_window_view(padded, covered)[:count], axis=1)
 
 
 def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -383,9 +446,9 @@ def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
     FRICATION_RANGE of its range, and always within FRICATION_FLOOR dB of its floor (noisy or
     band-limited recordings, whose range in this band is mostly noise)."""
     band = high[inner]
-    floor = np.percentile(high, 5)
-    threshold = floor + max(FRICATION_RANGE * (np.percentile(band, 95) - floor), FRICATION_FLOOR)
-    return np.clip((threshold - band) / SILENCE_SCALE, -3.0, 1.0)
+    floor = np.percentile(high, FLOOR_PERCENTILE)
+    threshold = floor + max(FRICATION_RANGE * (np.percentile(band, LOUD_PERCENTILE) - floor), FRICATION_FLOOR)
+    return np.clip((threshold - band) / SILENCE_SCALE, *SILENCE_CLIP)
 
 
 def _confidence(margins: np.ndarray, quality: float) -> np.ndarray:

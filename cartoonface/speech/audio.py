@@ -27,6 +27,15 @@ MAX_SECONDS = 30 * 60
 # A recording whose peak is below this is silent: -70 dBFS, far below the
 # noise floor of any microphone recording.
 SILENT_PEAK = 10 ** (-70 / 20)
+# Digital silence: a stretch whose samples span at most this (peak to peak) holds no recorded
+# sound, only a constant (zeros, a DC offset, the resting code of 8-bit audio) or the last
+# bit of a 16-bit file flickering (2 steps of 2 / 65536: about -84 dBFS). Edited recordings,
+# joined files, noise gates and TTS put such stretches between sentences; they are no noise
+# floor (thesis 002, 3.2.1: silence is normally *not* zero, because of environment noise).
+DIGITAL_SILENCE = 2 * 2 / 65536
+# A mean (DC offset) larger than this (-60 dBFS) is subtracted from the samples when reading:
+# a faulty converter or sound card adds it; smaller means are what speech itself averages to.
+DC_OFFSET = 1e-3
 # Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
 _SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
 # Formats every current browser plays in an <audio> element, kept as they are by browser_copy.
@@ -45,6 +54,17 @@ class Audio:
     def duration(self) -> float:
         """Length in seconds."""
         return len(self.samples) / self.rate
+
+
+def digital_silence(samples: np.ndarray, rate: int, hop: float) -> np.ndarray:
+    """(n,) samples at `rate` Hz -> (n // block,) bool per block of `hop` seconds (at least one
+    sample): True where the block's samples span at most DIGITAL_SILENCE (no recorded sound)."""
+    block = max(1, round(rate * hop))
+    count = len(samples) // block
+    if count == 0:
+        return np.zeros(0, dtype=bool)
+    blocks = np.asarray(samples[: count * block]).reshape(count, block)
+    return (blocks.max(axis=1) - blocks.min(axis=1)) <= DIGITAL_SILENCE
 
 
 def ffmpeg_exe() -> str:
@@ -81,6 +101,9 @@ def load_audio(path: str | os.PathLike[str]) -> Audio:
         )
     # Float files may hold NaN or infinities (a broken encoder): read them as silence / full scale.
     np.nan_to_num(samples, copy=False, nan=0.0, posinf=1.0, neginf=-1.0)
+    offset = float(np.mean(samples, dtype=np.float64))
+    if abs(offset) > DC_OFFSET:
+        samples -= np.float32(offset)  # a DC offset is no sound: it would hide a silent file
     np.clip(samples, -1.0, 1.0, out=samples)
     peak = float(np.max(np.abs(samples)))
     if peak < SILENT_PEAK:

@@ -16,9 +16,19 @@ from scipy.signal import resample_poly
 RATE = 16000
 HOP = 0.010          # seconds between frames
 WINDOW = 400         # samples (25 ms at 16 kHz)
+WINDOW_SECONDS = WINDOW / RATE
 NFFT = 512
 MELS = 40
 CEPSTRA = 13
+MEL_RANGE_HZ = (50.0, 7600.0)  # the mel filter bank's lowest and highest edge
+PRE_EMPHASIS = 0.97            # x[n] - 0.97 x[n - 1] before the spectrum (the usual HTK/Kaldi value)
+# Frequency bands (Hz) of Frames.low, .mid, .high: the first formant and voicing (stops and
+# pauses silence it), the second formant, frication and bursts.
+LOW_BAND = (100.0, 1000.0)
+MID_BAND = (1000.0, 3000.0)
+HIGH_BAND = (3000.0, 8000.0)
+POWER_FLOOR = 1e-10   # added to a band's power before dB: digital silence is -100 dB
+MEL_FLOOR = 1e-8      # added to a mel band's energy before its log
 
 
 @dataclass(frozen=True)
@@ -47,11 +57,12 @@ def to_rate(samples: np.ndarray, rate: int) -> np.ndarray:
 
 
 def mel_filters() -> np.ndarray:
-    """Triangular mel filter bank, (NFFT // 2 + 1, 40), 50-7600 Hz."""
+    """Triangular mel filter bank, (NFFT // 2 + 1, 40), MEL_RANGE_HZ."""
     def mel(f):
-        return 2595.0 * np.log10(1.0 + f / 700.0)
+        return 2595.0 * np.log10(1.0 + f / 700.0)  # O'Shaughnessy's mel scale
 
-    edges = 700.0 * (10 ** (np.linspace(mel(50.0), mel(7600.0), MELS + 2) / 2595.0) - 1.0)
+    lowest, highest = MEL_RANGE_HZ
+    edges = 700.0 * (10 ** (np.linspace(mel(lowest), mel(highest), MELS + 2) / 2595.0) - 1.0)
     freqs = np.fft.rfftfreq(NFFT, 1.0 / RATE)
     bank = np.zeros((freqs.size, MELS))
     for m in range(MELS):
@@ -68,7 +79,7 @@ def power_spectrum(samples: np.ndarray) -> np.ndarray:
 
     T = max(1, 1 + (n - 400) // 160); shorter input is zero-padded to one frame.
     """
-    x = np.append(samples[:1], samples[1:] - 0.97 * samples[:-1]) if samples.size else np.zeros(1)
+    x = np.append(samples[:1], samples[1:] - PRE_EMPHASIS * samples[:-1]) if samples.size else np.zeros(1)
     if x.size < WINDOW:
         x = np.pad(x, (0, WINDOW - x.size))
     hop = int(RATE * HOP)
@@ -81,7 +92,7 @@ def band_db(power: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """(T, 257) power spectra -> (T,) dB of the energy between lo and hi Hz."""
     freqs = np.fft.rfftfreq(NFFT, 1.0 / RATE)
     band = (freqs >= lo) & (freqs < hi)
-    return 10.0 * np.log10(power[:, band].sum(axis=1) + 1e-10)
+    return 10.0 * np.log10(power[:, band].sum(axis=1) + POWER_FLOOR)
 
 
 def frames(samples: np.ndarray, rate: int) -> Frames:
@@ -89,12 +100,12 @@ def frames(samples: np.ndarray, rate: int) -> Frames:
     power = power_spectrum(to_rate(samples, rate))
     # einsum rather than a BLAS product: a small product on a loaded machine is slowed many
     # times by BLAS threads waiting for cores (measured in bench/align.py)
-    logmel = np.log(np.einsum("tf,fm->tm", power, _BANK) + 1e-8)
+    logmel = np.log(np.einsum("tf,fm->tm", power, _BANK) + MEL_FLOOR)
     return Frames(
         logmel=logmel,
         mfcc=dct(logmel, type=2, norm="ortho", axis=1)[:, :CEPSTRA],
-        energy=band_db(power, 0.0, 8000.0),
-        low=band_db(power, 100.0, 1000.0),
-        mid=band_db(power, 1000.0, 3000.0),
-        high=band_db(power, 3000.0, 8000.0),
+        energy=band_db(power, 0.0, RATE / 2),
+        low=band_db(power, *LOW_BAND),
+        mid=band_db(power, *MID_BAND),
+        high=band_db(power, *HIGH_BAND),
     )

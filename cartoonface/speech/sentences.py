@@ -24,7 +24,7 @@ import numpy as np
 from scipy import signal
 
 from cartoonface.errors import OptionError
-from cartoonface.speech.audio import Audio
+from cartoonface.speech.audio import Audio, digital_silence
 
 # thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
 C1 = 0.95
@@ -35,8 +35,11 @@ C1 = 0.95
 C2 = 1.45
 
 HOP = 0.01  # seconds per energy frame
+SMOOTH_FRAMES = 3  # frame energies are smoothed over this many frames (30 ms)
 HIGH_PASS_HZ = 80.0  # damps rumble and the 50/60 Hz fundamental of mains hum in the energy
+HIGH_PASS_ORDER = 2  # Butterworth order of that high-pass
 # Automatic mode: frames louder than floor + max(MIN_CONTRAST_DB, SHARE * (speech - floor)) are sound.
+# The floor is a percentile of the frames that hold recorded sound (not digital silence).
 FLOOR_PERCENTILE = 5.0
 SPEECH_PERCENTILE = 98.0
 MIN_CONTRAST_DB = 6.0
@@ -47,6 +50,10 @@ JOIN_GAP = 0.15
 VOICED_MIN = 0.05
 VOICING_R = 0.5  # normalised autocorrelation peak at a pitch lag (70..400 Hz) that counts as voiced
 PITCH_RANGE_HZ = (70.0, 400.0)
+VOICING_RATE = 8000  # Hz: voicing is measured on the audio decimated to about this rate
+VOICING_WINDOW = 0.04  # seconds of audio per voicing measurement (two periods at 50 Hz)
+VOICING_STEP = 2  # voicing is measured on every second 10 ms frame (half the cost, 20 ms resolution)
+VOICING_CHUNK = 4096  # windows measured per FFT block (bounds the memory on long recordings)
 # Unvoiced sound kept before the first / after the last voiced frame of a group (fricatives, aspiration).
 UNVOICED_EDGE = 0.2
 # A group whose loudest frame is this far below the speech level is a click or a breath, not speech.
@@ -62,8 +69,21 @@ PAD = 0.05
 # Thesis mode: a selected pause whose noise level V * c2 reaches this share of the speech peaks
 # (99th percentile of frame RMS) holds speech, not silence, and is refused.
 LOUD_PAUSE = 0.5
+PEAK_PERCENTILE = 99.0
+# Frames with less sound than this share of recorded (non-digital-silence) frames: the floor is
+# taken over all frames (a recording that is nearly all digital silence).
+MIN_RECORDED = 0.05
+POWER_EPSILON = 1e-12  # added to a frame's mean square before taking dB (-120 dB: digital silence)
 # Parts shorter than this are clicks, not speech (both modes).
 MIN_PART = 0.06
+# Split candidates inside a part (dips): at least DIP_MARGIN s from its ends, on the energy
+# smoothed over DIP_SMOOTH_FRAMES frames, at least DIP_DISTANCE s apart and DIP_PROMINENCE_DB
+# deep; a dip's plateau is how long the energy stays within PLATEAU_DB of its minimum.
+DIP_MARGIN = 0.25
+DIP_SMOOTH_FRAMES = 5
+DIP_DISTANCE = 0.12
+DIP_PROMINENCE_DB = 3.0
+PLATEAU_DB = 6.0
 
 
 @dataclass(frozen=True)
@@ -96,14 +116,14 @@ def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None) ->
 def frame_power(audio: Audio) -> np.ndarray:
     """Mean square of each 10 ms frame of the 80 Hz high-passed audio, smoothed over 30 ms; shape (frames,)."""
     hop = max(1, round(audio.rate * HOP))
-    sos = signal.butter(2, HIGH_PASS_HZ, "highpass", fs=audio.rate, output="sos")
+    sos = signal.butter(HIGH_PASS_ORDER, HIGH_PASS_HZ, "highpass", fs=audio.rate, output="sos")
     filtered = signal.sosfilt(sos, audio.samples).astype(np.float32)
     count = max(1, len(filtered) // hop)
     padded = np.zeros(count * hop, dtype=np.float32)
     usable = min(len(filtered), count * hop)
     padded[:usable] = filtered[:usable]
     power = np.mean(np.square(padded.reshape(count, hop), dtype=np.float64), axis=1)
-    return np.convolve(power, np.ones(3) / 3, mode="same")
+    return np.convolve(power, np.ones(SMOOTH_FRAMES) / SMOOTH_FRAMES, mode="same")
 
 
 def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -> tuple[Span, ...]:
@@ -118,7 +138,7 @@ def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -
     inside = rms[int(np.ceil(start / HOP)) : max(int(np.ceil(start / HOP)) + 1, int(end / HOP))]
     v_noise = float(inside.max()) * C2  # steps 2 and 4
     d_pause = (end - start) * C1  # step 3
-    if v_noise >= LOUD_PAUSE * np.percentile(rms, 99):
+    if v_noise >= LOUD_PAUSE * np.percentile(rms, PEAK_PERCENTILE):
         raise OptionError(
             f"pause {start:g},{end:g}: not a silence (its loudest frame is as loud as the speech); "
             "expected START,END of the quiet pause between the first two sentences"
@@ -138,8 +158,8 @@ def _thesis_parts(audio: Audio, power: np.ndarray, pause: tuple[float, float]) -
 
 def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
     """Speaking parts with the noise floor, speech level and pause length learned from the recording."""
-    level = 10 * np.log10(power + 1e-12)
-    floor = float(np.percentile(level, FLOOR_PERCENTILE))
+    level = 10 * np.log10(power + POWER_EPSILON)
+    floor = float(np.percentile(_recorded(audio, level), FLOOR_PERCENTILE))
     loud = float(np.percentile(level, SPEECH_PERCENTILE))
     threshold = floor + max(MIN_CONTRAST_DB, THRESHOLD_SHARE * (loud - floor))
     runs = _runs(level > threshold)
@@ -149,11 +169,12 @@ def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
     voiced = _voiced_frames(audio, groups)
     speech = []
     for (first, last), flags in zip(groups, voiced, strict=True):
-        hits = np.flatnonzero(flags)  # voicing is measured on every second frame
-        if len(hits) * HOP * 2 < VOICED_MIN or level[first:last].max() < loud - GROUP_BELOW_SPEECH_DB:
+        hits = np.flatnonzero(flags)  # voicing is measured on every VOICING_STEP-th frame
+        if len(hits) * HOP * VOICING_STEP < VOICED_MIN or level[first:last].max() < loud - GROUP_BELOW_SPEECH_DB:
             continue
         edge = round(UNVOICED_EDGE / HOP)
-        speech.append((max(first, first + hits[0] * 2 - edge), min(last, first + hits[-1] * 2 + 1 + edge)))
+        speech.append((max(first, first + hits[0] * VOICING_STEP - edge),
+                       min(last, first + hits[-1] * VOICING_STEP + 1 + edge)))
     if not speech:
         return ()
     gaps = np.array([(b[0] - a[1]) * HOP for a, b in zip(speech, speech[1:])])
@@ -166,6 +187,16 @@ def _automatic_parts(audio: Audio, power: np.ndarray) -> tuple[Span, ...]:
         end = min(last + round(PAD / HOP), (last + after) // 2 if index + 1 < len(parts) else len(level)) * HOP
         spans.append(Span(round(start, 3), round(min(end, audio.duration), 3)))
     return tuple(span for span in spans if span.duration >= MIN_PART)
+
+
+def _recorded(audio: Audio, level: np.ndarray) -> np.ndarray:
+    """The frame levels (frames,) of `audio` without its digital silence (audio.DIGITAL_SILENCE):
+    exact zeros, a gate's near-zero or a constant are no noise floor. All of them when fewer
+    than MIN_RECORDED of the frames hold recorded sound."""
+    dead = np.zeros(len(level), dtype=bool)
+    blocks = digital_silence(audio.samples, audio.rate, HOP)[: len(level)]
+    dead[: len(blocks)] = blocks
+    return level if np.mean(~dead) < MIN_RECORDED else level[~dead]
 
 
 def learn_pause(gaps: np.ndarray) -> float:
@@ -220,57 +251,57 @@ def _join(runs: list[tuple[int, int]], max_gap: int) -> list[tuple[int, int]]:
 
 
 def _voiced_frames(audio: Audio, groups: list[tuple[int, int]]) -> list[np.ndarray]:
-    """For each frame range in `groups`, a boolean array: voicing of every second 10 ms frame.
+    """For each frame range in `groups`, a boolean array: voicing of every VOICING_STEP-th 10 ms frame.
 
     Voiced = the normalised autocorrelation of a 40 ms window (audio low-passed
     and decimated to about 8 kHz) peaks above VOICING_R at a lag of a pitch in
     PITCH_RANGE_HZ.
     """
-    factor = max(1, audio.rate // 8000)
+    factor = max(1, audio.rate // VOICING_RATE)
     low = signal.resample_poly(audio.samples, 1, factor).astype(np.float32) if factor > 1 else audio.samples
     rate = audio.rate / factor
-    window = round(0.04 * rate)
+    window = round(VOICING_WINDOW * rate)
     hop = rate * HOP
     lag_lo, lag_hi = int(rate / PITCH_RANGE_HZ[1]), int(np.ceil(rate / PITCH_RANGE_HZ[0]))
     nfft = 1 << int(np.ceil(np.log2(2 * window)))
     padded = np.concatenate((low, np.zeros(window, dtype=np.float32)))
-    frames_of = [np.arange(first, last, 2) for first, last in groups]
+    frames_of = [np.arange(first, last, VOICING_STEP) for first, last in groups]
     every = np.concatenate(frames_of)
     starts = np.minimum((every * hop).astype(np.int64), len(low) - 1)
     result = np.empty(len(every), dtype=bool)
     correction = window / (window - np.arange(lag_lo, lag_hi + 1))
-    for chunk in range(0, len(every), 4096):
-        idx = starts[chunk : chunk + 4096, None] + np.arange(window)
+    for chunk in range(0, len(every), VOICING_CHUNK):
+        idx = starts[chunk : chunk + VOICING_CHUNK, None] + np.arange(window)
         block = padded[idx]
         block = block - block.mean(axis=1, keepdims=True)
         spectrum = np.fft.rfft(block * np.hanning(window), n=nfft, axis=1)
         acf = np.fft.irfft(np.abs(spectrum) ** 2, n=nfft, axis=1)
         energy = np.maximum(acf[:, 0], 1e-12)
         peak = np.max(acf[:, lag_lo : lag_hi + 1] * correction, axis=1) / energy
-        result[chunk : chunk + 4096] = peak > VOICING_R
+        result[chunk : chunk + VOICING_CHUNK] = peak > VOICING_R
     split = np.cumsum([len(f) for f in frames_of])[:-1]
     return np.split(result, split)
 
 
-def dips(audio: Audio, span: Span, margin: float = 0.25) -> tuple[tuple[float, float], ...]:
+def dips(audio: Audio, span: Span, margin: float = DIP_MARGIN) -> tuple[tuple[float, float], ...]:
     """Candidate places to split the speaking part `span`: local energy minima inside it.
 
     Returns (time seconds, plateau seconds) pairs, time order, at least
     `margin` seconds from either end; `plateau` is how long the energy stays
-    within 6 dB of the minimum, so a real pause scores longer than a dip
+    within PLATEAU_DB of the minimum, so a real pause scores longer than a dip
     between two syllables.
     """
     first = int(span.start * audio.rate)
     part = Audio(audio.samples[first : int(span.end * audio.rate)], audio.rate, audio.source)
     if part.duration < 2 * margin + HOP:
         return ()
-    level = 10 * np.log10(frame_power(part) + 1e-12)
-    level = np.convolve(level, np.ones(5) / 5, mode="same")
+    level = 10 * np.log10(frame_power(part) + POWER_EPSILON)
+    level = np.convolve(level, np.ones(DIP_SMOOTH_FRAMES) / DIP_SMOOTH_FRAMES, mode="same")
     edge = round(margin / HOP)
-    minima, _ = signal.find_peaks(-level[edge:-edge], distance=round(0.12 / HOP), prominence=3.0)
+    minima, _ = signal.find_peaks(-level[edge:-edge], distance=round(DIP_DISTANCE / HOP), prominence=DIP_PROMINENCE_DB)
     found = []
     for index in minima + edge:
-        near = level <= level[index] + 6.0
+        near = level <= level[index] + PLATEAU_DB
         left = index
         while left > 0 and near[left - 1]:
             left -= 1

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.errors import AlignmentError, TranscriptError
-from cartoonface.speech.alignment import Alignment, Sentence, Syllable
+from cartoonface.speech.records import Alignment, Sentence, Syllable, check_times
 from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shape_onsets, shapes_for
 
 TIERS = ("sentences", "syllables", "mouth shapes")
@@ -36,11 +36,14 @@ _SLACK = 1e-4
 
 @dataclass(frozen=True)
 class Interval:
-    """One labelled interval of a tier: `start`, `end` seconds, `text`."""
+    """One interval of a tier: `start`, `end` seconds (0 <= start <= end), `text` ("" when unlabelled)."""
 
     start: float
     end: float
     text: str
+
+    def __post_init__(self) -> None:
+        check_times(self.start, self.end, f"interval {self.text!r}")
 
 
 def write_textgrid(alignment: Alignment) -> str:
@@ -156,7 +159,7 @@ class _Reader:
         self.tokens = []
         for match in _TOKEN.finditer(text):
             kind = match.lastgroup
-            if kind in ("skip", "word"):
+            if kind is None or kind in ("skip", "word"):
                 continue
             line = text.count("\n", 0, match.start()) + 1
             value = match.group(kind)
@@ -221,6 +224,22 @@ def read_textgrid(text: str, source: str) -> Alignment:
     `sentences` and `syllables`, when intervals are out of order, or when a
     syllable lies outside every sentence.
     """
+    duration, tiers = read_tiers(text, source)
+    for name in TIERS[:2]:
+        if name not in tiers:
+            raise AlignmentError(f"{source}: no interval tier named {name!r}; expected tiers {', '.join(TIERS)}")
+    labelled = {name: [item for item in items if item.text] for name, items in tiers.items()}
+    return _alignment(labelled, duration, source)
+
+
+def read_tiers(text: str, source: str) -> tuple[float, dict[str, list[Interval]]]:
+    """Parse any interval TextGrid `text` (long or short format) read from `source`.
+
+    Returns (xmax of the TextGrid in seconds, {tier name: every interval in time order,
+    labels stripped, "" for an unlabelled one}); point tiers are skipped. Raises
+    AlignmentError naming `source` and the line when the text is not a TextGrid or an
+    interval is empty, negative or overlaps the one before.
+    """
     reader = _Reader(text, source)
     if reader.string('"ooTextFile" (a Praat text file)') != "ooTextFile":
         reader.position -= 1
@@ -248,15 +267,12 @@ def read_textgrid(text: str, source: str) -> Alignment:
             reader.position -= 5
             raise reader.fail('"IntervalTier" or "TextTier"')
         tiers[name] = _read_intervals(reader, name, size)
-    for name in TIERS[:2]:
-        if name not in tiers:
-            raise AlignmentError(f"{source}: no interval tier named {name!r}; expected tiers {', '.join(TIERS)}")
-    return _alignment(tiers, duration, source)
+    return duration, tiers
 
 
 def _read_intervals(reader: _Reader, name: str, size: int) -> list[Interval]:
-    """Read `size` intervals of tier `name`; only the labelled ones are returned, in time order."""
-    labelled = []
+    """Read `size` intervals of tier `name` in time order, labels stripped."""
+    intervals = []
     previous = None
     for index in range(1, size + 1):
         line = reader.tokens[reader.position].line if reader.position < len(reader.tokens) else 0
@@ -269,9 +285,11 @@ def _read_intervals(reader: _Reader, name: str, size: int) -> list[Interval]:
                 "is empty or overlaps the one before; expected increasing times"
             )
         previous = end
-        if label.strip():
-            labelled.append(Interval(start, end, label.strip()))
-    return labelled
+        try:
+            intervals.append(Interval(start, end, label.strip()))
+        except ValueError as exc:
+            raise AlignmentError(f"{reader.source}, line {line}: tier {name}, {exc}") from None
+    return intervals
 
 
 def _alignment(tiers: dict[str, list[Interval]], duration: float, source: str) -> Alignment:
@@ -283,14 +301,20 @@ def _alignment(tiers: dict[str, list[Interval]], duration: float, source: str) -
         inside = [s for s in pending if s.start >= sentence.start - _SLACK and s.end <= sentence.end + _SLACK]
         pending = [s for s in pending if s not in inside]
         syllables = tuple(_syllable(item, shapes, source) for item in inside)
-        sentences.append(Sentence(sentence.text, sentence.start, sentence.end, syllables))
+        try:
+            sentences.append(Sentence(sentence.text, sentence.start, sentence.end, syllables))
+        except ValueError as exc:
+            raise AlignmentError(f"{source}: tier sentences, {exc}") from None
     if pending:
         item = pending[0]
         raise AlignmentError(
             f"{source}: tier syllables, interval {item.text!r} ({item.start:g}-{item.end:g} s) lies outside "
             "every interval of tier sentences; expected each syllable inside a sentence"
         )
-    return Alignment(tuple(sentences), duration, (f"timing read from {source}",))
+    try:
+        return Alignment(tuple(sentences), duration, (f"timing read from {source}",))
+    except ValueError as exc:
+        raise AlignmentError(f"{source}: {exc}") from None
 
 
 def _syllable(item: Interval, shapes: list[Interval], source: str) -> Syllable:
@@ -317,4 +341,7 @@ def _syllable(item: Interval, shapes: list[Interval], source: str) -> Syllable:
                 f"{source}: tier syllables, label {item.text!r} at {item.start:g} s: {exc}; "
                 "expected `text pinyin` such as `你 ni3`, or a mouth shapes tier"
             ) from None
-    return Syllable(text, pinyin, inside, item.start, item.end, 1.0)
+    try:
+        return Syllable(text, pinyin, inside, item.start, item.end, 1.0)
+    except ValueError as exc:
+        raise AlignmentError(f"{source}: tier syllables, {exc}") from None

@@ -18,7 +18,7 @@ from flask import Flask, Request, Response
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import photo_views
 from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
-from cartoonface.web.drafts import sweep_drafts
+from cartoonface.web.draft_store import sweep_drafts
 from cartoonface.web.inputs import MAX_FACE_BYTES, MAX_PHOTO_BYTES, Limits
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import add_headers

@@ -10,14 +10,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from cartoonface.data import SAMPLE_FACES
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
 
 # The package folder: templates/ and static/ inside it are links to the top-level
 # folders in a source checkout and real folders in the wheel (pyproject package-data).
 PACKAGE = Path(__file__).resolve().parents[1]
-# The source checkout, for the sample faces (not part of the wheel).
-ROOT = PACKAGE.parent
 
 DEFAULTS: dict[str, object] = {
     "MAX_UPLOAD_MB": 200,  # MiB; a 30-minute mono 16-bit 44.1 kHz WAV is 151 MiB
@@ -25,7 +24,7 @@ DEFAULTS: dict[str, object] = {
     "WORKERS": os.cpu_count() or 1,
     "RETENTION_DAYS": 7,
     "RETENTION_MB": 2048,
-    "SAMPLES_DIR": str(ROOT / "samples" / "faces"),
+    "SAMPLES_DIR": str(SAMPLE_FACES),
 }
 
 # key -> (type, smallest value)

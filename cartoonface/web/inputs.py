@@ -3,7 +3,7 @@
 `check_submission(form, files, limits)` returns a `Submission` (the inputs as
 bytes under names chosen here, plus the request as plain values) or a dict of
 field -> message for the form. A photo becomes a face model here
-(face/photo.py), so a photo without a usable face is a message in the form. File types are decided from the bytes (magic
+(photo/model_from_photo.py), so a photo without a usable face is a message in the form. File types are decided from the bytes (magic
 numbers), never from the file name; the user's file name is only ever shown
 (escaped), never used in a path.
 """
@@ -20,7 +20,7 @@ from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import face_from_dict, face_to_dict
-from cartoonface.face.photo import face_from_photo, load_photo
+from cartoonface.photo.model_from_photo import face_from_photo, load_photo
 from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.transcript import parse_transcript
@@ -84,9 +84,11 @@ def sniff_image(head: bytes) -> str | None:
     return None
 
 
-def shown_name(upload: FileStorage, fallback: str) -> str:
-    """The user's file name for messages only: last path part, at most SHOWN_NAME_CHARS."""
-    name = (upload.filename or "").replace("\\", "/").rsplit("/", 1)[-1].strip()
+def shown_name(upload: FileStorage | None, fallback: str) -> str:
+    """The user's file name for messages only: last path part, at most SHOWN_NAME_CHARS;
+    `fallback` when there is no upload or it has no name."""
+    filename = upload.filename if upload is not None else None
+    name = (filename or "").replace("\\", "/").rsplit("/", 1)[-1].strip()
     return (name or fallback)[:SHOWN_NAME_CHARS]
 
 
@@ -109,10 +111,10 @@ def form_values(form: MultiDict[str, str]) -> dict[str, str]:
                                                  "clothes", "transcript")}
 
 
-def check_photo(upload: FileStorage, data: bytes, too_big: bool,
+def check_photo(name: str, data: bytes, too_big: bool,
                 errors: dict[str, str]) -> tuple[bytes | None, str, tuple[str, ...]]:
-    """A face model made from a photo: (face JSON bytes, label, warnings about the photo)."""
-    name = shown_name(upload, "photo")
+    """A face model made from the photo bytes the user called `name`: (face JSON bytes,
+    label, warnings about the photo)."""
     if too_big:
         errors["photo"] = f"{name}: a photo must be at most {megabytes(MAX_PHOTO_BYTES)} MB."
         return None, name, ()
@@ -146,7 +148,7 @@ def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], li
         errors["photo"] = "Give either a face model (JSON) or a photo, not both."
         return None, "", ()
     if photo_data is not None:
-        return check_photo(photo, photo_data, photo_too_big, errors)
+        return check_photo(shown_name(photo, "photo"), photo_data, photo_too_big, errors)
     if data is not None:
         name = shown_name(upload, "face model")
         if too_big:

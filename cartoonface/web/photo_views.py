@@ -1,6 +1,6 @@
 """The "face from a photo" routes (blueprint "photo"): upload a photo, see the detected
 points over it beside the cartoon, drag points to correct them, then go on to the form
-with that face (drafts.py stores it; docs/web.md).
+with that face (draft_store.py stores it, point_editor.py checks the points; docs/web.md).
 
 GET  /photos                    the upload form
 POST /photos                    read the photo, find the face, store a draft, 303 to its editor
@@ -17,12 +17,14 @@ import json
 import threading
 
 from flask import Blueprint, Response, abort, jsonify, redirect, render_template, request, url_for
+from werkzeug.wrappers import Response as BaseResponse
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES
-from cartoonface.web.drafts import (MAX_POINTS_CHARS, PHOTO_FILE, POINT_LABELS, Draft, create_draft, edited_face,
-                                    load_draft, parse_points, preview_svg, save_edit, sweep_drafts)
+from cartoonface.web.draft_store import PHOTO_FILE, Draft, create_draft, load_draft, save_edit, sweep_drafts
 from cartoonface.web.inputs import MAX_PHOTO_BYTES, megabytes, read_upload, shown_name, sniff_image
+from cartoonface.web.point_editor import MAX_POINTS_CHARS, edited_face, parse_points, preview_svg
+from cartoonface.web.point_labels import POINT_LABELS
 from cartoonface.web.security import CSRF_FIELD, csrf_ok, csrf_token
 from cartoonface.web.store import new_id
 from cartoonface.web.views import state
@@ -31,6 +33,10 @@ from cartoonface.web.views import state
 # a request that cannot start within this many seconds is told the server is busy.
 DETECT_WAIT = 20.0
 _detecting = threading.Lock()
+
+# The editor's point dots: this share of the photo's long side, at least MIN_POINT_RADIUS px.
+POINT_RADIUS_SHARE = 0.008
+MIN_POINT_RADIUS = 2.0
 
 EXPIRED = "This form has expired or did not come from this page. Please try again."
 
@@ -55,7 +61,7 @@ def render_editor(draft: Draft, error: str = "", status: int = 200) -> tuple[str
     """The editor page of `draft`, with `error` (may be empty) above the points."""
     points = [(name, POINT_LABELS[name], float(x), float(y)) for name, (x, y) in zip(POINT_NAMES, draft.points)]
     width, height = draft.size
-    radius = max(2.0, 0.008 * max(width, height))
+    radius = max(MIN_POINT_RADIUS, POINT_RADIUS_SHARE * max(width, height))
     return render_template("web/photo_edit.html", draft=draft, points=points, radius=radius,
                            hair=" ".join(f"{x:.1f},{y:.1f}" for x, y in draft.hair),
                            points_json=json.dumps(dict(zip(POINT_NAMES, draft.points.round(2).tolist()))),
@@ -71,7 +77,7 @@ def upload_form() -> tuple[str, int]:
 
 
 @bp.post("/photos")
-def upload() -> Response | tuple[str, int]:
+def upload() -> BaseResponse | tuple[str, int]:
     """Read the uploaded photo and find the face: 303 to the new draft's editor, or the
     upload form with the reason (400; 503 when another photo is being read too long)."""
     if not csrf_ok(request.form.get(CSRF_FIELD)):
@@ -138,7 +144,7 @@ def update_preview(draft_id: str) -> tuple[Response, int]:
 
 
 @bp.post("/photos/<jobid:draft_id>")
-def use_face(draft_id: str) -> Response | tuple[str, int]:
+def use_face(draft_id: str) -> BaseResponse | tuple[str, int]:
     """Save the edited points (form field points, as for the preview) and 303 to the
     form with this face chosen; the editor again with the reason (400) when they are bad."""
     draft = stored_draft(draft_id)

@@ -22,7 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from cartoonface.files import atomic_directory, write_text_atomic
+from cartoonface.files import atomic_directory, folder_size, write_text_atomic
 
 # secrets.token_urlsafe(24) gives 32 characters of this alphabet (24 random bytes, 192 bits).
 ID_BYTES = 24
@@ -84,7 +84,10 @@ class Job:
     @property
     def created(self) -> float:
         """Submission time, epoch seconds."""
-        return float(self.spec.get("created", 0.0))
+        created = self.spec.get("created", 0.0)
+        if not isinstance(created, (int, float)):
+            raise ValueError(f"job.json: created is {created!r}; expected epoch seconds")
+        return float(created)
 
 
 def new_id() -> str:
@@ -184,18 +187,6 @@ def fail_interrupted(instance: Path) -> list[str]:
                                             updated=time.time()))
             marked.append(job.id)
     return marked
-
-
-def folder_size(folder: Path) -> int:
-    """Total bytes of the regular files under `folder`."""
-    total = 0
-    for base, _dirs, names in os.walk(folder):
-        for name in names:
-            try:
-                total += os.lstat(os.path.join(base, name)).st_size
-            except FileNotFoundError:
-                continue
-    return total
 
 
 def delete_job(folder: Path) -> None:

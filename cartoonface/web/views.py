@@ -21,9 +21,10 @@ from flask import (Blueprint, Response, abort, current_app, jsonify, redirect, r
 from flask.globals import request_ctx
 from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
+from werkzeug.wrappers import Response as BaseResponse
 
 from cartoonface.web.config import PACKAGE, Settings
-from cartoonface.web.drafts import draft_choice, load_draft
+from cartoonface.web.draft_store import draft_choice, load_draft
 from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, check_submission, form_values,
                                     megabytes)
 from cartoonface.web.runner import Runner
@@ -150,7 +151,7 @@ def index() -> tuple[str, int]:
 
 
 @bp.post("/jobs")
-def submit() -> Response | tuple[str, int]:
+def submit() -> BaseResponse | tuple[str, int]:
     """Check the form; store and queue the job and 303 to its page, or the form again (400)."""
     values = form_values(request.form)
     if not csrf_ok(request.form.get(CSRF_FIELD)):

@@ -73,15 +73,16 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     """Generate the job stored in `folder`, writing status.json as it goes; stop
     (Orphaned) at a progress report when `server_alive()` is False."""
     spec = read_spec(folder)
-    last = {"stage": "", "time": 0.0}
+    last_stage, last_time = "", 0.0
 
     def progress(stage: str, fraction: float) -> None:
+        nonlocal last_stage, last_time
         if not server_alive():
             raise Orphaned(stage)
         now = time.monotonic()
-        if stage == last["stage"] and now - last["time"] < PROGRESS_INTERVAL:
+        if stage == last_stage and now - last_time < PROGRESS_INTERVAL:
             return
-        last.update(stage=stage, time=now)
+        last_stage, last_time = stage, now
         write_status(folder, Status(state=RUNNING, stage=stage, fraction=min(max(fraction, 0.0), 1.0),
                                     updated=time.time()))
 
@@ -93,7 +94,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
                           folder / "transcript.txt", folder / SITE, options, progress)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
     except InputError as exc:
-        write_status(folder, Status(state=FAILED, stage=last["stage"], error=user_message(exc, folder, spec),
+        write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
                                     updated=time.time()))
         return
     summary = {
@@ -133,6 +134,9 @@ def forked_main(folder: str) -> None:
     os.dup2(log, 2)
     os.close(log)
     server = multiprocessing.parent_process()
+    if server is None:
+        sys.exit("worker: forked_main runs only in a process the runner started; by hand: "
+                 "python -m cartoonface.web.worker JOB_FOLDER PARENT_PID")
     sys.exit(main(Path(folder), server.is_alive))
 
 

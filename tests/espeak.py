@@ -2,8 +2,8 @@
 
 libespeak-ng (Debian package libespeak-ng1) is driven through ctypes with the voice
 `cmn-latn-pinyin`, which reads tone-numbered pinyin; the library reports one WORD event per
-syllable (see /work/shared/DEPENDENCIES.md). The aligner uses the result as a template of
-the same syllables to warp onto a real recording.
+syllable (see /work/shared/DEPENDENCIES.md). Tests use it as speech with known syllable
+onsets; bench/align.py as the template of the espeak+DTW baseline (the aligner does not use it).
 """
 
 from __future__ import annotations
@@ -43,13 +43,28 @@ class _Event(ctypes.Structure):
 
 _CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int, ctypes.POINTER(_Event))
 _lock = threading.Lock()
-_state: dict[str, object] = {}
 
 
-def _library():
-    """The initialised library and its sample rate, or None when espeak-ng or the voice is missing."""
-    if "lib" not in _state:
-        _state["lib"] = None
+class _Engine:
+    """The loaded library (None until loaded or when missing), its sample rate, the callback
+    object (kept alive while the library holds it), and what one synthesis collects."""
+
+    def __init__(self) -> None:
+        self.tried = False
+        self.lib: ctypes.CDLL | None = None
+        self.rate = 0
+        self.callback: object = None
+        self.chunks: list[np.ndarray] = []
+        self.words: list[int] = []
+
+
+_engine = _Engine()
+
+
+def _library() -> ctypes.CDLL | None:
+    """The initialised library, or None when espeak-ng or the voice is missing."""
+    if not _engine.tried:
+        _engine.tried = True
         name = ctypes.util.find_library("espeak-ng") or "libespeak-ng.so.1"
         try:
             lib = ctypes.CDLL(name)
@@ -60,17 +75,18 @@ def _library():
             return None
         callback = _CALLBACK(_collect)
         lib.espeak_SetSynthCallback(callback)
-        _state.update(lib=lib, rate=rate, callback=callback)
-    return _state["lib"]
+        _engine.lib, _engine.rate, _engine.callback = lib, int(rate), callback
+    return _engine.lib
 
 
-def _collect(wav, count, events) -> int:
+def _collect(wav: ctypes._Pointer, count: int, events: ctypes._Pointer) -> int:
+    """The synthesis callback: keep `count` samples of `wav` and the sample of each WORD event."""
     if wav and count > 0:
-        _state["chunks"].append(np.ctypeslib.as_array(wav, (count,)).copy())
+        _engine.chunks.append(np.ctypeslib.as_array(wav, (count,)).copy())
     i = 0
     while events[i].type != 0:
         if events[i].type == _WORD:
-            _state["words"].append(events[i].sample)
+            _engine.words.append(events[i].sample)
         i += 1
     return 0
 
@@ -85,9 +101,9 @@ def synthesize(syllables: Sequence[str]) -> Synthesis | None:
         lib = _library()
         if lib is None:
             return None
-        _state["chunks"], _state["words"] = [], []
+        _engine.chunks, _engine.words = [], []
         lib.espeak_Synth(text, len(text) + 1, 0, _CHARACTER, 0, _UTF8, None, None)
-        chunks, words, rate = _state["chunks"], _state["words"], int(_state["rate"])
+        chunks, words, rate = _engine.chunks, _engine.words, _engine.rate
     if len(words) != len(syllables) or not chunks:
         return None
     samples = np.concatenate(chunks).astype(np.float32) / 32768.0

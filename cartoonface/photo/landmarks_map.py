@@ -13,10 +13,14 @@ import numpy as np
 
 from cartoonface.face.model import POINT_NAMES
 
+# The iris centres: face-mesh rows of the iris refinement (landmarks.py): the image-left
+# iris (the subject's right eye, point 3.6, FAPU r1) and the image-right iris (3.5, r2).
+IRIS_LEFT = 468
+IRIS_RIGHT = 473
 # Named point -> face mesh index (image left = the subject's right).
 DIRECT = {
     "2.1": 152, "2.2": 13, "2.3": 14,
-    "3.1": 386, "3.2": 159, "3.3": 374, "3.4": 145, "3.5": 473, "3.6": 468,
+    "3.1": 386, "3.2": 159, "3.3": 374, "3.4": 145, "3.5": IRIS_RIGHT, "3.6": IRIS_LEFT,
     "3.7": 263, "3.8": 133, "3.11": 362, "3.12": 33,
     "4.3": 334, "4.4": 105, "4.3a": 293, "4.4a": 63,
     "8.1": 0, "8.2": 17, "8.3": 291, "8.4": 61, "8.9": 37, "8.10": 267,
@@ -29,11 +33,13 @@ BROW_ENDS = {"4.1": (336, 285), "4.2": (107, 55), "4.5": (300, 276), "4.6": (70,
 # Eyebrow thickness at the arch and beside it (upper edge, lower edge) per side:
 # EyebrowH = 1.3 x thickness (thesis 002, Alg. 2.1: G = 4.4 + EyebrowH / 1.3).
 BROW_THICKNESS = {"eyebrow_h": ((105, 52), (334, 282)), "eyebrow_h2": ((63, 53), (293, 283))}
-# Iris rims (thesis 2.2: r1 for the image-left eye 3.6, r2 for 3.5).
-IRIS_RIM = {"r1": (469, 470, 471, 472), "r2": (474, 475, 476, 477)}
+# Iris centre and rim per FAPU (docs/face-model.md: r1 for the image-left eye 3.6, r2 for 3.5).
+IRIS_RIM = {"r1": (IRIS_LEFT, (469, 470, 471, 472)), "r2": (IRIS_RIGHT, (474, 475, 476, 477))}
 # The face oval from the top of the forehead (10) to the chin (152), per side.
 OVAL_LEFT = (10, 109, 67, 103, 54, 21, 162, 127, 234, 93, 132, 58, 172, 136, 150, 149, 176, 148, 152)
 OVAL_RIGHT = (10, 338, 297, 332, 284, 251, 389, 356, 454, 323, 361, 288, 397, 365, 379, 378, 400, 377, 152)
+# The whole oval as one loop: down the image-left side, up the image-right side.
+OVAL = OVAL_LEFT + OVAL_RIGHT[-2:0:-1]
 # Contour points on the oval, at a height given as (point a, point b, fraction):
 # y = y_a + fraction (y_b - y_a). Ours, from the proportions of the sample faces
 # (temple a little above the eyes, cheek level with the nose bottom, jaw corner
@@ -52,6 +58,13 @@ HAIRLINE_FRACTION = 0.2
 EAR_RAISE, EAR_OUT, EAR_LOBE_OUT = 0.1, 0.15, 0.03
 
 
+def eyes(mesh: np.ndarray) -> tuple[np.ndarray, float]:
+    """The (3,) midpoint of the two iris centres of a (478, 3) mesh and their distance d
+    in the image plane (pixels)."""
+    left, right = mesh[IRIS_LEFT], mesh[IRIS_RIGHT]
+    return (left + right) / 2, float(np.hypot(*(right[:2] - left[:2])))
+
+
 def _on_oval(mesh: np.ndarray, oval: tuple[int, ...], y: float) -> np.ndarray:
     """(3,) point of the oval polyline at height y (clamped to its ends), x and z interpolated."""
     line = mesh[list(oval)]
@@ -66,8 +79,8 @@ def model_points(mesh: np.ndarray) -> np.ndarray:
     out: dict[str, np.ndarray] = {name: mesh[i] for name, i in DIRECT.items()}
     for name, (upper, lower) in BROW_ENDS.items():
         out[name] = (mesh[upper] + mesh[lower]) / 2
-    eyes_y = (mesh[468, 1] + mesh[473, 1]) / 2
-    d = float(np.hypot(*(mesh[473, :2] - mesh[468, :2])))
+    middle, d = eyes(mesh)
+    eyes_y = middle[1]
     for name, (a, b, fraction) in ON_OVAL.items():
         ya = eyes_y if a == "eyes" else out[a][1]
         y = ya + fraction * (out[b][1] - ya)
@@ -86,7 +99,7 @@ def free_fapu(mesh: np.ndarray) -> dict[str, float]:
     out = {}
     for name, sides in BROW_THICKNESS.items():
         out[name] = 1.3 * float(np.mean([np.hypot(*(mesh[u, :2] - mesh[lo, :2])) for u, lo in sides]))
-    for name, rim in IRIS_RIM.items():
-        centre = mesh[468 if name == "r1" else 473, :2]
+    for name, (centre_row, rim) in IRIS_RIM.items():
+        centre = mesh[centre_row, :2]
         out[name] = float(np.mean(np.hypot(*(mesh[list(rim), :2] - centre).T)))
     return out

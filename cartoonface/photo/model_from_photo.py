@@ -2,15 +2,14 @@
 
 `load_photo(path)` reads and checks the picture; `face_from_photo(photo)` finds the
 largest face (face mesh, landmarks.py), maps the mesh to the named points
-(landmarks_map.py), segments the hair (photo_hair.py), samples the colours
-(photo_palette.py), warns when the face is not neutral and normalises it (levels the
+(landmarks_map.py), segments the hair (hair.py), samples the colours
+(palette.py), warns when the face is not neutral and normalises it (levels the
 roll, turns it to face the camera, closes the mouth, drops a smile), and places it on
 the canvas of the sample faces (d = 100 px). docs/photo.md.
 """
 
 from __future__ import annotations
 
-import io
 import math
 import os
 import warnings
@@ -18,14 +17,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageOps
+from PIL import Image, ImageOps
 
 from cartoonface.errors import FaceModelError, InputError
-from cartoonface.face.landmarks import Landmarks, landmarker
-from cartoonface.face.landmarks_map import free_fapu, model_points
-from cartoonface.face.model import POINT_INDEX, FaceModel, face_from_dict
-from cartoonface.face.photo_hair import Head, segment_head
-from cartoonface.face.photo_palette import BLACK, face_colours, hex_colour, mix, palette_values
+from cartoonface.photo.landmarks import Landmarks, landmarker
+from cartoonface.photo.landmarks_map import IRIS_LEFT, IRIS_RIGHT, eyes, free_fapu, model_points
+from cartoonface.face.model import FORMAT, POINT_INDEX, VERSION, FaceModel, face_from_dict
+from cartoonface.photo.hair import Head, segment_head
+from cartoonface.photo.palette import BLACK, face_colours, hex_colour, mix, palette_values
 
 # A face narrower than this (in the photo's own pixels) is refused: too few pixels
 # for the eyes and mouth to be placed.
@@ -233,10 +232,11 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     if found.faces > 1:
         notes.append(f"{found.faces} faces in the photo; using the largest")
 
-    eyes = (mesh[468] + mesh[473]) / 2
-    roll = math.degrees(math.atan2(mesh[473, 1] - mesh[468, 1], mesh[473, 0] - mesh[468, 0]))
+    middle, _d = eyes(mesh)
+    across = mesh[IRIS_RIGHT] - mesh[IRIS_LEFT]
+    roll = math.degrees(math.atan2(across[1], across[0]))
     level = mesh.copy()
-    level[:, :2] = _rotate2d(mesh[:, :2], eyes[:2], -roll)
+    level[:, :2] = _rotate2d(mesh[:, :2], middle[:2], -roll)
     turn = float(np.degrees(np.median([math.atan2(level[b, 2] - level[a, 2], level[b, 0] - level[a, 0])
                                        for a, b in TURN_PAIRS])))
     if abs(turn) > MAX_TURN:
@@ -246,18 +246,18 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
         notes.append(f"the head leans {abs(roll):.0f} degrees sideways; the model is levelled")
 
     named = model_points(level)
-    photo_points = _rotate2d(named[:, :2], eyes[:2], roll)
+    photo_points = _rotate2d(named[:, :2], middle[:2], roll)
 
     colours = face_colours(photo.rgb, mesh)
     skin = colours["skin"]
     if skin is None:
         raise InputError(f"{source}: the face shows too little skin to sample its colour; expected a clear portrait")
     head = segment_head(photo.rgb, mesh, skin, roll)
-    hair_level = _rotate2d(head.polygon, eyes[:2], -roll)
+    hair_level = _rotate2d(head.polygon, middle[:2], -roll)
     hair_depth = float(np.mean(level[[234, 454], 2]))
     hair_xyz = np.column_stack([hair_level, np.full(len(hair_level), hair_depth)])
 
-    axis = level[[468, 473]].mean(axis=0)
+    axis, _d = eyes(level)
     frontal = _unturn(named, axis, turn)
     hair_frontal = _unturn(hair_xyz, axis, turn)
     d = float(np.hypot(*(frontal[POINT_INDEX["3.5"]] - frontal[POINT_INDEX["3.6"]])))
@@ -275,7 +275,7 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
 
     fapu = {key: value * k for key, value in free_fapu(level).items()}
     obj = {
-        "format": "cartoonface-face", "version": 1, "name": name, "canvas": list(CANVAS),
+        "format": FORMAT, "version": VERSION, "name": name, "canvas": list(CANVAS),
         "points": {n: [float(x), float(y)] for n, (x, y) in zip(POINT_INDEX, points)},
         "hair": [[float(x), float(y)] for x, y in hair],
         "fapu": fapu,
@@ -288,23 +288,3 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     return PhotoFace(face=face, points=photo_points, hair=head.polygon, turn=turn, roll=roll,
                      clothes=hex_colour(head.clothes) if head.clothes is not None else None,
                      warnings=tuple(notes))
-
-
-def overlay_png(photo: Photo, result: PhotoFace, max_side: int = 512) -> bytes:
-    """PNG bytes of the photo (scaled to at most `max_side` pixels a side) with the
-    detected named points (red dots) and the hair polygon (blue line and dots) drawn on it."""
-    image = Image.fromarray(photo.rgb)
-    k = min(1.0, max_side / max(image.size))
-    image = image.resize((max(1, round(image.width * k)), max(1, round(image.height * k))), Image.Resampling.LANCZOS)
-    draw = ImageDraw.Draw(image)
-    r = max(1.5, 0.012 * float(np.ptp(result.points[:, 0])) * k)
-    hair = [(float(x) * k, float(y) * k) for x, y in result.hair]
-    draw.line(hair, fill=(40, 110, 255), width=max(1, round(r / 2)))
-    for x, y in hair:
-        draw.ellipse((x - r, y - r, x + r, y + r), fill=(40, 110, 255))
-    for x, y in result.points * k:
-        draw.ellipse((x - r, y - r, x + r, y + r), fill=(255, 40, 40), outline=(255, 255, 255))
-    out = io.BytesIO()
-    image.save(out, "PNG", optimize=True)
-    return out.getvalue()
-

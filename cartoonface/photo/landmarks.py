@@ -135,7 +135,8 @@ class Landmarker:
         side = crop.shape[0]
         mesh = np.array([(p.x * side, p.y * side, p.z * side) for p in result[0].landmark], dtype=float)
         points = np.column_stack([mesh[:, :2] / scale + origin, mesh[:, 2] / scale])
-        return Landmarks(points=points, box=tuple(float(v) for v in box), faces=len(boxes))
+        x0, y0, x1, y1 = box
+        return Landmarks(points=points, box=(float(x0), float(y0), float(x1), float(y1)), faces=len(boxes))
 
 
 def _crop(rgb: np.ndarray, box: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray, float]:

@@ -1,0 +1,110 @@
+"""Numbers, symbols and Latin letters in a transcript -> the Chinese that is read out.
+
+Times 12:30, years, long digit runs, dates, decimals, percentages, 两 before measure words,
+spelled acronyms with Mandarin letter names, and full-width ASCII forms. The rules are
+written out in docs/mandarin-mouth-shapes.md.
+"""
+
+from __future__ import annotations
+
+import re
+
+import cn2an
+
+from cartoonface.speech.readings import Unit
+
+# Letter names as Mandarin speakers say them (our approximation), for spelled acronyms.
+_LETTERS: dict[str, tuple[str, ...]] = {
+    "A": ("ei1",), "B": ("bi4",), "C": ("xi1",), "D": ("di4",), "E": ("yi4",),
+    "F": ("ai2", "fu5"), "G": ("ji4",), "H": ("ai2", "qi1"), "I": ("ai4",), "J": ("zhei4",),
+    "K": ("kei4",), "L": ("ai4", "lou5"), "M": ("ai2", "mu5"), "N": ("en1",), "O": ("ou1",),
+    "P": ("pi1",), "Q": ("qiu1",), "R": ("a4", "er5"), "S": ("ai2", "si5"), "T": ("ti1",),
+    "U": ("you1",), "V": ("wei1",), "W": ("da2", "bu5", "liu5"), "X": ("ai2", "ke4", "si5"),
+    "Y": ("wai1",), "Z": ("zei4",),
+}
+_ACRONYM_MAX = 6
+
+# Measure words after which the number 2 is read 两 (两个, 两点).
+_LIANG_BEFORE = frozenset("个位只次天件条张本名岁种点斤双对口年周")
+SYMBOL_READINGS = {"℃": "摄氏度"}
+_DATE_AFTER = frozenset("月日号")
+# Citation readings of digits read one by one (no tone changes, no phrase look-up: pypinyin's
+# phrase 一月 would say yi2).
+DIGIT_READINGS = {"零": "ling2", "一": "yi1", "二": "er4", "三": "san1", "四": "si4",
+                   "五": "wu3", "六": "liu4", "七": "qi1", "八": "ba1", "九": "jiu3", "点": "dian3"}
+
+NUMBER_RE = re.compile(r"(\d{1,2}):(\d{2})(?!\d)|(\d{1,3}(?:,\d{3})+|\d+)(\.\d+)?(%)?", re.ASCII)
+
+
+def ascii_form(ch: str) -> str:
+    """Full-width ASCII forms (digits, letters, ％ － ．) -> ASCII; other characters unchanged."""
+    if "\uff01" <= ch <= "\uff5e":
+        return chr(ord(ch) - 0xFEE0)
+    return ch
+
+
+def is_latin(ch: str) -> bool:
+    return bool(ch) and "a" <= ascii_form(ch).lower() <= "z"
+
+
+def number_words(match: re.Match[str], following: str) -> tuple[str, bool]:
+    """A matched number -> (the Chinese characters to read, read digit by digit?).
+
+    following: the text after the number. Times 12:30 read 十二点三十; years (4 digits
+    before 年; 2 before 年代), runs of 7+ digits (phone
+    numbers, codes), runs starting with 0 and 1 in dates (1月, 1日, 1号: yi1, no tone change)
+    digit by digit; 2 before a measure word 两;
+    decimals 三点一四; percentages 百分之五十; thousands separators ignored. cn2an reads
+    the cardinals.
+    """
+    if match.group(1):
+        return _cardinal(match.group(1)) + "点" + _cardinal(match.group(2)), False
+    whole = match.group(3).replace(",", "")
+    decimals, percent = match.group(4), match.group(5)
+    plain = not decimals and not percent
+    nxt = following[:1]
+    by_digit = (len(whole) >= 7 or (whole.startswith("0") and len(whole) > 1)
+                or (nxt == "年" and len(whole) == 4 and plain)
+                or (following.startswith("年代") and len(whole) == 2 and plain)
+                or (whole == "1" and nxt in _DATE_AFTER and plain))
+    if by_digit:
+        spoken = _digits(whole)
+    elif whole == "2" and plain and nxt in _LIANG_BEFORE:
+        spoken = "两"
+    else:
+        spoken = _cardinal(whole)
+    if decimals:
+        spoken += "点" + _digits(decimals[1:])
+    if percent:
+        spoken = "百分之" + spoken
+    return spoken, by_digit
+
+
+def _digits(digits: str) -> str:
+    return "".join("零一二三四五六七八九"[int(d)] for d in digits)
+
+
+def _cardinal(whole: str) -> str:
+    return cn2an.an2cn(str(int(whole)), "low")
+
+
+def latin_units(word: str, readings: tuple[str, ...] | None, notes: list[str]) -> list[Unit]:
+    """A Latin word: its override readings, spelled letter names for an acronym, or nothing.
+
+    Acronyms: all capitals, at most _ACRONYM_MAX letters, or a single letter.
+    """
+    if readings:
+        return [Unit(word if k == 0 else "", reading=r, no_sandhi=True)
+                for k, r in enumerate(readings)]
+    letters = "".join(ascii_form(c) for c in word)
+    if len(letters) == 1 or (letters.isupper() and len(letters) <= _ACRONYM_MAX):
+        units: list[Unit] = []
+        for shown, letter in zip(word, letters.upper()):
+            units.extend(Unit(shown if k == 0 else "", reading=r, no_sandhi=True)
+                         for k, r in enumerate(_LETTERS[letter]))
+        return units
+    notes.append(f"skipped the Latin word {word!r}: not read as Mandarin (write it in Chinese, "
+                 f"or give its readings like {word}{{ha1 lou2}}, one per syllable)")
+    return []
+
+
