@@ -14,8 +14,8 @@ from cartoonface.errors import OptionError
 from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.face.lift import lift
-from cartoonface.face.pose import pose_face, rig
-from cartoonface.render.animation import animation_svg, clock, unroll
+from cartoonface.face.pose import pose_face, rig, unroll
+from cartoonface.render.animation import animation_svg, clock
 from cartoonface.render.pathdata import MIRROR, TOLERANCE, compact_paths
 
 ROOT = Path(__file__).resolve().parent.parent

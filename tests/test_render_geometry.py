@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial import Delaunay
 
-from cartoonface.render.geometry import arc, chaikin, contour, number_text, number_texts
+from cartoonface.render.geometry import arc, chaikin, contour
+from cartoonface.render.numbers import number_text, number_texts
 
 
 def bezier(start: np.ndarray, pieces: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -142,7 +143,7 @@ def test_face_shapes_draw_every_part_through_its_points(posed_sample) -> None:
 def test_nose_bridge_is_drawn_on_the_side_the_pose_shows(posed_sample) -> None:
     from cartoonface.render.geometry import face_shapes
 
-    for turn, posed in posed_sample.items():
+    for posed in posed_sample.values():
         start = anchors(face_shapes(posed)["nose"])[0]
         bridge = "9.7" if posed.nose_side == 1 else "9.6"
         np.testing.assert_allclose(start, posed.p(bridge), atol=0.051)

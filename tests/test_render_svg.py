@@ -16,7 +16,9 @@ from cartoonface.face.model import face_from_dict, face_to_dict, load_face
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.geometry import face_shapes
-from cartoonface.render.svg import face_defs, face_group, face_svg, svg_bytes, svg_to_png
+from cartoonface.render.elements import svg_bytes
+from cartoonface.render.png import svg_to_png
+from cartoonface.render.svg import face_defs, face_group, face_svg
 from tests.conftest import ROOT
 
 SVG = "{http://www.w3.org/2000/svg}"

@@ -179,17 +179,17 @@ def _uniform2(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
     return int(rng.integers(low, high + 1)) / 100
 
 
-def _ms(t: float) -> float:
-    """`t` seconds rounded to whole milliseconds, the resolution of the timeline."""
+def _round_to_ms(t: float) -> float:
+    """`t` seconds rounded to whole milliseconds, still in seconds (the resolution of the timeline)."""
     return round(t, 3)
 
 
 def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
-    length = _ms(BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN)
+    length = _round_to_ms(BLINK_CLOSE + BLINK_CLOSED + BLINK_OPEN)
     blinks: list[Action] = []
     end = 0.0
     while True:
-        start = _ms(end + blink_interval(rng))
+        start = _round_to_ms(end + blink_interval(rng))
         if start + length > duration:
             return blinks
         blinks.append(Action("blink", start, length, BLINK_AMOUNT, BLINK_CLOSE, BLINK_OPEN))
@@ -200,12 +200,12 @@ def _brows(duration: float, rng: np.random.Generator) -> list[Action]:
     brows: list[Action] = []
     end = 0.0
     while True:
-        start = _ms(end + _uniform2(rng, BROW_INTERVAL))
+        start = _round_to_ms(end + _uniform2(rng, BROW_INTERVAL))
         length = _uniform2(rng, BROW_DURATION)
         amount = round(float(rng.uniform(*BROW_AMOUNT)), 2)
         if start + length > duration:
             return brows
-        ramp = _ms(BROW_RAMP * length)
+        ramp = _round_to_ms(BROW_RAMP * length)
         brows.append(Action("brow", start, length, amount, ramp, ramp))
         end = brows[-1].end
 
@@ -232,10 +232,10 @@ def _moves(
         gap, span = _uniform2(rng, interval), _uniform2(rng, length)
         side = -side
         target = round(side * float(rng.uniform(angle / 3, angle)), 1)
-        start = _ms(end + gap)
+        start = _round_to_ms(end + gap)
         blocking = _overlap(start, start + span, busy)
         while blocking is not None:
-            start = _ms(blocking[1] + gap)
+            start = _round_to_ms(blocking[1] + gap)
             blocking = _overlap(start, start + span, busy)
         if start + span > duration:
             return moves
@@ -258,9 +258,9 @@ def _nods(duration: float, pauses: Sequence[tuple[float, float]], rng: np.random
     for pause_start, _ in sorted(pauses):
         t1, d1, d2 = _uniform2(rng, NOD_T1), _uniform2(rng, NOD_D1), _uniform2(rng, NOD_D2)
         depth = round(float(rng.uniform(*NOD_ANGLE)), 1)
-        start = _ms(pause_start - t1 - d1)
+        start = _round_to_ms(pause_start - t1 - d1)
         end = pause_start + d2
         if start < 0 or end > duration or (nods and start < nods[-1].end):
             continue
-        nods.append(Action("nod", start, _ms(end - start), depth, d1, d2))
+        nods.append(Action("nod", start, _round_to_ms(end - start), depth, d1, d2))
     return nods

@@ -130,7 +130,7 @@ def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
     keys = [Keyframe(0, REST)]
     previous_end = None
     for index, syllable in enumerate(syllables):
-        start, end = _ms(syllable.start), _ms(syllable.end)
+        start, end = _seconds_to_ms(syllable.start), _seconds_to_ms(syllable.end)
         gap = None if previous_end is None else start - previous_end
         if gap is None or gap >= SHORT_PAUSE_MS:
             lag, lead = LAG_MS, LEAD_MS
@@ -141,7 +141,7 @@ def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:
                 keys += [Keyframe(previous_end, keys[-1].value), Keyframe(previous_end + lag, REST)]
             keys.append(Keyframe(max(start - lead, 0), REST))
         following = syllables[index + 1] if index + 1 < len(syllables) else None
-        paused = following is None or _ms(following.start) - end >= LAG_MS + LEAD_MS
+        paused = following is None or _seconds_to_ms(following.start) - end >= LAG_MS + LEAD_MS
         shaped = round((end - start) / FINAL_LENGTHENING) if paused else end - start
         times = [start + round(onset * shaped) for onset in shape_onsets(len(syllable.shapes))]
         if syllable.shapes[0] == REST and len(times) > 1:
@@ -178,11 +178,11 @@ def envelope_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
     """
     keys = [Keyframe(0, 0.0)]
     for action in actions:
-        start, end = _ms(action.start), _ms(action.end)
+        start, end = _seconds_to_ms(action.start), _seconds_to_ms(action.end)
         keys += [
             Keyframe(start, 0.0),
-            Keyframe(start + _ms(action.attack), action.amplitude),
-            Keyframe(end - _ms(action.release), action.amplitude),
+            Keyframe(start + _seconds_to_ms(action.attack), action.amplitude),
+            Keyframe(end - _seconds_to_ms(action.release), action.amplitude),
             Keyframe(end, 0.0),
         ]
     return _monotonic(keys)
@@ -197,12 +197,12 @@ def move_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
     """
     keys = [Keyframe(0, 0.0)]
     for action in actions:
-        keys += [Keyframe(_ms(action.start), keys[-1].value), Keyframe(_ms(action.end), action.amplitude)]
+        keys += [Keyframe(_seconds_to_ms(action.start), keys[-1].value), Keyframe(_seconds_to_ms(action.end), action.amplitude)]
     return _monotonic(keys)
 
 
-def _ms(seconds: float) -> int:
-    """Seconds to whole milliseconds."""
+def _seconds_to_ms(seconds: float) -> int:
+    """`seconds` as a whole number of milliseconds (an int)."""
     return round(seconds * 1000)
 
 

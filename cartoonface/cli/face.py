@@ -128,7 +128,8 @@ def _state(args: argparse.Namespace) -> FaceState:
 def _write(root: etree._Element, args: argparse.Namespace, palette: bool = False) -> int:
     """Write the SVG (and with --png the PNG, with a 256-colour `palette` if asked) for `root`;
     print what was written; exit code 0."""
-    from cartoonface.render.svg import svg_bytes, svg_to_png
+    from cartoonface.render.elements import svg_bytes
+    from cartoonface.render.png import svg_to_png
 
     if args.output.suffix.lower() != ".svg":
         raise OptionError(f"-o {args.output}: expected a file name ending in .svg")
@@ -162,7 +163,7 @@ def run_sheet(args: argparse.Namespace) -> int:
     from cartoonface.face.model import load_face
     from cartoonface.face.mouth import MOUTH_SYMBOLS
     from cartoonface.face.state import FaceState, Pose
-    from cartoonface.render.svg import sheet_svg
+    from cartoonface.render.sheet import sheet_svg
 
     face = load_face(args.face)
     rows = [(label, [FaceState(Pose(*angles), blink, smile, brow).with_mouth(m) for m in MOUTH_SYMBOLS])
@@ -173,6 +174,6 @@ def run_sheet(args: argparse.Namespace) -> int:
 def run_diagram(args: argparse.Namespace) -> int:
     """`face diagram`: the labelled point diagram."""
     from cartoonface.face.model import load_face
-    from cartoonface.render.svg import diagram_svg
+    from cartoonface.render.diagram import diagram_svg
 
     return _write(diagram_svg(load_face(args.face)), args, palette=True)

@@ -46,7 +46,9 @@ def run_from_photo(args: argparse.Namespace) -> int:
     from cartoonface.files import write_bytes_atomic
     from cartoonface.photo.model_from_photo import face_from_photo, load_photo
     from cartoonface.photo.pictures import overlay_png
-    from cartoonface.render.svg import face_svg, svg_bytes, svg_to_png
+    from cartoonface.render.elements import svg_bytes
+    from cartoonface.render.png import svg_to_png
+    from cartoonface.render.svg import face_svg
 
     photo = load_photo(args.photo)
     result = face_from_photo(photo, name)

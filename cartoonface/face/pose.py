@@ -10,6 +10,7 @@ numpy operations on arrays precomputed once per lifted face (the Rig).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -261,3 +262,28 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
         else:
             xy[replaced] += weight * (xy[by] - xy[replaced])
     return PosedFace(xy=xy, hair=out[n:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if turn > 0 else -1)
+
+
+def unrolled(state: FaceState) -> FaceState:
+    """`state` with no roll (the state render/animation.py draws, turning the roll as a layer)."""
+    if not state.pose.roll:
+        return state
+    return dataclasses.replace(state, pose=dataclasses.replace(state.pose, roll=0.0))
+
+
+def unroll(posed: PosedFace, roll: float, origin: np.ndarray) -> PosedFace:
+    """`posed` (a face posed with `roll` degrees) turned back by the roll about the rig's
+    `origin` (2,) pixels. pose_face rolls last, in the image plane about that origin
+    (rotation_matrix: Rz @ Rx @ Ry, y flipped: x' = cos x + sin y, y' = -sin x + cos y), so
+    this is the face posed without roll, except the pupils, which keep gazing at the fixed
+    focus (up to 0.05 px per degree of roll apart); drawn and turned by `rotate(-roll)` (SVG
+    angles turn clockwise on screen) it is the posed face exactly."""
+    if not roll:
+        return posed
+    c, s = math.cos(math.radians(roll)), math.sin(math.radians(roll))
+    back = np.array([[c, s], [-s, c]])  # row vectors: (x', y') @ back = (c x' - s y', s x' + c y')
+
+    def turn(points: np.ndarray) -> np.ndarray:
+        return (points - origin) @ back + origin
+
+    return dataclasses.replace(posed, xy=turn(posed.xy), hair=turn(posed.hair), pupils=turn(posed.pupils))

@@ -37,20 +37,21 @@ from typing import Protocol
 
 import numpy as np
 
+from cartoonface.render.numbers import number_texts
+
 # Eyebrows and hair: rounds of corner cutting. Three rounds turn each polygon edge into
 # eight short pieces, which read as a smooth outline at the sizes a face is drawn.
 CHAIKIN_ROUNDS = 3
 
-# Coordinates are written in tenths of a pixel: the finest step a screen shows.
-_SCALE = 10
-
-
 class Posed(Protocol):
-    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace`."""
+    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace` (read-only)."""
 
-    xy: np.ndarray
-    hair: np.ndarray
-    nose_side: int
+    @property
+    def xy(self) -> np.ndarray: ...
+    @property
+    def hair(self) -> np.ndarray: ...
+    @property
+    def nose_side(self) -> int: ...
 
 
 def arc(points: np.ndarray, before: np.ndarray | None = None, after: np.ndarray | None = None) -> np.ndarray:
@@ -211,37 +212,6 @@ def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
             texts.append(_polygon(rows, outline))
         part_names.append(name)
     return _Plan(np.array(rows), "|".join(texts), tuple(part_names))
-
-
-@functools.lru_cache(maxsize=1)
-def _number_table() -> tuple[np.ndarray, int]:
-    """Strings for every tenth of a pixel in +-3276.8 px, indexed by tenths + offset."""
-    offset = 1 << 15
-    return np.array([_tenths_text(v) for v in range(-offset, offset)], dtype=object), offset
-
-
-def _tenths_text(tenths: int) -> str:
-    """The shortest SVG number text for `tenths`/10: 12, 12.5, .5, -.5."""
-    sign = "-" if tenths < 0 else ""
-    whole, frac = divmod(abs(tenths), _SCALE)
-    if frac == 0:
-        return f"{sign}{whole}"
-    return f"{sign}{whole or ''}.{frac}"
-
-
-def number_texts(values: np.ndarray) -> tuple[str, ...]:
-    """Takes any float array (pixels); returns its values, flattened, as SVG number text
-    rounded to 0.1 px with the fewest characters."""
-    tenths = np.rint(np.asarray(values, dtype=float).ravel() * _SCALE).astype(np.int64)
-    table, offset = _number_table()
-    if tenths.size and (tenths.min() < -offset or tenths.max() >= offset):
-        return tuple(_tenths_text(int(v)) for v in tenths)
-    return tuple(table[tenths + offset])
-
-
-def number_text(value: float) -> str:
-    """One number (pixels) as SVG text rounded to 0.1 px, e.g. 12.5 -> "12.5", 3.0 -> "3"."""
-    return _tenths_text(int(round(float(value) * _SCALE)))
 
 
 def face_shapes(posed: Posed) -> dict[str, str]:

@@ -14,13 +14,63 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 from lxml import etree
 
 from cartoonface.errors import OptionError
+from cartoonface.face.model import FaceModel
+from cartoonface.render.elements import DECIMALS, element
+from cartoonface.render.numbers import decimal_text
 
-SVG = "http://www.w3.org/2000/svg"
 BACKGROUNDS = ("studio", "newsroom", "classroom", "plain")
 CLOTHES = ("suit", "shirt", "sweater", "none")
+
+# Everything below is our own drawing (the thesis's figures are lost), tuned by eye.
+# Gradients by id: (offset 0..1, colour) stops, top to bottom.
+GRADIENTS: dict[str, tuple[tuple[float, str], ...]] = {
+    "bg-studio": ((0, "#1e3a8a"), (0.7, "#0f172a"), (1, "#020617")),  # dark blue backdrop
+    "bg-desk": ((0, "#475569"), (1, "#1e293b")),
+    "bg-dusk": ((0, "#fb923c"), (0.55, "#7c3aed"), (1, "#1e1b4b")),  # the newsroom's evening sky
+    "bg-board": ((0, "#2f5d3a"), (1, "#1f3d27")),  # chalkboard
+    "cl-suit": ((0, "#334155"), (1, "#0f172a")),
+    "cl-shirt": ((0, "#bfdbfe"), (1, "#60a5fa")),
+    "cl-sweater": ((0, "#16a34a"), (1, "#14532d")),
+}
+# Flat colours by what they paint.
+COLOURS = {"wall": "#f3efe6", "panel": "#3b82f6", "skyline": "#1e1b4b", "window": "#fde68a",
+           "classroom wall": "#efe6d2", "board frame": "#8b5a2b", "chalk": "#e5e7eb", "floor": "#c8b48c",
+           "jaw shadow": "#000", "shirt front": "#f8fafc", "tie": "#b91c1c", "lapel": "#1e293b",
+           "collar": "#eff6ff", "collar line": "#93c5fd", "placket": "#3b82f6", "rib": "#166534"}
+
+# Backgrounds, in fractions of the picture's width w and height h.
+STUDIO_PANELS = 5  # light panels behind the announcer: left edges at w * (PANEL_LEFT + PANEL_PITCH k)
+PANEL_LEFT, PANEL_PITCH, PANEL_TOP, PANEL_WIDTH, PANEL_HEIGHT = 0.04, 0.2, 0.08, 0.12, 0.5
+PANEL_OPACITY = "0.18"
+DESK_TOP, DESK_HEIGHT = 0.78, 0.22
+CORNER = 0.01  # corner radius of the panels and the board frame
+SKYLINE = (0.35, 0.55, 0.42, 0.7, 0.5, 0.62, 0.38, 0.58, 0.45, 0.66)  # building heights, left to right
+BUILDING_WIDTH, BUILDING_OPACITY = 0.92, "0.85"  # of the building's slot w / len(SKYLINE)
+# Lit windows: a row per tenth of the building's height, WINDOW_FIRST below its top then every
+# WINDOW_PITCH (of h); WINDOW_LEFT, WINDOW_WIDTH of the slot.
+WINDOW_ROWS_PER_HEIGHT = 10
+WINDOW_LEFT, WINDOW_WIDTH, WINDOW_FIRST, WINDOW_PITCH, WINDOW_HEIGHT = 0.2, 0.5, 0.05, 0.08, 0.02
+WINDOW_OPACITY = "0.5"
+FRAME = (0.05, 0.06, 0.9, 0.55)  # the board's wooden frame: x, y, width, height
+BOARD = (0.07, 0.085, 0.86, 0.5)  # the board inside it
+CHALK_MARKS = ((0.12, 0.2), (0.7, 0.3), (0.15, 0.45))  # left ends; mark k rises 0.02 k over its length
+CHALK_LENGTH, CHALK_RISE, CHALK_LINE, CHALK_OPACITY = 0.15, 0.02, 0.004, "0.7"
+FLOOR_TOP, FLOOR_HEIGHT = 0.8, 0.2
+
+# The body, in fractions of the face width fw (Figure.face_width); render/sheet.py's neck
+# uses NECK too, so the sheet's heads sit on the same neck.
+NECK = 0.22  # half the neck's width
+NECK_TOP = 0.3  # the neck starts this far above the chin, so the jaw covers it while the head moves
+NECK_FOOT = 0.1  # ... and ends this far below the shoulder line
+SHOULDER_DROP = 0.35  # the shoulder line below the chin
+SHOULDER = 1.25  # half the shoulders' width
+SHOULDER_SLOPE = 0.25  # the arms' top below the shoulder line
+SHOULDER_START = 2.2  # where the shoulders leave the collar, in half neck widths
+JAW_SHADOW, JAW_SHADOW_OPACITY = 0.07, "0.12"  # the jaw's shadow on the neck: vertical radius
 
 
 @dataclass(frozen=True)
@@ -35,18 +85,18 @@ class Figure:
     skin: str
 
 
-def _el(parent: etree._Element, tag: str, **attrs: object) -> etree._Element:
-    """Append an SVG element `tag` with `attrs` (numbers rounded to 0.1 px) to `parent`."""
-    node = etree.SubElement(parent, f"{{{SVG}}}{tag}")
-    for key, value in attrs.items():
-        node.set(key.rstrip("_").replace("_", "-"), _num(value) if isinstance(value, float) else str(value))
-    return node
+def figure_of(face: FaceModel, box: tuple[float, float, float, float]) -> Figure:
+    """Where the neck and shoulders go for `face` inside the picture `box` (x, y, width,
+    height in pixels): under its chin 2.1, the face as wide as its widest feature points
+    (the contour). The one place a Figure is made, so stills and animations match."""
+    chin = face.point("2.1")
+    return Figure(box=box, chin_x=float(chin[0]), chin_y=float(chin[1]),
+                  face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
 
 
 def _num(value: float) -> str:
-    """A coordinate rounded to 0.1 px, without a trailing '.0'."""
-    text = f"{value:.1f}"
-    return text[:-2] if text.endswith(".0") else text
+    """A coordinate of path data, written like element's numbers (to 0.1 px, "0.5", "12")."""
+    return decimal_text(value, DECIMALS)
 
 
 def _points(*pairs: tuple[float, float]) -> str:
@@ -54,11 +104,11 @@ def _points(*pairs: tuple[float, float]) -> str:
     return "M" + "L".join(f"{_num(x)},{_num(y)}" for x, y in pairs) + "Z"
 
 
-def _gradient(defs: etree._Element, gid: str, stops: tuple[tuple[float, str], ...], vertical: bool = True) -> str:
-    """Add a linear gradient `gid` with (offset 0..1, colour) `stops` to `defs`; return its url()."""
-    grad = _el(defs, "linearGradient", id=gid, x1="0", y1="0", x2="0" if vertical else "1", y2="1" if vertical else "0")
-    for offset, colour in stops:
-        _el(grad, "stop", offset=f"{offset:g}", stop_color=colour)
+def _gradient(defs: etree._Element, gid: str) -> str:
+    """Add the vertical linear gradient GRADIENTS[`gid`] to `defs`; return its url()."""
+    grad = element(defs, "linearGradient", id=gid, x1="0", y1="0", x2="0", y2="1")
+    for offset, colour in GRADIENTS[gid]:
+        element(grad, "stop", offset=f"{offset:g}", stop_color=colour)
     return f"url(#{gid})"
 
 
@@ -67,43 +117,45 @@ def background_layer(name: str, figure: Figure, defs: etree._Element) -> etree._
     if name not in BACKGROUNDS:
         raise OptionError(f"background {name!r}: expected one of {', '.join(BACKGROUNDS)}")
     x, y, w, h = figure.box
-    layer = etree.Element(f"{{{SVG}}}g", id="background")
+    layer = element(None, "g", id="background")
     if name == "plain":
-        _el(layer, "rect", x=x, y=y, width=w, height=h, fill="#f3efe6")
+        element(layer, "rect", x=x, y=y, width=w, height=h, fill=COLOURS["wall"])
     elif name == "studio":
-        _el(layer, "rect", x=x, y=y, width=w, height=h,
-            fill=_gradient(defs, "bg-studio", ((0, "#1e3a8a"), (0.7, "#0f172a"), (1, "#020617"))))
-        for k in range(5):  # light panels behind the announcer
-            px = x + w * (0.04 + 0.2 * k)
-            _el(layer, "rect", x=px, y=y + h * 0.08, width=w * 0.12, height=h * 0.5, rx=w * 0.01,
-                fill="#3b82f6", opacity="0.18")
-        _el(layer, "rect", x=x, y=y + h * 0.78, width=w, height=h * 0.22,
-            fill=_gradient(defs, "bg-desk", ((0, "#475569"), (1, "#1e293b"))))
+        element(layer, "rect", x=x, y=y, width=w, height=h, fill=_gradient(defs, "bg-studio"))
+        for k in range(STUDIO_PANELS):
+            px = x + w * (PANEL_LEFT + PANEL_PITCH * k)
+            element(layer, "rect", x=px, y=y + h * PANEL_TOP, width=w * PANEL_WIDTH, height=h * PANEL_HEIGHT,
+                    rx=w * CORNER, fill=COLOURS["panel"], opacity=PANEL_OPACITY)
+        element(layer, "rect", x=x, y=y + h * DESK_TOP, width=w, height=h * DESK_HEIGHT,
+                fill=_gradient(defs, "bg-desk"))
     elif name == "newsroom":
-        _el(layer, "rect", x=x, y=y, width=w, height=h,
-            fill=_gradient(defs, "bg-dusk", ((0, "#fb923c"), (0.55, "#7c3aed"), (1, "#1e1b4b"))))
-        heights = (0.35, 0.55, 0.42, 0.7, 0.5, 0.62, 0.38, 0.58, 0.45, 0.66)
-        step = w / len(heights)
-        for k, tall in enumerate(heights):  # a city skyline
-            _el(layer, "rect", x=x + k * step, y=y + h * (1 - tall), width=step * 0.92, height=h * tall, fill="#1e1b4b",
-                opacity="0.85")
-            for row in range(int(tall * 10)):
-                _el(layer, "rect", x=x + k * step + step * 0.2, y=y + h * (1 - tall + 0.05 + row * 0.08),
-                    width=step * 0.5, height=h * 0.02, fill="#fde68a", opacity="0.5")
+        element(layer, "rect", x=x, y=y, width=w, height=h, fill=_gradient(defs, "bg-dusk"))
+        step = w / len(SKYLINE)
+        for k, tall in enumerate(SKYLINE):  # a city skyline
+            element(layer, "rect", x=x + k * step, y=y + h * (1 - tall), width=step * BUILDING_WIDTH,
+                    height=h * tall, fill=COLOURS["skyline"], opacity=BUILDING_OPACITY)
+            for row in range(int(tall * WINDOW_ROWS_PER_HEIGHT)):
+                element(layer, "rect", x=x + k * step + step * WINDOW_LEFT,
+                        y=y + h * (1 - tall + WINDOW_FIRST + row * WINDOW_PITCH),
+                        width=step * WINDOW_WIDTH, height=h * WINDOW_HEIGHT, fill=COLOURS["window"],
+                        opacity=WINDOW_OPACITY)
     else:  # classroom: a chalkboard in a wooden frame on a cream wall
-        _el(layer, "rect", x=x, y=y, width=w, height=h, fill="#efe6d2")
-        _el(layer, "rect", x=x + w * 0.05, y=y + h * 0.06, width=w * 0.9, height=h * 0.55, rx=w * 0.01, fill="#8b5a2b")
-        _el(layer, "rect", x=x + w * 0.07, y=y + h * 0.085, width=w * 0.86, height=h * 0.5,
-            fill=_gradient(defs, "bg-board", ((0, "#2f5d3a"), (1, "#1f3d27"))))
-        for k, (u, v) in enumerate(((0.12, 0.2), (0.7, 0.3), (0.15, 0.45))):  # chalk marks
-            _el(layer, "path", d=_points((x + w * u, y + h * v), (x + w * (u + 0.15), y + h * (v - 0.02 * k))),
-                stroke="#e5e7eb", stroke_width=w * 0.004, fill="none", opacity="0.7")
-        _el(layer, "rect", x=x, y=y + h * 0.8, width=w, height=h * 0.2, fill="#c8b48c")
+        element(layer, "rect", x=x, y=y, width=w, height=h, fill=COLOURS["classroom wall"])
+        element(layer, "rect", x=x + w * FRAME[0], y=y + h * FRAME[1], width=w * FRAME[2], height=h * FRAME[3],
+                rx=w * CORNER, fill=COLOURS["board frame"])
+        element(layer, "rect", x=x + w * BOARD[0], y=y + h * BOARD[1], width=w * BOARD[2], height=h * BOARD[3],
+                fill=_gradient(defs, "bg-board"))
+        for k, (u, v) in enumerate(CHALK_MARKS):
+            element(layer, "path", d=_points((x + w * u, y + h * v),
+                                             (x + w * (u + CHALK_LENGTH), y + h * (v - CHALK_RISE * k))),
+                    stroke=COLOURS["chalk"], stroke_width=w * CHALK_LINE, fill="none", opacity=CHALK_OPACITY)
+        element(layer, "rect", x=x, y=y + h * FLOOR_TOP, width=w, height=h * FLOOR_HEIGHT, fill=COLOURS["floor"])
     return layer
 
 
 def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Element | None:
-    """The clothes `name` (one of CLOTHES) with neck and shoulders under the chin as a `<g>`, or None for "none"."""
+    """The clothes `name` (one of CLOTHES) with neck and shoulders under the chin as a `<g>`, or None for "none".
+    Sizes are fractions of the face width fw (the body constants above, and the clothes' own)."""
     if name not in CLOTHES:
         raise OptionError(f"clothes {name!r}: expected one of {', '.join(CLOTHES)}")
     if name == "none":
@@ -111,42 +163,42 @@ def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Ele
     x, y, w, h = figure.box
     cx, chin, fw = figure.chin_x, figure.chin_y, figure.face_width
     bottom = y + h + fw  # past the bottom edge: the body leaves the picture
-    neck = fw * 0.22  # half the neck's width
-    shoulder_y = chin + fw * 0.35
-    spread = fw * 1.25  # half the shoulders' width
-    layer = etree.Element(f"{{{SVG}}}g", id="clothes")
-    # The neck starts well above the chin so the jaw covers its top while the head moves.
-    _el(layer, "path", d=_points((cx - neck, chin - fw * 0.3), (cx + neck, chin - fw * 0.3),
-                                 (cx + neck, shoulder_y + fw * 0.1), (cx - neck, shoulder_y + fw * 0.1)),
-        fill=figure.skin)
+    neck = fw * NECK
+    shoulder_y = chin + fw * SHOULDER_DROP
+    spread = fw * SHOULDER
+    layer = element(None, "g", id="clothes")
+    element(layer, "path", d=_points((cx - neck, chin - fw * NECK_TOP), (cx + neck, chin - fw * NECK_TOP),
+                                     (cx + neck, shoulder_y + fw * NECK_FOOT), (cx - neck, shoulder_y + fw * NECK_FOOT)),
+            fill=figure.skin)
     # The jaw's shadow on the neck: the face covers the top half of this ellipse.
-    _el(layer, "ellipse", cx=cx, cy=chin, rx=neck, ry=fw * 0.07, fill="#000", opacity="0.12")
-    body = ((cx - spread, bottom), (cx - spread, shoulder_y + fw * 0.25), (cx - neck * 2.2, shoulder_y),
-            (cx + neck * 2.2, shoulder_y), (cx + spread, shoulder_y + fw * 0.25), (cx + spread, bottom))
+    element(layer, "ellipse", cx=cx, cy=chin, rx=neck, ry=fw * JAW_SHADOW, fill=COLOURS["jaw shadow"],
+            opacity=JAW_SHADOW_OPACITY)
+    arms = shoulder_y + fw * SHOULDER_SLOPE
+    body = ((cx - spread, bottom), (cx - spread, arms), (cx - neck * SHOULDER_START, shoulder_y),
+            (cx + neck * SHOULDER_START, shoulder_y), (cx + spread, arms), (cx + spread, bottom))
+    element(layer, "path", d=_points(*body), fill=_gradient(defs, f"cl-{name}"))
+    # Below: each garment's own shapes, points as (x in half neck widths from cx, y in fw from shoulder_y).
     if name == "suit":
-        _el(layer, "path", d=_points(*body), fill=_gradient(defs, "cl-suit", ((0, "#334155"), (1, "#0f172a"))))
-        _el(layer, "path", d=_points((cx - neck * 1.6, shoulder_y - fw * 0.02), (cx + neck * 1.6, shoulder_y - fw * 0.02),
-                                     (cx, shoulder_y + fw * 0.7)), fill="#f8fafc")  # shirt front
-        _el(layer, "path", d=_points((cx - neck * 0.35, shoulder_y + fw * 0.06), (cx + neck * 0.35, shoulder_y + fw * 0.06),
-                                     (cx + neck * 0.5, shoulder_y + fw * 0.55), (cx, shoulder_y + fw * 0.68),
-                                     (cx - neck * 0.5, shoulder_y + fw * 0.55)), fill="#b91c1c")  # tie
+        element(layer, "path", d=_points((cx - neck * 1.6, shoulder_y - fw * 0.02), (cx + neck * 1.6, shoulder_y - fw * 0.02),
+                                         (cx, shoulder_y + fw * 0.7)), fill=COLOURS["shirt front"])
+        element(layer, "path", d=_points((cx - neck * 0.35, shoulder_y + fw * 0.06), (cx + neck * 0.35, shoulder_y + fw * 0.06),
+                                         (cx + neck * 0.5, shoulder_y + fw * 0.55), (cx, shoulder_y + fw * 0.68),
+                                         (cx - neck * 0.5, shoulder_y + fw * 0.55)), fill=COLOURS["tie"])
         for side in (-1, 1):  # lapels
-            _el(layer, "path", d=_points((cx + side * neck * 1.6, shoulder_y - fw * 0.02),
-                                         (cx + side * neck * 0.2, shoulder_y + fw * 0.75),
-                                         (cx + side * neck * 2.6, shoulder_y + fw * 0.3)), fill="#1e293b")
+            element(layer, "path", d=_points((cx + side * neck * 1.6, shoulder_y - fw * 0.02),
+                                             (cx + side * neck * 0.2, shoulder_y + fw * 0.75),
+                                             (cx + side * neck * 2.6, shoulder_y + fw * 0.3)), fill=COLOURS["lapel"])
     elif name == "shirt":
-        _el(layer, "path", d=_points(*body), fill=_gradient(defs, "cl-shirt", ((0, "#bfdbfe"), (1, "#60a5fa"))))
-        _el(layer, "path", d=_points((cx - neck, shoulder_y - fw * 0.02), (cx + neck, shoulder_y - fw * 0.02),
-                                     (cx, shoulder_y + fw * 0.3)), fill=figure.skin)  # open collar
+        element(layer, "path", d=_points((cx - neck, shoulder_y - fw * 0.02), (cx + neck, shoulder_y - fw * 0.02),
+                                         (cx, shoulder_y + fw * 0.3)), fill=figure.skin)  # open collar
         for side in (-1, 1):
-            _el(layer, "path", d=_points((cx + side * neck * 1.1, shoulder_y - fw * 0.08), (cx, shoulder_y + fw * 0.3),
-                                         (cx + side * neck * 2.4, shoulder_y + fw * 0.12)),
-                fill="#eff6ff", stroke="#93c5fd", stroke_width=fw * 0.01)
-        _el(layer, "path", d=f"M{_num(cx)},{_num(shoulder_y + fw * 0.3)}V{_num(bottom)}",
-            stroke="#3b82f6", stroke_width=fw * 0.012, fill="none")
+            element(layer, "path", d=_points((cx + side * neck * 1.1, shoulder_y - fw * 0.08), (cx, shoulder_y + fw * 0.3),
+                                             (cx + side * neck * 2.4, shoulder_y + fw * 0.12)),
+                    fill=COLOURS["collar"], stroke=COLOURS["collar line"], stroke_width=fw * 0.01)
+        element(layer, "path", d=f"M{_num(cx)},{_num(shoulder_y + fw * 0.3)}V{_num(bottom)}",
+                stroke=COLOURS["placket"], stroke_width=fw * 0.012, fill="none")
     else:  # sweater: round neck, ribbed collar
-        _el(layer, "path", d=_points(*body), fill=_gradient(defs, "cl-sweater", ((0, "#16a34a"), (1, "#14532d"))))
         left, right, dip = cx - neck * 1.3, cx + neck * 1.3, shoulder_y + fw * 0.12
-        _el(layer, "path", d=f"M{_num(left)},{_num(shoulder_y)}Q{_num(cx)},{_num(dip)} {_num(right)},{_num(shoulder_y)}",
-            fill="none", stroke="#166534", stroke_width=fw * 0.05, stroke_linecap="round")  # ribbed collar
+        element(layer, "path", d=f"M{_num(left)},{_num(shoulder_y)}Q{_num(cx)},{_num(dip)} {_num(right)},{_num(shoulder_y)}",
+                fill="none", stroke=COLOURS["rib"], stroke_width=fw * 0.05, stroke_linecap="round")
     return layer

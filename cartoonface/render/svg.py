@@ -13,29 +13,28 @@ no area left and nothing of the eyeball shows. Then the outline and a bolder upp
 gives one state's drawing as a `<g>` whose children are the parts, each with a class
 naming it ("hair", "ear-l", "face", "eye-l", "mouth", ...), and whose own clip paths carry
 the caller's `uid` so many states can share one document (render/animation.py). Colours
-are written as hex: cairosvg paints hsl() black (shared DEPENDENCIES.md).
+are written as hex (#rrggbb), the form `_mix` reads and every renderer paints alike
+(docs/drawing.md). The contact sheet, the point diagram and PNG output are in
+render/sheet.py, render/diagram.py and render/png.py.
 """
 
 from __future__ import annotations
 
 import functools
-import io
 import math
 
 import numpy as np
-import resvg_py
 from lxml import etree
-from PIL import Image
 
 from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
-from cartoonface.render.geometry import face_shapes, number_text
-from cartoonface.render.scenery import Figure, background_layer, clothes_layer
+from cartoonface.render.elements import SVG, element, svg_root
+from cartoonface.render.geometry import face_shapes
+from cartoonface.render.numbers import number_text
+from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
 
-SVG = "http://www.w3.org/2000/svg"
-NSMAP = {None: SVG}
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
 # face of any size is drawn alike. Our own choice, tuned by eye on the sample faces.
@@ -51,6 +50,23 @@ GLOSS = 0.14      # half-width of the gloss on the lower lip / width of the mout
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
 CHEEK = (0.2, 0.12)  # blush ellipse radii / d
+BROW_LINE = 0.006  # the eyebrow's outline, which rounds its corner-cut polygon
+EYE_LINE = 0.8    # the eye outline's width / OUTLINE
+# Shades and opacities, our own choice like the widths.
+HAIR_LINE_SHADE = 0.35   # the hair's outline: its colour this far towards black
+LID_SHADOW_OPACITY = "0.18"
+# The blush (_cheeks), in d: an eye this wide (corner to corner) seen
+# frontally gives the full CHEEK[0] width; a wider-looking eye widens it up to CHEEK_STRETCH times.
+CHEEK_EYE_WIDTH = 0.46
+CHEEK_STRETCH = 1.2
+# the blush centre's x: these weights of the outer and the inner eye corner
+CHEEK_OUTER, CHEEK_INNER = 0.55, 0.45
+CHEEK_LIFT = 0.08   # the blush centre above the midpoint of the lower lid and the mouth corner
+# The highlight on the iris: its centre left and up of the iris centre by these fractions
+# of the iris radius (the light comes from the upper left), and its opacity.
+GLINT_LEFT = 0.3
+GLINT_UP = 0.34
+GLINT_OPACITY = "0.9"
 
 # Eye outline points (thesis 002, Alg. 2.2 steps 9-10) by drawn eye.
 EYES = {"l": ("3.12", "3.2", "3.8", "3.4"), "r": ("3.7", "3.1", "3.11", "3.3")}
@@ -68,16 +84,11 @@ def _mix(colour: str, other: str, t: float) -> str:
     return "#" + "".join(f"{v:02x}" for v in mixed)
 
 
-def _el(parent: etree._Element, tag: str, attrs: dict[str, str]) -> etree._Element:
-    """Append SVG element `tag` with string attributes `attrs` to `parent`; return it."""
-    return etree.SubElement(parent, f"{{{SVG}}}{tag}", attrs)
-
-
 def _gradient(kind: str, gid: str, stops: tuple[tuple[float, str, float], ...], **attrs: str) -> etree._Element:
     """A linear/radial gradient `gid` with (offset, colour, opacity) stops."""
-    grad = etree.Element(f"{{{SVG}}}{kind}Gradient", {"id": gid, **attrs})
+    grad = element(None, f"{kind}Gradient", {"id": gid, **attrs})
     for offset, colour, opacity in stops:
-        stop = _el(grad, "stop", {"offset": f"{offset:g}", "stop-color": colour})
+        stop = element(grad, "stop", {"offset": f"{offset:g}", "stop-color": colour})
         if opacity < 1:
             stop.set("stop-opacity", f"{opacity:g}")
     return grad
@@ -115,17 +126,18 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
     line = {"fill": "none", "stroke": p.outline, **round_}
     skin = {**line, "fill": "url(#cf-skin)", "stroke-width": number_text(OUTLINE * d)}
     return {
-        "hair": {"fill": "url(#cf-hair)", "stroke": _mix(p.hair, "#000000", 0.35),
+        "hair": {"fill": "url(#cf-hair)", "stroke": _mix(p.hair, "#000000", HAIR_LINE_SHADE),
                  "stroke-width": number_text(HAIR_LINE * d), "stroke-linejoin": "round"},
         "skin": skin,
         "nose": {**line, "stroke": "url(#cf-nose)", "stroke-width": number_text(FEATURE * d)},
-        "brow": {"fill": p.brow, "stroke": p.brow, "stroke-width": number_text(0.006 * d), "stroke-linejoin": "round"},
+        "brow": {"fill": p.brow, "stroke": p.brow, "stroke-width": number_text(BROW_LINE * d),
+                 "stroke-linejoin": "round"},
         "cheek_ry": {"ry": number_text(CHEEK[1] * d)},
         "white": {"fill": p.eye_white},
-        "eye_line": {**line, "stroke-width": number_text(OUTLINE * d * 0.8)},
+        "eye_line": {**line, "stroke-width": number_text(OUTLINE * d * EYE_LINE)},
         "lid": {**line, "stroke-width": number_text(LID * d)},
         # the upper lid's shadow on the eyeball, inside the eye clip
-        "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": "0.18",
+        "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": LID_SHADOW_OPACITY,
                        "stroke-width": number_text(LID_SHADOW * d)},
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
         "opening": {"fill": p.mouth},
@@ -151,16 +163,16 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     style = _styles(face)
     shapes = face_shapes(posed)
     points = posed.xy[_ROWS].tolist()
-    group = etree.Element(f"{{{SVG}}}g", {"class": "cf-face"})
-    defs = _el(group, "defs", {})
-    _el(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
+    group = element(None, "g", {"class": "cf-face"})
+    defs = element(group, "defs", {})
+    element(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
     for side in "lr":
-        _el(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
-    _el(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
+        element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
+    element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
     _cheeks(group, points, face.fapu.d, style)
-    _el(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
+    element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
     for side in "lr":
-        _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
+        element(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
     for side, eyeball in zip("lr", _eyeballs(posed, points)):
         _eye(group, defs, shapes, side, eyeball, face, uid, style)
     _mouth(group, defs, shapes, uid, style, face.fapu.d, points[10:14])
@@ -170,13 +182,13 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
 def _cheeks(group: etree._Element, points: list[list[float]], d: float, style: dict[str, dict[str, str]]) -> None:
     """Blush under each eye, between the eye's lower lid and the mouth corner on its side.
     `points`: the posed rows _ROWS as [x, y] lists."""
-    cheeks = _el(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
+    cheeks = element(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
     for first, mouth_corner in ((0, points[8]), (4, points[9])):
         (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
-        width = math.hypot(ox - ix, oy - iy) / (0.46 * d)  # foreshortening: narrower when turned away
-        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - 0.08 * d
-        _el(cheeks, "ellipse", {"cx": number_text(0.55 * ox + 0.45 * ix), "cy": number_text(cy),
-                                "rx": number_text(CHEEK[0] * d * min(width, 1.2)), **style["cheek_ry"]})
+        width = math.hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
+        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - CHEEK_LIFT * d
+        element(cheeks, "ellipse", {"cx": number_text(CHEEK_OUTER * ox + CHEEK_INNER * ix), "cy": number_text(cy),
+                                    "rx": number_text(CHEEK[0] * d * min(width, CHEEK_STRETCH)), **style["cheek_ry"]})
 
 
 def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
@@ -197,19 +209,23 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
     upper lid."""
     outline = shapes[f"eye_{side}"]
     clip_id = f"cf-eye-{side}-{uid}"
-    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
-    eye = _el(group, "g", {"class": f"eye-{side}"})
-    _el(eye, "path", {"d": outline, **style["white"]})
-    ball = _el(eye, "g", {"clip-path": f"url(#{clip_id})"})
+    element(element(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
+    eye = element(group, "g", {"class": f"eye-{side}"})
+    element(eye, "path", {"d": outline, **style["white"]})
+    ball = element(eye, "g", {"clip-path": f"url(#{clip_id})"})
     x, y, r = eyeball
     cx, cy = number_text(x), number_text(y)
-    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
-    _el(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
-    _el(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
-    _el(ball, "circle", {"cx": number_text(x - 0.3 * r), "cy": number_text(y - 0.34 * r),
-                         "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": "0.9"})
-    _el(eye, "path", {"d": outline, **style["eye_line"]})
-    _el(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
+    element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
+    element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
+    element(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
+    element(ball, "circle", {"cx": number_text(x - GLINT_LEFT * r), "cy": number_text(y - GLINT_UP * r),
+                             "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": GLINT_OPACITY})
+    element(eye, "path", {"d": outline, **style["eye_line"]})
+    element(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
+
+
+# _mouth (being redrawn on branch mouth) calls the element helper by its old name.
+_el = element
 
 
 def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
@@ -242,176 +258,16 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
     """
     width, height = float(face.width), float(face.height)
-    root = etree.Element(f"{{{SVG}}}svg", {"width": f"{width:g}", "height": f"{height:g}",
-                                            "viewBox": f"0 0 {width:g} {height:g}"}, nsmap=NSMAP)
-    defs = _el(root, "defs", {})
+    root = svg_root({"width": f"{width:g}", "height": f"{height:g}", "viewBox": f"0 0 {width:g} {height:g}"})
+    defs = element(root, "defs", {})
     defs.extend(face_defs(face))
-    chin = face.point("2.1")
-    # the face width as render/animation.py measures it, so stills and animations match
-    figure = Figure(box=(0.0, 0.0, width, height), chin_x=float(chin[0]), chin_y=float(chin[1]),
-                    face_width=float(np.ptp(face.points[:, 0])), skin=face.palette.skin)
+    figure = figure_of(face, (0.0, 0.0, width, height))
     root.append(background_layer(background, figure, defs))
     group = face_group(face, pose_face(lift(face), state), "0")
-    hair = _el(root, "g", {"id": "hair"})
+    hair = element(root, "g", {"id": "hair"})
     hair.extend(group.findall(f"{{{SVG}}}path[@class='hair']"))
     dressed = clothes_layer(clothes, figure, defs)
-    root.append(dressed if dressed is not None else etree.Element(f"{{{SVG}}}g", {"id": "clothes"}))
+    root.append(dressed if dressed is not None else element(None, "g", {"id": "clothes"}))
     group.set("id", "face")
     root.append(group)
     return root
-
-
-def svg_bytes(root: etree._Element) -> bytes:
-    """The document `root` as UTF-8 SVG bytes with an XML declaration."""
-    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
-
-
-def svg_to_png(data: bytes, palette: bool = False) -> bytes:
-    """Rasterise SVG bytes at their own size with resvg; returns PNG bytes (RGBA). With
-    `palette`, the picture (drawn on an opaque background) is stored with a 256-colour
-    palette instead: a third of the size, for large sheets."""
-    png = bytes(resvg_py.svg_to_bytes(svg_string=data.decode("utf-8")))
-    if not palette:
-        return png
-    with Image.open(io.BytesIO(png)) as image:
-        out = io.BytesIO()
-        image.convert("RGB").quantize(256).save(out, "PNG", optimize=True)
-    return out.getvalue()
-
-
-def _head_box(face: FaceModel) -> tuple[float, float, float, float]:
-    """(x, y, width, height) around the hair and the head of `face`, with room for a head
-    turned, tilted or rolled by 15 degrees."""
-    points = np.concatenate([face.points, face.hair])
-    low, high = points.min(axis=0), points.max(axis=0)
-    margin = 0.55 * face.fapu.d
-    return low[0] - margin, low[1] - margin, high[0] - low[0] + 2 * margin, high[1] - low[1] + 2 * margin
-
-
-def _neck(face: FaceModel, bottom: float) -> etree._Element:
-    """A plain neck under the chin down to `bottom` (the sheet's heads have no body): the
-    width of render/scenery.py's neck, its top hidden behind the jaw in every pose."""
-    chin = face.point("2.1")
-    half = 0.22 * float(np.ptp(face.points[:, 0]))
-    top = float(chin[1]) - 0.6 * face.fapu.d
-    corners = ((chin[0] - half, bottom), (chin[0] - half, top), (chin[0] + half, top), (chin[0] + half, bottom))
-    d = "M" + "L".join(f"{number_text(x)} {number_text(y)}" for x, y in corners)  # open: no line at the bottom
-    return etree.Element(f"{{{SVG}}}path", {"class": "neck", "d": d, "fill": face.palette.skin,
-                                             "stroke": face.palette.outline,
-                                             "stroke-width": number_text(OUTLINE * face.fapu.d)})
-
-
-def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns: list[str],
-              cell_width: float) -> etree._Element:
-    """A contact sheet: a grid of heads (hair and face layers), one row per (label, states)
-    of `rows` (a label may hold several lines, split at "\n"), each column headed by its label
-    in `columns`, cells `cell_width` pixels wide. Returns the SVG root."""
-    x0, y0, w, h = _head_box(face)
-    scale = cell_width / w
-    cell_height = h * scale
-    font = max(11.0, cell_width * 0.12)
-    gap = cell_width * 0.05
-    longest = max(len(line) for label, _ in rows for line in label.split("\n"))
-    left_margin, top_margin = font * (0.62 * longest + 1), font * 2
-    pitch_x, pitch_y = cell_width + gap, cell_height + gap
-    width = left_margin + len(columns) * pitch_x + gap
-    height = top_margin + len(rows) * pitch_y + gap
-    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(width), "height": number_text(height),
-                                            "viewBox": f"0 0 {number_text(width)} {number_text(height)}"}, nsmap=NSMAP)
-    _el(root, "defs", {}).extend(face_defs(face))
-    _el(root, "rect", {"width": "100%", "height": "100%", "fill": "#ffffff"})
-    text_style = {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font), "fill": "#333333"}
-    for j, label in enumerate(columns):
-        _el(root, "text", {"x": number_text(left_margin + j * pitch_x + cell_width / 2),
-                           "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
-    lifted = lift(face)
-    neck = _neck(face, y0 + h)
-    for i, (label, states) in enumerate(rows):
-        top = top_margin + i * pitch_y
-        lines = label.split("\n")
-        caption = _el(root, "text", {"text-anchor": "end", **text_style})
-        for k, line in enumerate(lines):
-            _el(caption, "tspan", {"x": number_text(left_margin - gap * 2),
-                                   "y": number_text(top + cell_height / 2 + font * (1.25 * k - 0.6 * len(lines) + 1))
-                                   }).text = line
-        for j, state in enumerate(states):
-            left = left_margin + j * pitch_x
-            _el(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
-                               "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
-                               "fill": "#f1ede6"})
-            head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
-            head.insert(2, etree.fromstring(etree.tostring(neck)))  # after the <defs> and the hair
-            head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
-                                  f"scale({scale:.5g})")
-            root.append(head)
-    return root
-
-
-def diagram_svg(face: FaceModel, scale: float = 3.0) -> etree._Element:
-    """The labelled point diagram of `face` (docs/face-model.md): the frontal drawing faded,
-    every model point (black), additional point A..S (red, thesis 002 Alg. 2.1) and hair
-    point (blue, numbered from 0) with its name; points at the same place share a label.
-    Labels are placed greedily where they overlap no other label or point, with a leader
-    line when pushed away. The picture shows the head `scale` times its model size.
-    Returns the SVG root."""
-    from cartoonface.face.lift import LIFTED_NAMES
-    from cartoonface.face.model import POINT_NAMES
-
-    posed = pose_face(lift(face), FaceState())
-    font, dot = 0.042 * face.fapu.d, 0.011 * face.fapu.d
-    groups: dict[tuple[float, float], list[str]] = {}
-    colour: dict[tuple[float, float], str] = {}
-    named = [(n, xy, "#000000" if n in POINT_NAMES else "#c62828") for n, xy in zip(LIFTED_NAMES, posed.xy)]
-    named += [(str(i), xy, "#1565c0") for i, xy in enumerate(posed.hair)]
-    for name, xy, ink in named:
-        key = (round(float(xy[0]), 1), round(float(xy[1]), 1))
-        groups.setdefault(key, []).append(name)
-        colour.setdefault(key, ink)
-    x0, y0, w, h = _head_box(face)
-    x0, y0, w, h = x0 - 4 * font, y0 - 2 * font, w + 8 * font, h + 4 * font
-    root = etree.Element(f"{{{SVG}}}svg", {"width": number_text(w * scale), "height": number_text(h * scale),
-                                            "viewBox": " ".join(number_text(v) for v in (x0, y0, w, h))},
-                         nsmap=NSMAP)
-    _el(root, "defs", {}).extend(face_defs(face))
-    _el(root, "rect", {"x": number_text(x0), "y": number_text(y0), "width": "100%", "height": "100%",
-                       "fill": "#ffffff"})
-    drawing = face_group(face, posed, "d")
-    drawing.set("opacity", "0.35")
-    root.append(drawing)
-    marks = _el(root, "g", {"font-family": "DejaVu Sans, sans-serif", "font-size": number_text(font)})
-    taken = [(x - dot, y - dot, x + dot, y + dot) for x, y in groups]
-    centre = posed.xy.mean(axis=0)
-    for (x, y), names in groups.items():
-        text = "/".join(names)
-        box, anchor, (tx, ty) = _place_label(text, np.array([x, y]), centre, font, taken)
-        taken.append(box)
-        if np.hypot(tx - x, ty + 0.35 * font - y) > 1.6 * font:
-            _el(marks, "line", {"x1": number_text(x), "y1": number_text(y), "x2": number_text(tx),
-                                "y2": number_text(ty - 0.35 * font), "stroke": colour[(x, y)],
-                                "stroke-width": number_text(dot * 0.25), "opacity": "0.6"})
-        _el(marks, "circle", {"cx": number_text(x), "cy": number_text(y), "r": number_text(dot),
-                              "fill": colour[(x, y)]})
-        _el(marks, "text", {"x": number_text(tx), "y": number_text(ty), "text-anchor": anchor,
-                            "fill": colour[(x, y)]}).text = text
-    return root
-
-
-def _place_label(text: str, at: np.ndarray, centre: np.ndarray, font: float,
-                 taken: list[tuple[float, float, float, float]]) -> tuple[tuple[float, float, float, float], str,
-                                                                          tuple[float, float]]:
-    """Where the label `text` of the point `at` goes: the first candidate position (directions
-    starting away from `centre`, growing distances) whose box overlaps none of `taken`.
-    Returns (box (x1, y1, x2, y2), text-anchor, baseline position)."""
-    width, height = 0.62 * font * len(text), font
-    away = np.degrees(np.arctan2(*(at - centre)[::-1]))
-    for distance in (1.0, 1.8, 2.8, 4.0, 5.5, 7.5):
-        for turn in (0, 30, -30, 60, -60, 90, -90, 135, -135, 180):
-            angle = np.radians(away + turn)
-            ux, uy = np.cos(angle), np.sin(angle)
-            cx, cy = at[0] + ux * distance * font, at[1] + uy * distance * font
-            left = cx if ux > 0.3 else cx - width if ux < -0.3 else cx - width / 2
-            box = (left, cy - height / 2, left + width, cy + height / 2)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in taken):
-                anchor = "start" if ux > 0.3 else "end" if ux < -0.3 else "middle"
-                return box, anchor, (cx, cy + 0.35 * font)
-    return box, anchor, (cx, cy + 0.35 * font)

@@ -19,7 +19,8 @@ import numpy as np
 from cartoonface.errors import FaceModelError, InputError
 from cartoonface.face.model import POINT_INDEX, POINT_NAMES, FaceModel, face_from_dict, face_to_dict
 from cartoonface.face.state import FaceState
-from cartoonface.render.svg import face_svg, svg_bytes
+from cartoonface.render.elements import svg_bytes
+from cartoonface.render.svg import face_svg
 from cartoonface.web.draft_store import Draft, model_points, named_points
 from cartoonface.web.point_labels import POINT_LABELS
 

@@ -1,0 +1,277 @@
+"""The SVG compactor of render/animation.py: many drawings of one face written small.
+
+`Writer` takes every state's drawing (a `<g>` of parts, render/svg.py's face_group),
+keeps each distinct part once, and tidies it: path data in whole pixels as relative
+commands (render/pathdata.py), groups that only pass on style dissolved into their
+children, positions rounded, every other presentation attribute moved to a CSS class
+(the most used classes named by one letter), a path with its clip path's outline drawn
+as a `<use>` of it, per-state definitions (clip paths) renamed by content with short
+base-36 ids. `share` then puts a part shown in several drawings once into `<defs>` and
+shows it with `<use>`.
+"""
+
+from __future__ import annotations
+
+import html
+import re
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from lxml import etree
+
+from cartoonface.render.elements import SVG, element
+from cartoonface.render.pathdata import compact_paths
+
+# Elements that only define something referenced by id: a part's own ones (per state, from
+# face_group) go with the part, renamed so each distinct part drawing has its own.
+DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
+                                                  "pattern", "filter", "marker", "symbol"))
+# Attributes that place an element (rounded to whole pixels, kept on it). Every other
+# attribute but KEPT ones and references to per-state definitions is style: a CSS class.
+POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
+KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
+                  "offset", "id"))
+# Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
+# with no other attribute can be dissolved into its children. Not opacity, which applies to
+# the group as a whole.
+INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-width", "stroke-linecap",
+                       "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
+                       "stroke-dashoffset", "color"))
+_REFERENCE = re.compile(r"url\(#([^)]+)\)")
+_PATH_DATA = re.compile(rb' d="([^"]*)"')
+
+
+@dataclass(frozen=True)
+class RawPart:
+    """A part as face_group drew it (serialized: a drawing of every state would not fit in
+    memory as lxml trees), with the per-state definitions it references and the `label`
+    the Writer's `label_of` gave it."""
+
+    label: str
+    element: bytes
+    definitions: tuple[bytes, ...]
+
+
+class Writer:
+    """Collects the drawn states, then writes the distinct part drawings compactly.
+    `label_of` names the group a top-level part belongs to (kept as RawPart.label)."""
+
+    def __init__(self, label_of: Callable[[etree._Element], str]) -> None:
+        self.label_of = label_of
+        self.raw_ids: dict[bytes, int] = {}
+        self.raw: list[RawPart] = []
+        self.styles: dict[tuple[tuple[str, str], ...], str] = {}
+
+    def collect(self, group: etree._Element) -> tuple[int, ...]:
+        """Take one face_group drawing; return the raw part numbers, in drawing order."""
+        definitions = {node.get("id"): node for node in group.iter(*DEFINITIONS) if node.get("id")}
+        numbers = []
+        for part in group:
+            if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
+                continue
+            raw = etree.tostring(part)
+            used = tuple(etree.tostring(node) for name, node in definitions.items() if f"#{name})".encode() in raw)
+            key = raw + b"".join(used)
+            number = self.raw_ids.get(key)
+            if number is None:
+                number = self.raw_ids[key] = len(self.raw)
+                self.raw.append(RawPart(self.label_of(part), raw, used))
+            numbers.append(number)
+        return tuple(numbers)
+
+    def finish(self) -> tuple[list[int], list[list[etree._Element]]]:
+        """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
+        and the tidy drawings (each a list of elements)."""
+        compact = compact_paths(_text(d) for part in self.raw
+                                for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
+        self.raw_ids.clear()
+        tidy_ids: dict[bytes, int] = {}
+        tidy: list[list[etree._Element]] = []
+        mapping = []
+        for part in self.raw:
+            elements = self._tidy_part(part, compact)
+            key = b"".join(etree.tostring(node) for node in elements)
+            number = tidy_ids.get(key)
+            if number is None:
+                number = tidy_ids[key] = len(tidy)
+                tidy.append(_own_ids(elements, short_id("k", number)))
+            mapping.append(number)
+        self._short_classes(tidy)
+        return mapping, tidy
+
+    def _short_classes(self, tidy: list[list[etree._Element]]) -> None:
+        """Rename the style classes of the `tidy` drawings (each written once in the document) by
+        how often they are used: the most used ones get one letter ("a".."z", "A".."Z")."""
+        nodes = [node for elements in tidy for top in elements for node in top.iter() if node.get("class")]
+        counts = Counter(node.get("class") for node in nodes)
+        names = {label: _letters(rank) for rank, (label, _) in enumerate(counts.most_common())}
+        for node in nodes:
+            node.set("class", names[node.get("class")])
+        self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
+
+    def _tidy_part(self, part: RawPart, compact: dict[str, str]) -> list[etree._Element]:
+        """The part with compact paths, groups that only pass on style dissolved, style as
+        classes: its definitions (ids "c0", "c1", ...), then its elements in drawing order."""
+        drawn = etree.fromstring(part.element)
+        definitions = [etree.fromstring(raw) for raw in part.definitions]
+        tops = (drawn, *definitions)
+        paths = [node for top in tops for node in top.iter() if node.get("d")]
+        for node in paths:
+            node.set("d", compact[node.get("d")])
+        renamed = {}
+        for number, definition in enumerate(definitions):
+            renamed[definition.get("id")] = f"c{number}"
+            definition.set("id", f"c{number}")
+            for node in definition.iter():
+                node.attrib.pop("class", None)
+        elements = _dissolve(drawn)
+        for top in elements:
+            for node in top.iter():
+                self._tidy_node(node, renamed)
+        _reuse_clip_outlines(definitions, elements)
+        return [*definitions, *elements]
+
+    def _tidy_node(self, node: etree._Element, renamed: dict[str, str]) -> None:
+        """Round `node`'s position, point its references at hoisted definitions, move its style to a class."""
+        attrib = node.attrib
+        attrib.pop("class", None)
+        style = []
+        for name, value in attrib.items():
+            if name in POSITIONS:
+                attrib[name] = str(round(float(value)))
+            elif "url(#" in value and renamed:
+                target = value[5:-1] if value.startswith("url(#") and value.endswith(")") else None
+                if target in renamed:
+                    attrib[name] = f"url(#{renamed[target]})"
+                elif target is None:
+                    attrib[name] = _REFERENCE.sub(lambda m: f"url(#{renamed.get(m.group(1), m.group(1))})", value)
+                elif name not in KEPT:
+                    style.append((name, value))
+            elif name not in KEPT:
+                style.append((name, value))
+        for name, _ in style:
+            del attrib[name]
+        attrib.pop("id", None)
+        if style:
+            key = tuple(sorted(style))
+            label = self.styles.get(key)
+            if label is None:
+                label = self.styles[key] = f"s{len(self.styles)}"
+            attrib["class"] = label
+
+    def style_sheet(self) -> str:
+        """The CSS of the style classes, one rule each."""
+        return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
+
+
+def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
+    """Draw a top-level path of `elements` whose outline is that of a clip path's only path in
+    `definitions` (the mouth's opening clipping the teeth, an eye's outline clipping the eyeball)
+    as a `<use>` of it: the clip path's path gets the id of its clip path plus "_". The `<use>`
+    carries the style (class) and the path none, so the shown copy inherits it."""
+    outlines: dict[str, etree._Element] = {}
+    for definition in definitions:
+        if definition.tag == f"{{{SVG}}}clipPath" and len(definition) == 1 and definition[0].get("d"):
+            outlines.setdefault(definition[0].get("d"), definition)
+    for index, node in enumerate(elements):
+        definition = outlines.get(node.get("d")) if node.tag == f"{{{SVG}}}path" else None
+        if definition is None or set(node.attrib) - {"d", "class"}:
+            continue
+        definition[0].set("id", definition.get("id") + "_")
+        use = element(None, "use", href=f"#{definition.get('id')}_")
+        if node.get("class"):
+            use.set("class", node.get("class"))
+        elements[index] = use
+
+
+def _letters(number: int) -> str:
+    """A CSS class name for `number` >= 0 made of letters only: 0 -> "a", 51 -> "Z", 52 -> "aa"."""
+    alphabet = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+    name = alphabet[number % 52]
+    while number >= 52:
+        number = number // 52 - 1
+        name = alphabet[number % 52] + name
+    return name
+
+
+def short_id(letter: str, number: int) -> str:
+    """An id for drawing `number` (>= 0): `letter` and the number in base 36 ("k", 1295 -> "kzz")."""
+    digits = ""
+    while True:
+        number, digit = divmod(number, 36)
+        digits = "0123456789abcdefghijklmnopqrstuvwxyz"[digit] + digits
+        if not number:
+            return letter + digits
+
+
+def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
+    """`elements` with their local definition ids ("c0", "c1", ...) made unique: `prefix`,
+    `prefix`-1, ..., and the references to them."""
+    def own(local: str) -> str:  # "c0" -> prefix, "c0_" -> prefix + "_", "c1" -> prefix + "-1"
+        match = re.fullmatch(r"c(\d+)(\D*)", local)
+        if match is None:
+            raise ValueError(f"{local!r} is not a local definition id (c0, c1_, ...)")
+        number, rest = match.groups()
+        return prefix + ("" if number == "0" else f"-{number}") + rest
+
+    for top in elements:
+        for node in top.iter():
+            for name, value in node.attrib.items():
+                if name == "id":
+                    node.set(name, own(value))
+                elif value.startswith("url(#c"):
+                    node.set(name, f"url(#{own(value[5:-1])})")
+                elif name == "href" and value.startswith("#c"):
+                    node.set(name, f"#{own(value[1:])}")
+    return elements
+
+
+def _text(value: bytes) -> str:
+    """An attribute value as serialized by lxml, back to its text."""
+    text = value.decode()
+    return html.unescape(text) if "&" in text else text
+
+
+def _dissolve(top: etree._Element) -> list[etree._Element]:
+    """Hand the INHERITED style of every `<g>` in `top` down to its children (each child
+    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children;
+    returns `top`, or its children if `top` itself dissolved. Fewer elements and
+    classes for the browser, fewer bytes per frame (a clipped group keeps only its clip)."""
+    groups = list(top.iter(f"{{{SVG}}}g"))
+    for group in groups:  # outermost first, so handed-down style goes on down
+        style = {name: value for name, value in group.attrib.items() if name in INHERITED}
+        for child in group:
+            for name, value in style.items():
+                if name not in child.attrib:
+                    child.set(name, value)
+        for name in style:
+            del group.attrib[name]
+    empty = [group for group in groups if all(name == "class" for name in group.attrib)]
+    for group in reversed(empty):  # innermost first
+        parent = group.getparent()
+        if parent is not None:
+            index = parent.index(group)
+            parent[index : index + 1] = list(group)
+    if empty and empty[0] is top:
+        return list(top)
+    return [top]
+
+
+def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
+           defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
+    """The elements of every drawing of `drawings` (lists of tidy part numbers by group, as
+    Writer.finish numbered them into `tidy`): a part drawn in one drawing only is itself; a
+    part in several is put once into `defs` as `<g id="gN">` and each drawing shows it with
+    `<use>`. Returns the drawings' element lists by group."""
+    uses = Counter(part for track in drawings.values() for drawing in track for part in drawing)
+    names: dict[int, str] = {}
+    for part, count in uses.items():
+        if count > 1:
+            names[part] = short_id("g", len(names))
+            element(defs, "g", id=names[part]).extend(tidy[part])
+    return {track: [[node for part in drawing
+                     for node in ([element(None, "use", href=f"#{names[part]}")] if part in names
+                                  else tidy[part])]
+                     for drawing in track_drawings]
+            for track, track_drawings in drawings.items()}

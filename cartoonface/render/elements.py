@@ -1,0 +1,43 @@
+"""SVG elements built with lxml: the namespace, one element helper, documents as bytes.
+
+Every render module builds its SVG with `element` (and `svg_root` for a document), so
+attribute names and number formats follow one rule: keyword names are written with
+hyphens ("stroke_width" -> "stroke-width"), numbers to 0.1 with
+`cartoonface.render.numbers.decimal_text`; a mapping of attributes is written as given.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from lxml import etree
+
+from cartoonface.render.numbers import decimal_text
+
+SVG = "http://www.w3.org/2000/svg"
+NSMAP = {None: SVG}
+# Decimals of a number given to `element` as a keyword attribute (pixels: a tenth is the
+# finest step a screen shows); render/scenery.py writes its path data alike.
+DECIMALS = 1
+
+
+def element(parent: etree._Element | None, tag: str, attrs: Mapping[str, str] | None = None,
+            /, **named: str | float) -> etree._Element:
+    """The SVG element `tag` (no namespace: "path") appended to `parent`, or a free element
+    when `parent` is None. Its attributes are `attrs` in their order, then `named` with
+    underscores as hyphens, numbers written with DECIMALS decimals. Returns it."""
+    node = (etree.Element(f"{{{SVG}}}{tag}", attrs) if parent is None
+            else etree.SubElement(parent, f"{{{SVG}}}{tag}", attrs))
+    for name, value in named.items():
+        node.set(name.replace("_", "-"), value if isinstance(value, str) else decimal_text(value, DECIMALS))
+    return node
+
+
+def svg_root(attrs: Mapping[str, str]) -> etree._Element:
+    """An `<svg>` document root with attributes `attrs`, SVG the default namespace (no prefix)."""
+    return etree.Element(f"{{{SVG}}}svg", attrs, nsmap=NSMAP)
+
+
+def svg_bytes(root: etree._Element) -> bytes:
+    """The document `root` as UTF-8 SVG bytes with an XML declaration."""
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8")

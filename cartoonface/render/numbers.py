@@ -1,0 +1,56 @@
+"""Numbers as SVG text: the one place the render modules turn floats into attribute text.
+
+`number_text` / `number_texts` write coordinates of the face drawing rounded to 0.1 px
+with the fewest characters (".5", "-12.3"); `number_texts` formats a whole array through
+a table of every tenth (the hot path of render/geometry.py's face_shapes).
+`decimal_text` writes a number with at most a given number of decimals and a leading zero
+("0.5"): the scenery's coordinates, SMIL clock values and key times. The two round ties
+differently (number_text rounds value * 10 half to even, decimal_text rounds the exact
+binary value) and write .5 differently, so each caller keeps the text it always wrote.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+# Coordinates are written in tenths of a pixel: the finest step a screen shows.
+TENTHS = 10
+
+
+@functools.lru_cache(maxsize=1)
+def _number_table() -> tuple[np.ndarray, int]:
+    """Strings for every tenth of a pixel in +-3276.8 px, indexed by tenths + offset."""
+    offset = 1 << 15
+    return np.array([_tenths_text(v) for v in range(-offset, offset)], dtype=object), offset
+
+
+def _tenths_text(tenths: int) -> str:
+    """The shortest SVG number text for `tenths`/10: 12, 12.5, .5, -.5."""
+    sign = "-" if tenths < 0 else ""
+    whole, frac = divmod(abs(tenths), TENTHS)
+    if frac == 0:
+        return f"{sign}{whole}"
+    return f"{sign}{whole or ''}.{frac}"
+
+
+def number_texts(values: np.ndarray) -> tuple[str, ...]:
+    """Takes any float array (pixels); returns its values, flattened, as SVG number text
+    rounded to 0.1 px with the fewest characters."""
+    tenths = np.rint(np.asarray(values, dtype=float).ravel() * TENTHS).astype(np.int64)
+    table, offset = _number_table()
+    if tenths.size and (tenths.min() < -offset or tenths.max() >= offset):
+        return tuple(_tenths_text(int(v)) for v in tenths)
+    return tuple(table[tenths + offset])
+
+
+def number_text(value: float) -> str:
+    """One number (pixels) as SVG text rounded to 0.1 px, e.g. 12.5 -> "12.5", 3.0 -> "3"."""
+    return _tenths_text(int(round(float(value) * TENTHS)))
+
+
+def decimal_text(value: float, decimals: int) -> str:
+    """`value` rounded to `decimals` (>= 1) decimals, trailing zeros and a trailing "." dropped,
+    e.g. (12.0, 1) -> "12", (0.25, 3) -> "0.25", (-0.04, 1) -> "-0"."""
+    return f"{value:.{decimals}f}".rstrip("0").rstrip(".")
