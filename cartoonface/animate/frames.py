@@ -24,7 +24,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.state import FaceState, Pose
 
-FPS_RANGE = (12, 60)  # frames per second allowed (issue 4: default 30, 12-60)
+FPS_RANGE = (12, 60)  # frames per second allowed (default 30; docs/animation.md)
 EASINGS = {
     "smoothstep": lambda u: u * u * (3.0 - 2.0 * u),
     "cosine": lambda u: 0.5 - 0.5 * np.cos(np.pi * u),

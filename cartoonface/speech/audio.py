@@ -22,7 +22,7 @@ import soundfile
 from cartoonface.errors import AudioError
 from cartoonface.files import write_bytes_atomic
 
-# Longest recording accepted (issue 3, item 1): 30 minutes.
+# Longest recording accepted: 30 minutes (README, "Limits").
 MAX_SECONDS = 30 * 60
 # A recording whose peak is below this is silent: -70 dBFS, far below the
 # noise floor of any microphone recording.
