@@ -160,13 +160,17 @@ def schedule(
     nods = _nods(duration, pauses, nod_rng, style.head)
     nods = _with_beat_nods(nods, duration, peaks, beat_rng, style)
     busy = tuple((nod.start, nod.end) for nod in nods)
+    turns = _moves("turn", duration, TURN_INTERVAL, TURN_DURATION, TURN_ANGLE * style.head, busy, turn_rng)
+    head_moves = [(nod.start, nod.start + nod.attack, 0.0, 1.0) for nod in nods]
+    head_moves += [(turn.start, turn.end, math.copysign(1.0, turn.amplitude - before), 0.0)
+                   for before, turn in zip([0.0] + [t.amplitude for t in turns], turns)]
     actions = (
         *_blinks(duration, blink_rng),
         *_brows(duration, brow_rng, style.brow_rate, peaks),
         *_moves("tilt", duration, TILT_INTERVAL, TILT_DURATION, TILT_ANGLE * style.head, busy, tilt_rng),
-        *_moves("turn", duration, TURN_INTERVAL, TURN_DURATION, TURN_ANGLE * style.head, busy, turn_rng),
+        *turns,
         *nods,
-        *_gaze(saccades(spans, pauses, gaze_rng, style), duration),
+        *_gaze(saccades(spans, pauses, gaze_rng, style, head_moves), duration),
         *_smiles(duration, spans, smile_rng, style.smile_share),
     )
     return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))

@@ -19,6 +19,12 @@ eyes between the viewer and places aside (behaviour.py turns them into
   "The main sequence, a tool for studying human eye movements", Math. Biosci. 24).
   Between saccades the eyes fixate; while looking at the viewer they dart
   between points of the viewer's face (small saccades within DART_RADIUS).
+- Eye-head coordination (Freedman 2008, "Coordination of the eyes and head
+  during visual orienting", Exp. Brain Res. 190): a gaze shift combines a
+  saccade with a head movement, the eyes leading; so most darts go with the
+  head's turns and nods, towards where the head goes, and the eyes settle
+  back on the viewer's centre as the head arrives. (This also keeps the SVG
+  small: the eyes are redrawn during a head movement anyway.)
 - In long pauses the eyes look down or aside (thinking, or reading on) and
   come back before the speech resumes.
 
@@ -51,7 +57,16 @@ AWAY_DIRECTIONS = (("aside", 0.7), ("up", 0.1), ("down", 0.2))
 UP_SHARE = 0.5  # a glance "up" rises by this share of its size while going aside
 # Looking down in a long pause: a fixed depth range (our choice).
 DOWN_RANGE = (5.0, 10.0)  # degrees
-DART_RADIUS = 2.0  # degrees: darts stay on the viewer's face (about eyes to mouth at 1 m)
+# Darts: while looking at the viewer the eyes jump between the viewer's eyes
+# and mouth, the places people fixate on a talking face (Vatikiotis-Bateson,
+# Eigsti, Yano and Munhall 1998, "Eye movement of perceivers during audiovisual
+# speech perception", Percept. Psychophys. 60). At 1 m the viewer's eyes are
+# about 1.8 degrees either side of their middle and the mouth about 4 degrees
+# below; we draw 3 degrees each way (an eye turns about 0.55 px per degree at
+# d = 100 px, so smaller darts would not show) and keep to these few points,
+# so that eye drawings repeat and the SVG stays small.
+DART_POINTS = ((0.0, 0.0), (-3.0, 0.0), (3.0, 0.0), (0.0, 3.0))
+DART_RADIUS = 3.0  # degrees: the farthest dart point from the viewer's centre
 MIN_FIXATION = 0.1  # seconds: the shortest fixation between two saccades ("Eyes Alive")
 END_LOOK = 0.5  # seconds before a sentence ends when the eyes are back on the viewer (Kendon 1967)
 MIN_SENTENCE = 1.5  # seconds: shorter sentences start without a glance away
@@ -87,10 +102,13 @@ def saccades(
     pauses: Sequence[tuple[float, float]],
     rng: np.random.Generator,
     style: Style,
+    head_moves: Sequence[tuple[float, float, float, float]] = (),
 ) -> list[Saccade]:
     """The saccades of a face speaking in `speech` spans with `pauses` between.
 
     `speech`, `pauses`: (start, end) seconds, each sorted and non-overlapping.
+    `head_moves`: (start, end, h, v) of the head's turns and nods, h and v the
+    sign of the movement (+1 towards the image right / down, -1, or 0).
     Returns saccades sorted by start, each changing the gaze: no two overlap,
     every fixation lasts at least MIN_FIXATION, the eyes start on the viewer
     (0, 0) and are within DART_RADIUS of it END_LOOK before each sentence ends,
@@ -98,9 +116,11 @@ def saccades(
     """
     parts = sorted([(s, e, True) for s, e in speech] + [(s, e, False) for s, e in pauses])
     shifts = _Shifts()
+    moves = sorted(head_moves)
     for start, end, speaking in parts:
         if speaking:
-            _sentence(shifts, start, end, rng, style)
+            inside = [move for move in moves if start <= move[0] and move[1] <= end - END_LOOK]
+            _sentence(shifts, start, end, rng, style, inside)
         else:
             _pause(shifts, start, end, rng, style)
     return shifts.made
@@ -130,8 +150,9 @@ class _Shifts:
 
 
 def _away(rng: np.random.Generator) -> tuple[float, float]:
-    """(h, v) degrees of one glance away: size from the "Eyes Alive" law, direction by AWAY_DIRECTIONS."""
-    size = float(np.clip(rng.exponential(MAGNITUDE_SCALE), *AWAY_RANGE))
+    """(h, v) degrees of one glance away: size from the "Eyes Alive" law (to whole
+    degrees, so drawings repeat), direction by AWAY_DIRECTIONS."""
+    size = float(np.clip(round(rng.exponential(MAGNITUDE_SCALE)), *AWAY_RANGE))
     names, shares = zip(*AWAY_DIRECTIONS, strict=True)
     direction = names[int(rng.choice(len(names), p=np.array(shares)))]
     side = 1.0 if rng.random() < 0.5 else -1.0
@@ -143,13 +164,21 @@ def _away(rng: np.random.Generator) -> tuple[float, float]:
 
 
 def _dart(rng: np.random.Generator) -> tuple[float, float]:
-    """(h, v) degrees of a point on the viewer's face, within DART_RADIUS of its centre."""
-    angle, radius = rng.uniform(0, 2 * math.pi), DART_RADIUS * math.sqrt(rng.random())
-    return radius * math.cos(angle), radius * math.sin(angle)
+    """(h, v) degrees of one of DART_POINTS on the viewer's face, drawn uniformly."""
+    return DART_POINTS[int(rng.integers(len(DART_POINTS)))]
 
 
-def _sentence(shifts: _Shifts, start: float, end: float, rng: np.random.Generator, style: Style) -> None:
-    """A glance away at the start (style.look_away), back on the viewer, darts until END_LOOK before the end."""
+def _sentence(
+    shifts: _Shifts,
+    start: float,
+    end: float,
+    rng: np.random.Generator,
+    style: Style,
+    moves: Sequence[tuple[float, float, float, float]],
+) -> None:
+    """A glance away at the start (style.look_away), back on the viewer, then darts
+    until END_LOOK before the end: with the head `moves` (style.head_darts of them)
+    and at style.dart_interval intervals."""
     back_by = end - END_LOOK
     t = start
     if end - start >= MIN_SENTENCE and rng.random() < style.look_away:
@@ -159,11 +188,17 @@ def _sentence(shifts: _Shifts, start: float, end: float, rng: np.random.Generato
             t = shifts.to(back_at, *_dart(rng)) or shifts.to(back_by, *_dart(rng)) or t
     elif shifts.gaze != (0.0, 0.0) and shifts.to(start, *_dart(rng)) is not None:
         t = start
+    events: list[tuple[float, tuple[float, float]]] = []
+    for move_start, move_end, h, v in moves:
+        if move_start >= t and rng.random() < style.head_darts:
+            events += [(move_start, (DART_RADIUS * h, DART_RADIUS * v)), (move_end, (0.0, 0.0))]
     while True:
         t += rng.uniform(*style.dart_interval)
         if t > back_by:
-            return
-        shifts.to(t, *_dart(rng))
+            break
+        events.append((t, _dart(rng)))
+    for when, target in sorted(events):
+        shifts.to(when, *target)
 
 
 def _pause(shifts: _Shifts, start: float, end: float, rng: np.random.Generator, style: Style) -> None:
@@ -173,6 +208,6 @@ def _pause(shifts: _Shifts, start: float, end: float, rng: np.random.Generator, 
     look_at, back_at = start + rng.uniform(*PAUSE_LEAD), end - PAUSE_BACK
     if back_at - look_at < 2 * MIN_FIXATION:
         return
-    target = (0.0, float(rng.uniform(*DOWN_RANGE))) if rng.random() < 0.5 else _away(rng)
+    target = (0.0, float(round(rng.uniform(*DOWN_RANGE)))) if rng.random() < 0.5 else _away(rng)
     if shifts.to(look_at, *target) is not None:
         shifts.to(back_at, 0.0, 0.0)
