@@ -74,6 +74,8 @@ LONG_PAUSE = 0.7  # seconds: a pause at least this long may get a look down or a
 PAUSE_LEAD = (0.05, 0.25)  # seconds after the pause starts that the look begins
 PAUSE_BACK = 0.2  # seconds before the speech resumes that the eyes are back
 START_DELAY = (0.0, 0.3)  # seconds after a sentence starts that its glance away begins
+# The longest saccade a glance away can make (back from the farthest diagonal).
+LONGEST_SACCADE = SACCADE_D0 + SACCADE_SLOPE * (math.hypot(AWAY_RANGE[1], DOWN_RANGE[1]) + DART_RADIUS)
 
 
 @dataclass(frozen=True)
@@ -177,9 +179,9 @@ def _sentence(
     moves: Sequence[tuple[float, float, float, float]],
 ) -> None:
     """A glance away at the start (style.look_away), back on the viewer, then darts
-    until END_LOOK before the end: with the head `moves` (style.head_darts of them)
+    until END_LOOK (and a saccade) before the end: with the head `moves` (style.head_darts of them)
     and at style.dart_interval intervals."""
-    back_by = end - END_LOOK
+    back_by = end - END_LOOK - LONGEST_SACCADE
     t = start
     if end - start >= MIN_SENTENCE and rng.random() < style.look_away:
         away_at = start + rng.uniform(*START_DELAY)
