@@ -20,6 +20,7 @@ from cartoonface.face.pose import pose_face
 from cartoonface.face.state import MAX_GAZE, FaceState
 from cartoonface.pipeline import Options, check_options
 from cartoonface.speech.audio import Audio
+from tests.conftest import run_cli
 from tests.synthetic import synthetic_talk
 
 DURATION = 600.0
@@ -226,3 +227,11 @@ def test_style_option_is_checked_and_pages_have_defaults():
     check_options(Options(style="storyteller"))
     with pytest.raises(OptionError, match="style 'lively'"):
         check_options(Options(style="lively"))
+
+
+def test_cli_refuses_an_unknown_style(tmp_path):
+    done = run_cli("generate", "--face", "f.json", "--audio", "a.wav", "--transcript", "t.txt",
+                   "-o", tmp_path / "out", "--style", "lively")
+    assert done.returncode == 2
+    assert "--style" in done.stderr and "lively" in done.stderr
+    assert not (tmp_path / "out").exists()
