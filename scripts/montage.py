@@ -15,12 +15,12 @@ import sys
 from pathlib import Path
 
 from PIL import Image, ImageDraw
-from playwright.sync_api import sync_playwright
+from playwright.sync_api import ViewportSize, sync_playwright
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--mute-audio", "--disable-background-networking",
         "--disable-component-update", "--disable-sync", "--no-first-run"]
-VIEWPORT = {"width": 400, "height": 480}  # the face model's canvas
+VIEWPORT: ViewportSize = {"width": 400, "height": 480}  # the face model's canvas
 HEAD = (60, 60, 340, 400)  # crop box of the head on that canvas, pixels
 SCALE = 0.75  # cell size / cropped size
 COLUMNS = 6
