@@ -20,6 +20,9 @@ from pathlib import Path
 from cartoonface.animate.actions import actions_to_json, load_actions
 from cartoonface.animate.behaviour import schedule, speech_pauses
 from cartoonface.animate.frames import FPS_RANGE, sample_frames
+from cartoonface.animate.idle import with_sway
+from cartoonface.animate.prosody import pitch_peaks
+from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
 from cartoonface.face.model import FaceModel, load_face
@@ -50,6 +53,7 @@ class Options:
     title: str = ""
     fps: int = 30  # 12..60
     seed: int = 0
+    style: str | None = None  # performance style (animate/style.py); None: the page's default
     background: str = "studio"  # announcer backgrounds (scenery.BACKGROUNDS)
     clothes: str = "suit"  # announcer clothes (scenery.CLOTHES)
     actions: Path | None = None  # edited actions.json
@@ -77,6 +81,8 @@ def check_options(options: Options) -> None:
     fps = options.fps
     if isinstance(fps, bool) or not isinstance(fps, int) or not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
         raise OptionError(f"fps {fps!r}: expected a whole number of frames per second from {FPS_RANGE[0]} to {FPS_RANGE[1]}")
+    if options.style is not None and options.style not in STYLES:
+        raise OptionError(f"style {options.style!r}: expected one of {', '.join(STYLES)}")
     if isinstance(options.seed, bool) or not isinstance(options.seed, int) or options.seed < 0:
         raise OptionError(f"seed {options.seed!r}: expected a whole number 0 or more")
     if options.background not in BACKGROUNDS:
@@ -169,12 +175,16 @@ def generate(
         source = "transcript" if isinstance(transcript, str) else str(transcript)
         alignment = analyse(recording, text, pause=options.pause, progress=report, source=source)
     report("schedule")
+    style = STYLES[options.style or PAGE_STYLES[options.page]]
     if options.actions is not None:
         actions = load_actions(options.actions, duration)
     else:
-        actions = schedule(duration, speech_pauses(alignment), options.seed)
+        speech = tuple((sentence.start, sentence.end) for sentence in alignment.sentences)
+        actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
+                           peaks=pitch_peaks(recording, alignment), speech=speech)
     report("frames")
     states = sample_frames(build_timeline(alignment, actions), options.fps)
+    states = with_sway(states, options.fps, options.seed, style.sway * style.head)
     report("svg")
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                         wide=options.page == "announcer", title=options.title)

@@ -419,6 +419,7 @@ def test_photo_size_and_either_model_or_photo(client, speech, sample_name):
     ("page", "video", "Choose one of the page kinds"),
     ("background", "<img src=x>", "Choose one of the backgrounds"),
     ("clothes", "", "Choose one of the clothes"),
+    ("style", "lively", "Choose one of the styles"),
     ("title", "x" * 201, "at most 200 are accepted"),
 ])
 def test_choices_and_title_are_checked(client, speech, sample_name, field, value, message):

@@ -17,9 +17,16 @@ Kinds and what they drive (Pose is (tilt, turn, roll) about X, Y, Z):
   head goes down by `amplitude` degrees over `attack`, holds, and comes back up
   over `release`.
 
-Envelope kinds (blink, brow, nod) rise from 0 to `amplitude` over `attack`
+- ``gaze_h``, ``gaze_v``: a saccade of the eyes (gaze.py) to `amplitude`
+  degrees away from the viewer (towards the image right / down), over
+  `duration`; the eyes stay there until the next saccade.
+- ``smile``: a slight smile rises and fades; `amplitude` is the smile 0..1.
+
+Envelope kinds (blink, brow, nod, smile) rise from 0 to `amplitude` over `attack`
 seconds, hold, and fall back to 0 over `release` seconds, all inside
-`duration`. Amplitudes are docs/animation.md's announcer-like choices.
+`duration`. Amplitudes are docs/animation.md's announcer-like choices; a
+`Style` (style.py) scales them and adds the performer's behaviour on the voice:
+brows and beat nods on pitch peaks (prosody.py), gaze, smiles.
 """
 
 from __future__ import annotations
@@ -30,11 +37,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model
+from cartoonface.animate.gaze import Saccade, saccades
+from cartoonface.animate.style import ANNOUNCER, Style
+from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model, also the gaze limit
 
-KINDS = ("blink", "brow", "tilt", "turn", "nod")
-ENVELOPE_KINDS = ("blink", "brow", "nod")
-ANGLE_KINDS = ("tilt", "turn", "nod")
+KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile")
+ENVELOPE_KINDS = ("blink", "brow", "nod", "smile")
+ANGLE_KINDS = ("tilt", "turn", "nod", "gaze_h", "gaze_v")
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
 # The thesis measures a behaviour's interval from the end of one to the start of
@@ -74,6 +83,25 @@ TILT_ANGLE = 3.0
 TURN_ANGLE = 6.0
 NOD_ANGLE = (3.0, 6.0)  # nod depth in degrees, head down
 BROW_RAMP = 0.3  # a brow raise rises over 30 % of its duration and falls over 30 %
+
+# On the voice (our choices, docs/animation.md "On the voice"): a brow raise
+# whose drawn start lies within BROW_SNAP seconds of a pitch peak is moved so
+# that it is fully up at the peak, as speakers raise the brows on accented
+# syllables (Cave et al. 1996, "About the relationship between eyebrow movements
+# and F0 variations", ICSLP; Flecha-Garcia 2010, Speech Communication 52).
+BROW_SNAP = 1.5
+# Beat nods (storyteller): a small nod down onto an accented syllable.
+BEAT_DEPTH = (1.5, 3.0)  # degrees, before the style's head factor
+BEAT_ATTACK = (0.15, 0.25)  # seconds down, the head lowest at the peak
+BEAT_HOLD = 0.05  # seconds
+BEAT_RELEASE = (0.30, 0.45)  # seconds back up
+# Slight smiles around sentence ends, reaching into the pause after them.
+SMILE_AMOUNT = (0.15, 0.35)  # share of the full smile of the face model
+SMILE_LEAD = (0.3, 0.8)  # seconds before the sentence end that the smile starts
+SMILE_ATTACK = (0.3, 0.5)  # seconds
+SMILE_HOLD = (0.5, 1.5)  # seconds
+SMILE_RELEASE = (0.4, 0.7)  # seconds
+SMILE_GAP = 4.0  # seconds: at least this long between two smiles
 
 
 RAMP_SLACK = 0.0005  # seconds: attack + release may pass the duration by this much (times kept to the ms)
@@ -126,29 +154,71 @@ class Action:
         return self.start + self.duration
 
 
-def schedule(duration: float, pauses: Sequence[tuple[float, float]], seed: int) -> tuple[Action, ...]:
+def schedule(
+    duration: float,
+    pauses: Sequence[tuple[float, float]],
+    seed: int,
+    *,
+    style: Style = ANNOUNCER,
+    peaks: Sequence[float] = (),
+    speech: Sequence[tuple[float, float]] | None = None,
+) -> tuple[Action, ...]:
     """Draw the behaviour of a face talking for `duration` seconds.
 
     `pauses`: (start, end) seconds of the silent parts of the speech (see
     `speech_pauses`); a nod is placed before each pause where it fits.
     `seed`: any int; the same arguments give the same schedule. Each kind has
     its own random stream, so e.g. the pauses do not change the blinks.
+    `style`: the performance style (style.py) scaling head angles and rates.
+    `peaks`: seconds of pitch peaks (prosody.py): brow raises move onto them,
+    and the style's share of them gets a beat nod. `speech`: (start, end) of the
+    sentences (default: the stretches between `pauses`), for gaze and smiles.
     Returns every action sorted by start, all inside [0, duration]; no tilt or
     turn overlaps a nod; actions of one kind never overlap.
     """
-    blink_rng, brow_rng, tilt_rng, turn_rng, nod_rng = (
-        np.random.Generator(np.random.PCG64(child)) for child in np.random.SeedSequence(seed).spawn(5)
+    streams = np.random.SeedSequence(seed).spawn(8)
+    blink_rng, brow_rng, tilt_rng, turn_rng, nod_rng, beat_rng, gaze_rng, smile_rng = (
+        np.random.Generator(np.random.PCG64(child)) for child in streams
     )
-    nods = _nods(duration, pauses, nod_rng)
+    spans = _speech_spans(duration, pauses) if speech is None else tuple(sorted(speech))
+    nods = _nods(duration, pauses, nod_rng, style.head)
+    nods = _with_beat_nods(nods, duration, peaks, beat_rng, style)
     busy = tuple((nod.start, nod.end) for nod in nods)
+    turns = _moves("turn", duration, TURN_INTERVAL, TURN_DURATION, TURN_ANGLE * style.head, busy, turn_rng)
+    head_moves = [(nod.start, nod.start + nod.attack, 0.0, 1.0) for nod in nods]
+    head_moves += [(turn.start, turn.end, math.copysign(1.0, turn.amplitude - before), 0.0)
+                   for before, turn in zip([0.0] + [t.amplitude for t in turns], turns)]
     actions = (
         *_blinks(duration, blink_rng),
-        *_brows(duration, brow_rng),
-        *_moves("tilt", duration, TILT_INTERVAL, TILT_DURATION, TILT_ANGLE, busy, tilt_rng),
-        *_moves("turn", duration, TURN_INTERVAL, TURN_DURATION, TURN_ANGLE, busy, turn_rng),
+        *_brows(duration, brow_rng, style.brow_rate, peaks),
+        *_moves("tilt", duration, TILT_INTERVAL, TILT_DURATION, TILT_ANGLE * style.head, busy, tilt_rng),
+        *turns,
         *nods,
+        *_gaze(saccades(spans, pauses, gaze_rng, style, head_moves), duration),
+        *_smiles(duration, spans, smile_rng, style.smile_share),
     )
     return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))
+
+
+def _gaze(shifts: Sequence[Saccade], duration: float) -> list[Action]:
+    """gaze_h / gaze_v actions of the `shifts` that end by `duration` s: one per axis the shift changes."""
+    actions: list[Action] = []
+    h, v = 0.0, 0.0
+    for shift in shifts:
+        if shift.end > duration:
+            break
+        if shift.h != h:
+            actions.append(Action("gaze_h", shift.start, shift.duration, shift.h))
+        if shift.v != v:
+            actions.append(Action("gaze_v", shift.start, shift.duration, shift.v))
+        h, v = shift.h, shift.v
+    return actions
+
+
+def _speech_spans(duration: float, pauses: Sequence[tuple[float, float]]) -> tuple[tuple[float, float], ...]:
+    """(start, end) seconds of the stretches of [0, duration] between `pauses`."""
+    edges = [0.0, *(t for pause in sorted(pauses) for t in pause), duration]
+    return tuple((a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b > a)
 
 
 def speech_pauses(alignment) -> tuple[tuple[float, float], ...]:
@@ -196,16 +266,22 @@ def _blinks(duration: float, rng: np.random.Generator) -> list[Action]:
         end = blinks[-1].end
 
 
-def _brows(duration: float, rng: np.random.Generator) -> list[Action]:
+def _brows(duration: float, rng: np.random.Generator, rate: float, peaks: Sequence[float]) -> list[Action]:
+    """Brow raises at the thesis's intervals divided by `rate`; a raise drawn within
+    BROW_SNAP s of one of `peaks` (seconds) moves to be fully up at the nearest."""
     brows: list[Action] = []
     end = 0.0
+    peak_times = np.array(sorted(peaks), dtype=float)
     while True:
-        start = _round_to_ms(end + _uniform2(rng, BROW_INTERVAL))
+        start = _round_to_ms(end + _uniform2(rng, BROW_INTERVAL) / rate)
         length = _uniform2(rng, BROW_DURATION)
         amount = round(float(rng.uniform(*BROW_AMOUNT)), 2)
+        ramp = _round_to_ms(BROW_RAMP * length)
+        usable = peak_times[(peak_times - ramp >= end) & (np.abs(peak_times - ramp - start) <= BROW_SNAP)]
+        if len(usable):
+            start = _round_to_ms(float(usable[np.argmin(np.abs(usable - ramp - start))]) - ramp)
         if start + length > duration:
             return brows
-        ramp = _round_to_ms(BROW_RAMP * length)
         brows.append(Action("brow", start, length, amount, ramp, ramp))
         end = brows[-1].end
 
@@ -248,19 +324,60 @@ def _overlap(start: float, end: float, spans: Sequence[tuple[float, float]]) -> 
     return next((span for span in spans if start < span[1] and span[0] < end), None)
 
 
-def _nods(duration: float, pauses: Sequence[tuple[float, float]], rng: np.random.Generator) -> list[Action]:
+def _nods(
+    duration: float, pauses: Sequence[tuple[float, float]], rng: np.random.Generator, head: float = 1.0
+) -> list[Action]:
     """One nod before each pause (thesis 002, 4.5.3), skipped where it would not fit.
 
+    Depths are NOD_ANGLE times `head` (the style's factor), at most MAX_ANGLE.
     A nod is skipped when it would start before 0, end after `duration`, or
     overlap the previous nod (pauses closer together than a nod is long).
     """
     nods: list[Action] = []
     for pause_start, _ in sorted(pauses):
         t1, d1, d2 = _uniform2(rng, NOD_T1), _uniform2(rng, NOD_D1), _uniform2(rng, NOD_D2)
-        depth = round(float(rng.uniform(*NOD_ANGLE)), 1)
+        depth = round(min(float(rng.uniform(*NOD_ANGLE)) * head, MAX_ANGLE), 1)
         start = _round_to_ms(pause_start - t1 - d1)
         end = pause_start + d2
         if start < 0 or end > duration or (nods and start < nods[-1].end):
             continue
         nods.append(Action("nod", start, _round_to_ms(end - start), depth, d1, d2))
     return nods
+
+
+def _with_beat_nods(
+    nods: list[Action], duration: float, peaks: Sequence[float], rng: np.random.Generator, style: Style
+) -> list[Action]:
+    """`nods` plus a small nod, lowest at the peak, on the style's share of `peaks`
+    (seconds) where it fits inside [0, duration] without touching another nod."""
+    out = list(nods)
+    for peak in sorted(peaks):
+        if rng.random() >= style.beat_nods:
+            continue
+        attack, release = _uniform2(rng, BEAT_ATTACK), _uniform2(rng, BEAT_RELEASE)
+        depth = round(float(rng.uniform(*BEAT_DEPTH)) * style.head, 1)
+        start = _round_to_ms(peak - attack)
+        end = _round_to_ms(peak + BEAT_HOLD + release)
+        if start < 0 or end > duration or _overlap(start, end, [(n.start, n.end) for n in out]) is not None:
+            continue
+        out.append(Action("nod", start, _round_to_ms(end - start), depth, attack, release))
+    return sorted(out, key=lambda a: a.start)
+
+
+def _smiles(
+    duration: float, speech: Sequence[tuple[float, float]], rng: np.random.Generator, share: float
+) -> list[Action]:
+    """A slight smile around `share` of the sentence ends (`speech` (start, end) seconds),
+    at least SMILE_GAP s apart and inside [0, duration]."""
+    smiles: list[Action] = []
+    for _, sentence_end in speech:
+        if rng.random() >= share:
+            continue
+        start = _round_to_ms(max(sentence_end - _uniform2(rng, SMILE_LEAD), 0.0))
+        attack, hold, release = (_uniform2(rng, bounds) for bounds in (SMILE_ATTACK, SMILE_HOLD, SMILE_RELEASE))
+        amount = round(float(rng.uniform(*SMILE_AMOUNT)), 2)
+        length = _round_to_ms(attack + hold + release)
+        if start + length > duration or (smiles and start < smiles[-1].end + SMILE_GAP):
+            continue
+        smiles.append(Action("smile", start, length, amount, attack, release))
+    return smiles

@@ -32,7 +32,6 @@ EASINGS = {
 # A nod bends the head down: Pose.tilt is the rotation about X and positive
 # means the face looks down (face/state.py), so a nod of depth d is tilt +d.
 NOD_SIGN = 1.0
-SMILE = 0.0  # the announcer keeps a neutral mouth corner; speech drives the lips
 
 
 def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
@@ -53,17 +52,19 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
     """The face state at each of `times` ((n,) seconds), interpolated between key frames."""
     t = np.asarray(times, dtype=float) * 1000.0
     mouth = _mouth(timeline.track("mouth"), t)
-    blink, brow = (_amount(timeline.track(name), t) for name in ("blink", "brow"))
-    tilt, turn, nod = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod"))
+    blink, brow, smile = (_amount(timeline.track(name), t) for name in ("blink", "brow", "smile"))
+    tilt, turn, nod, gaze_h, gaze_v = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod", "gaze_h", "gaze_v"))
     pitch = NOD_SIGN * nod + 0.0
-    columns = zip(blink.tolist(), brow.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(), mouth, strict=True)
+    columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
+                  gaze_h.tolist(), gaze_v.tolist(), mouth, strict=True)
     states: list[FaceState] = []
     previous = None
     for values in columns:
         if values != previous:
-            eyes, brows, down, sideways, lean, mix = values
+            eyes, brows, smiling, down, sideways, lean, look_h, look_v, mix = values
             pose = Pose(tilt=down, turn=sideways, roll=lean)
-            states.append(FaceState(pose=pose, blink=eyes, smile=SMILE, brow=brows, mouth=mix))
+            states.append(FaceState(pose=pose, blink=eyes, smile=smiling, brow=brows, mouth=mix,
+                                    gaze_h=look_h, gaze_v=look_v))
             previous = values
         else:
             states.append(states[-1])

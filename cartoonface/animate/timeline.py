@@ -10,6 +10,8 @@ them. Tracks:
 - ``blink``, ``brow``: amounts 0..1.
 - ``tilt`` (sideways lean, Pose.roll), ``turn`` (Pose.turn), ``nod`` (depth
   of the nod in degrees, Pose.tilt): see behaviour.py for the kinds.
+- ``gaze_h``, ``gaze_v``: the eyes' angles away from the viewer, degrees.
+- ``smile``: amount 0..1.
 """
 
 from __future__ import annotations
@@ -91,7 +93,7 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
     """Key frames for an Alignment (speech/records.py) and behaviour `actions`.
 
     Returns a Timeline of alignment.duration (rounded to ms) with the tracks
-    mouth, blink, brow, tilt, turn and nod.
+    mouth, blink, brow, tilt, turn, nod, gaze_h, gaze_v and smile.
     """
     duration = round(alignment.duration * 1000)
     syllables = sorted((syl for sentence in alignment.sentences for syl in sentence.syllables), key=lambda s: s.start)
@@ -105,6 +107,9 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
             Track("tilt", move_keys(by_kind["tilt"]), ANGLE_EASING),
             Track("turn", move_keys(by_kind["turn"]), ANGLE_EASING),
             Track("nod", envelope_keys(by_kind["nod"]), ANGLE_EASING),
+            Track("gaze_h", move_keys(by_kind["gaze_h"]), ANGLE_EASING),
+            Track("gaze_v", move_keys(by_kind["gaze_v"]), ANGLE_EASING),
+            Track("smile", envelope_keys(by_kind["smile"]), AMOUNT_EASING),
         ),
     )
 
@@ -189,7 +194,7 @@ def envelope_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
 
 
 def move_keys(actions: Sequence[Action]) -> tuple[Keyframe, ...]:
-    """Key frames of head moves (tilt, turn) sorted by start.
+    """Key frames of head and eye moves (tilt, turn, gaze_h, gaze_v) sorted by start.
 
     The angle starts at 0; each move goes from the angle held so far to its
     amplitude between its start and its end, and that angle holds until the

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.cli.align import parse_pause
 from cartoonface.cli.progress import ProgressBar
 from cartoonface.errors import OptionError
@@ -43,6 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--fps", type=int, default=defaults.fps, help="frames per second, 12-60 (default %(default)s)")
     parser.add_argument("--seed", type=int, default=defaults.seed,
                         help="seed of the blinks and head movements (default %(default)s)")
+    page_defaults = ", ".join(f"{page}: {style}" for page, style in PAGE_STYLES.items())
+    parser.add_argument("--style", choices=STYLES, default=None,
+                        help=f"performance: how much the head, eyes, brows and smile move (default by page: {page_defaults})")
     parser.add_argument("--actions", type=Path, metavar="ACTIONS.json",
                         help="an edited actions.json to use instead of a new schedule (docs/actions.md)")
     parser.add_argument("--alignment", type=Path, metavar="EDITED.TextGrid",
@@ -77,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     from cartoonface.pipeline import Options, generate
 
     options = Options(
-        page=args.page, title=args.title, fps=args.fps, seed=args.seed, background=args.background,
+        page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
         links=tuple(parse_link(link) for link in args.link),
     )

@@ -4,7 +4,7 @@ pose_face applies the expressions and the mouth to the model points, moves
 the additional points with them (Alg. 2.1), shifts the hair depth (Alg. 2.3
 steps 1-2), rotates (2.4.3.1), projects to the image, replaces the hidden
 contour points (steps 5-6), picks the nose side (step 8) and turns the
-eyeballs to the fixed focus (2.4.3.2). Everything per call is a handful of
+eyeballs to the fixed focus (2.4.3.2), moved by the state's gaze. Everything per call is a handful of
 numpy operations on arrays precomputed once per lifted face (the Rig).
 """
 
@@ -244,7 +244,11 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     out = q @ m[:2].T + r.origin
 
     centres = r.centres @ m.T
-    toward = r.focus - centres
+    # The gaze (our addition to 2.4.3.2) moves the focus across the viewer's
+    # plane, FOCUS_DEPTH d in front: the eyes turn by about gaze_h, gaze_v degrees.
+    focus = r.focus + r.focus[2] * np.array([math.tan(math.radians(state.gaze_h)),
+                                             math.tan(math.radians(state.gaze_v)), 0.0])
+    toward = focus - centres
     pupils = centres[:, :2] + (r.radius / np.sqrt((toward * toward).sum(axis=1)))[:, None] * toward[:, :2]
     pupils += r.origin
     xy = out[:n]

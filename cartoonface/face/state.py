@@ -12,6 +12,10 @@ from cartoonface.face.mouth import MOUTH_SYMBOLS
 # Thesis 002, 2.3.1 / 2.4.3: the generic depth model holds for slight head
 # rotations; the system draws poses within +-15 degrees about each axis.
 MAX_ANGLE = 15.0
+# Gaze: how far the eyes turn from looking at the viewer, degrees, each axis.
+# Bahill, Adler and Stark (1975), "Most naturally occurring human saccades have
+# magnitudes of 15 degrees or less": larger gaze shifts are made with the head.
+MAX_GAZE = 15.0
 # Mouth weights must sum to 1 within this tolerance.
 WEIGHT_TOLERANCE = 1e-6
 
@@ -46,11 +50,13 @@ class Pose:
 
 @dataclass(frozen=True)
 class FaceState:
-    """Pose, expression amounts blink / smile / brow in 0..1, and the mouth.
+    """Pose, expression amounts blink / smile / brow in 0..1, the mouth and the gaze.
 
     mouth: (symbol, weight) pairs, symbols from MOUTH_SYMBOLS, weights >= 0
-    summing to 1, so key frames interpolate by blending weights. OptionError
-    for anything out of range.
+    summing to 1, so key frames interpolate by blending weights.
+    gaze_h, gaze_v: the eyes' turn away from the viewer in degrees (gaze_h
+    positive: towards the image right; gaze_v positive: down), each within
+    +-MAX_GAZE; 0, 0 looks at the viewer. OptionError for anything out of range.
     """
 
     pose: Pose = Pose()
@@ -58,6 +64,8 @@ class FaceState:
     smile: float = 0.0
     brow: float = 0.0
     mouth: tuple[tuple[str, float], ...] = (("m", 1.0),)
+    gaze_h: float = 0.0
+    gaze_v: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.pose, Pose):
@@ -66,6 +74,11 @@ class FaceState:
             value = _finite(getattr(self, name), name)
             if not 0.0 <= value <= 1.0:
                 raise OptionError(f"{name} {value:g} is out of range; expected 0 to 1")
+            object.__setattr__(self, name, value)
+        for name in ("gaze_h", "gaze_v"):
+            value = _finite(getattr(self, name), name)
+            if abs(value) > MAX_GAZE:
+                raise OptionError(f"{name} {value:g} degrees is out of range; expected -{MAX_GAZE:g} to {MAX_GAZE:g}")
             object.__setattr__(self, name, value)
         if not self.mouth:
             raise OptionError("mouth is empty; expected (symbol, weight) pairs")

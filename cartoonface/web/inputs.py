@@ -26,6 +26,9 @@ from cartoonface.speech.audio import load_audio
 from cartoonface.speech.transcript import parse_transcript
 
 PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
+# The performance style (animate/style.py); "" leaves it to the page (audio book: storyteller).
+STYLE_CHOICES = {"": "the page's own (audio book: storyteller, announcer: announcer)",
+                 "announcer": "announcer (restrained)", "storyteller": "storyteller (livelier)"}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 SHOWN_NAME_CHARS = 80
@@ -107,8 +110,8 @@ def _text(form: MultiDict[str, str], name: str) -> str:
 
 def form_values(form: MultiDict[str, str]) -> dict[str, str]:
     """The plain fields as sent, to fill the form again when it comes back with errors."""
-    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "title", "background",
-                                                 "clothes", "transcript")}
+    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "style", "title",
+                                                 "background", "clothes", "transcript")}
 
 
 def check_photo(name: str, data: bytes, too_big: bool,
@@ -260,6 +263,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     if len(title) > MAX_TITLE:
         errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE} are accepted."
     page = check_choice(form, "page", PAGES, "page kinds", errors)
+    style = check_choice(form, "style", STYLE_CHOICES, "styles", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
     face, face_label, face_notes = check_face(form, files, limits, errors, chosen)
@@ -270,6 +274,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     spec = {
         "title": title,
         "page": page,
+        "style": style,
         "background": background,
         "clothes": clothes,
         "face_label": face_label,

@@ -87,7 +87,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
                                     updated=time.time()))
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
-    options = Options(page=str(spec["page"]), title=str(spec["title"]),
+    options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
                       background=str(spec["background"]), clothes=str(spec["clothes"]))
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
