@@ -31,7 +31,10 @@ from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
+from cartoonface.face.mouth import shown_parts
 from cartoonface.render.geometry import face_shapes, number_text
+from cartoonface.render.mouth import ROWS as MOUTH_ROWS
+from cartoonface.render.mouth import mouth_outlines, mouth_paths
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 
 SVG = "http://www.w3.org/2000/svg"
@@ -44,10 +47,8 @@ LID = 0.045       # upper lid (lash line)
 LID_SHADOW = 0.09  # width of the lid's shadow on the eyeball (half of it falls inside the eye)
 FEATURE = 0.02    # nose, the line between the lips
 HAIR_LINE = 0.018
-TEETH = 0.07      # height of the visible upper teeth
-TEETH_OF_WIDTH = 0.12  # ... at most this fraction of the opening's width
-TONGUE = 0.1      # height of the tongue at the bottom of an open mouth
-GLOSS = 0.14      # half-width of the gloss on the lower lip / width of the mouth opening
+LOWER_TEETH_COLOUR = "#ece6e1"  # the lower teeth, in the upper ones' shade: a touch darker than white
+TONGUE_TURN = 1.0  # a tongue turned less than this many degrees is drawn level (no transform)
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
 CHEEK = (0.2, 0.12)  # blush ellipse radii / d
@@ -130,15 +131,16 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
         "opening": {"fill": p.mouth},
         "gloss": {"fill": "#ffffff", "opacity": "0.22", "stroke": "none"},
-        "tongue": {"stroke": _mix(p.lip, p.mouth, 0.3), "stroke-width": number_text(2 * TONGUE * d)},
-        "teeth": {"stroke": "#ffffff"},
+        "tongue": {"fill": _mix(p.lip, p.mouth, 0.3)},
+        "upper_teeth": {"fill": "none", "stroke": "#ffffff", "stroke-linecap": "round"},
+        "lower_teeth": {"fill": "none", "stroke": LOWER_TEETH_COLOUR, "stroke-linecap": "round"},
         "lips_line": {"fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25), "stroke-width": number_text(FEATURE * d * 0.8)},
     }
 
 
-# Rows of posed.xy read by the cheeks, the eyes and the mouth: the eye outlines of "l" and "r",
-# the mouth corners 8.4 and 8.3, the corners R and S of the opening, the lower lip 2.3 and 8.2.
-_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3", "R", "S", "2.3", "8.2")]
+# Rows of posed.xy read by the cheeks and the eyes: the eye outlines of "l" and "r", the mouth
+# corners 8.4 and 8.3.
+_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
@@ -163,7 +165,7 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
         _el(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
     for side, eyeball in zip("lr", _eyeballs(posed, points)):
         _eye(group, defs, shapes, side, eyeball, face, uid, style)
-    _mouth(group, defs, shapes, uid, style, face.fapu.d, points[10:14])
+    _mouth(group, defs, posed, uid, style, face.fapu.d)
     return group
 
 
@@ -212,27 +214,33 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
     _el(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
 
 
-def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
-           style: dict[str, dict[str, str]], d: float, points: list[list[float]]) -> None:
-    """Append the mouth: lips, the opening with the upper teeth and the tongue clipped to it,
-    the line where the lips meet, a gloss on the lower lip. `d` is the FAPU d in pixels,
-    `points` the posed R, S, 2.3, 8.2 as [x, y]: a narrow, rounded opening (o, u) shows
-    less of the teeth."""
-    (rx, ry), (sx, sy), (ix, iy), (ox, oy) = points
-    width = math.hypot(rx - sx, ry - sy)
+def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: str,
+           style: dict[str, dict[str, str]], d: float) -> None:
+    """Append the mouth (render/mouth.py): lips, the opening with the tongue and the lower and
+    upper teeth clipped to it, the upper teeth on the lower lip (f), the line where the lips
+    meet, a gloss on the lower lip. `d` is the FAPU d in pixels."""
+    outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
+    paths = mouth_paths(outlines)
     clip_id = f"cf-mouth-{uid}"
-    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": shapes["mouth_inner"]})
-    mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
-    _el(mouth, "path", {"d": shapes["mouth"], **style["lips"]})
-    _el(mouth, "path", {"d": shapes["mouth_inner"], **style["opening"]})
-    inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})", "fill": "none"})
-    _el(inside, "path", {"d": shapes["lower_inner"], **style["tongue"]})
-    teeth = min(TEETH * d, TEETH_OF_WIDTH * width)
-    _el(inside, "path", {"d": shapes["lips_line"], **style["teeth"], "stroke-width": number_text(2 * teeth)})
-    _el(mouth, "path", {"d": shapes["lips_line"], **style["lips_line"]})
-    _el(mouth, "ellipse", {"cx": number_text(0.45 * ix + 0.55 * ox), "cy": number_text(0.45 * iy + 0.55 * oy),
-                           "rx": number_text(GLOSS * width), "ry": number_text(0.22 * math.hypot(ox - ix, oy - iy)),
-                           **style["gloss"]})
+    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": paths["opening"]})
+    mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round"})
+    _el(mouth, "path", {"d": paths["lips"], **style["lips"]})
+    _el(mouth, "path", {"d": paths["opening"], **style["opening"]})
+    inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})"})
+    cx, cy, rx, ry, angle = outlines.tongue
+    tongue = _el(inside, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
+                                     "ry": number_text(ry), **style["tongue"]})
+    if abs(angle) >= TONGUE_TURN:
+        tongue.set("transform", f"rotate({angle:.0f} {number_text(cx)} {number_text(cy)})")
+    for row, width in (("lower_teeth", outlines.lower_width), ("upper_teeth", outlines.upper_width)):
+        if width > 0:
+            _el(inside, "path", {"d": paths[row], **style[row], "stroke-width": number_text(width)})
+    if outlines.bite_width > 0:
+        _el(mouth, "path", {"d": paths["bite"], **style["upper_teeth"], "stroke-width": number_text(outlines.bite_width)})
+    _el(mouth, "path", {"d": paths["lip_line"], **style["lips_line"]})
+    cx, cy, rx, ry = outlines.gloss
+    _el(mouth, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
+                           "ry": number_text(ry), **style["gloss"]})
 
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
