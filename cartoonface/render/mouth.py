@@ -27,7 +27,7 @@ them as a cartoonist would (docs/mouth.md):
 - Tongue: an ellipse at the bottom of the opening, raised with the shape's `tongue` until
   its top reaches the upper edge, taller and narrower (n: tongue tip behind the upper teeth).
 - Bite (f): the upper teeth as a band of height up to BITE d under the line where the lips
-  meet, over the lower lip.
+  meet, over the lower lip (clipped by the lips' outline).
 """
 
 from __future__ import annotations
@@ -56,12 +56,13 @@ LOWER_TEETH = 0.055  # ... of the lower teeth
 TEETH_OF_OPENING = 0.46  # a row of teeth at most this share of the opening's height
 TEETH_SPAN = 0.9  # the rows of teeth span this share of the opening's width
 TEETH_SAG = 0.3   # the rows curve down in the middle (the dental arch) by this share of their height
+LOWER_FOLLOW = 0.3  # the lower row follows the rise of the corners this much less than the upper
 TONGUE_WIDTH = 0.34  # tongue half-width, share of the opening's width
 TONGUE_HEIGHT = 0.32  # tongue half-height, share of the opening's height, doubled when raised
 TONGUE_TIP = 0.35  # a raised tongue is this much narrower (its tip)
 BITE = 0.05        # height of the upper teeth resting on the lower lip (f), share of d
-BITE_OF_LIP = 0.6  # ... at most this share of the lower lip's thickness
-BITE_SPAN = 0.8    # ... across this share of the teeth's span
+BITE_OF_LIP = 0.5  # ... at most this share of the lower lip's thickness
+BITE_SPAN = 0.6    # ... across this share of the teeth's span
 GLOSS = 0.14       # half-width of the gloss on the lower lip, share of the opening's width
 
 
@@ -73,10 +74,11 @@ class MouthOutlines:
     lips: closed outer outline from 8.4 over the top and back under the bottom (6 pieces).
     opening: closed, from the left inner corner along the upper edge and back along the
         lower edge (4 pieces); it clips the teeth and the tongue; its upper edge (the first
-        2 pieces) is drawn as the line where the lips meet.
+        2 pieces) is where the lips meet.
     upper_teeth, lower_teeth: centre lines (1 piece) of the rows, with their stroke widths
         (twice the height that shows inside the opening); width 0 when a row is hidden.
-    tongue: (cx, cy, rx, ry, degrees): an ellipse turned by `degrees` about its centre.
+    tongue: (cx, cy, rx, ry): an ellipse, level in the image (it shows through the opening
+        only, where a turn of the head's small angles does not show); ry 0 when shut.
     bite: centre line (1 piece) and width of the teeth on the lower lip (0 when none).
     gloss: (cx, cy, rx, ry) the highlight on the lower lip.
     """
@@ -87,19 +89,23 @@ class MouthOutlines:
     upper_width: float
     lower_teeth: np.ndarray
     lower_width: float
-    tongue: tuple[float, float, float, float, float]
+    tongue: tuple[float, float, float, float]
     bite: np.ndarray
     bite_width: float
     gloss: tuple[float, float, float, float]
 
 
-def _row(middle: np.ndarray, half_width: float, sag: float) -> np.ndarray:
-    """(4, 2) the centre line of a row of teeth: level through `middle` (local (2,)), from
-    `half_width` left of it to as far right, `sag` pixels lower at the middle."""
+def _row(middle: np.ndarray, half_width: float, sag: float, follow: float) -> np.ndarray:
+    """(4, 2) the centre line of a row of teeth through `middle` (local (2,)), from
+    `half_width` left of it to as far right, `sag` pixels lower at the middle than at the
+    ends. Where the mouth's corners (at local y 0) lie above `middle`, the ends rise by
+    `follow` x that height x (half_width / the opening's half width)**2, as the edge of a
+    smiling opening does (`follow` already includes the square)."""
     x, y = middle
-    dip = 4 * sag / 3  # a cubic's middle is 3/4 of the way to control points set this low
-    return np.array([[x - half_width, y], [x - half_width / 3, y + dip], [x + half_width / 3, y + dip],
-                     [x + half_width, y]])
+    end = y + follow * min(-y, 0.0)
+    dip = 4 * (sag + y - end) / 3  # a cubic's middle is 3/4 of the way to control points set this low
+    return np.array([[x - half_width, end], [x - half_width / 3, end + dip], [x + half_width / 3, end + dip],
+                     [x + half_width, end]])
 
 
 def _corner_arm(corner: np.ndarray, towards: np.ndarray, rise: float, roundness: float) -> np.ndarray:
@@ -174,10 +180,11 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
     upper_h = upper_teeth * min(TEETH * d, row)
     lower_h = lower_teeth * min(LOWER_TEETH * d, row)
     span = TEETH_SPAN * inner_width / 2
-    teeth_up = _row(inner_up, span, TEETH_SAG * upper_h)
-    teeth_dn = _row(inner_dn, span, TEETH_SAG * lower_h)
+    follow = TEETH_SPAN**2
+    teeth_up = _row(inner_up, span, TEETH_SAG * upper_h, follow)
+    teeth_dn = _row(inner_dn, span, TEETH_SAG * lower_h, LOWER_FOLLOW * follow)
     bite_h = bite * min(BITE * d, BITE_OF_LIP * float(bottom[1] - inner_dn[1]))
-    bite_line = _row(inner_up + (0.0, bite_h / 2), span * BITE_SPAN, TEETH_SAG * bite_h)
+    bite_line = _row(inner_up + (0.0, bite_h / 2), span * BITE_SPAN, TEETH_SAG * bite_h, follow * BITE_SPAN**2)
 
     tongue_rx = TONGUE_WIDTH * inner_width * (1 - TONGUE_TIP * tongue)
     tongue_ry = TONGUE_HEIGHT * height * (1 + tongue)
@@ -199,8 +206,7 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
         upper_width=2 * upper_h,
         lower_teeth=image(teeth_dn),
         lower_width=2 * lower_h,
-        tongue=(float(tongue_xy[0]), float(tongue_xy[1]), float(tongue_rx), float(tongue_ry),
-                math.degrees(math.atan2(ey, ex))),
+        tongue=(float(tongue_xy[0]), float(tongue_xy[1]), float(tongue_rx), float(tongue_ry)),
         bite=image(bite_line),
         bite_width=bite_h,
         gloss=(float(gloss_xy[0]), float(gloss_xy[1]), GLOSS * inner_width,
@@ -208,8 +214,7 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
     )
 
 
-# Path templates: a start point, then cubic pieces; the lip line is two straight ends round
-# the two pieces of the opening's upper edge.
+# Path templates: a start point, then cubic pieces.
 _CUBICS = {k: "M%s %s" + "C%s %s %s %s %s %s" * k for k in (1, 2, 4, 6)}
 
 
@@ -219,12 +224,11 @@ def _text(template: str, rows: np.ndarray) -> str:
 
 
 def mouth_paths(outlines: MouthOutlines) -> dict[str, str]:
-    """SVG path data of `outlines`: {"lips", "opening", "lip_line", "upper_teeth",
-    "lower_teeth", "bite"}; closed outlines end in Z."""
+    """SVG path data of `outlines`: {"lips", "opening", "upper_teeth", "lower_teeth", "bite"};
+    closed outlines end in Z."""
     return {
         "lips": _text(_CUBICS[6], outlines.lips) + "Z",
         "opening": _text(_CUBICS[4], outlines.opening) + "Z",
-        "lip_line": _text(_CUBICS[2], outlines.opening[:7]),
         "upper_teeth": _text(_CUBICS[1], outlines.upper_teeth),
         "lower_teeth": _text(_CUBICS[1], outlines.lower_teeth),
         "bite": _text(_CUBICS[1], outlines.bite),

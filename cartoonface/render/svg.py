@@ -48,7 +48,6 @@ LID_SHADOW = 0.09  # width of the lid's shadow on the eyeball (half of it falls 
 FEATURE = 0.02    # nose, the line between the lips
 HAIR_LINE = 0.018
 LOWER_TEETH_COLOUR = "#ece6e1"  # the lower teeth, in the upper ones' shade: a touch darker than white
-TONGUE_TURN = 1.0  # a tongue turned less than this many degrees is drawn level (no transform)
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
 CHEEK = (0.2, 0.12)  # blush ellipse radii / d
@@ -129,12 +128,13 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
         "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": "0.18",
                        "stroke-width": number_text(LID_SHADOW * d)},
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
-        "opening": {"fill": p.mouth},
+        # the opening, outlined: the line where the lips meet when it is shut
+        "opening": {"fill": p.mouth, "stroke": _mix(p.mouth, p.lip, 0.25),
+                    "stroke-width": number_text(FEATURE * d * 0.8)},
         "gloss": {"fill": "#ffffff", "opacity": "0.22", "stroke": "none"},
         "tongue": {"fill": _mix(p.lip, p.mouth, 0.3)},
         "upper_teeth": {"fill": "none", "stroke": "#ffffff", "stroke-linecap": "round"},
         "lower_teeth": {"fill": "none", "stroke": LOWER_TEETH_COLOUR, "stroke-linecap": "round"},
-        "lips_line": {"fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25), "stroke-width": number_text(FEATURE * d * 0.8)},
     }
 
 
@@ -216,28 +216,30 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
 
 def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: str,
            style: dict[str, dict[str, str]], d: float) -> None:
-    """Append the mouth (render/mouth.py): lips, the opening with the tongue and the lower and
-    upper teeth clipped to it, the upper teeth on the lower lip (f), the line where the lips
-    meet, a gloss on the lower lip. `d` is the FAPU d in pixels."""
+    """Append the mouth (render/mouth.py): lips; the opening, its outline the line where the
+    lips meet; the tongue and the lower and upper teeth clipped to it (when it is open); the
+    upper teeth on the lower lip (f, clipped by the lips); a gloss on the lower lip. `d` is
+    the FAPU d in pixels."""
     outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
     paths = mouth_paths(outlines)
-    clip_id = f"cf-mouth-{uid}"
-    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": paths["opening"]})
     mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round"})
     _el(mouth, "path", {"d": paths["lips"], **style["lips"]})
     _el(mouth, "path", {"d": paths["opening"], **style["opening"]})
-    inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})"})
-    cx, cy, rx, ry, angle = outlines.tongue
-    tongue = _el(inside, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
-                                     "ry": number_text(ry), **style["tongue"]})
-    if abs(angle) >= TONGUE_TURN:
-        tongue.set("transform", f"rotate({angle:.0f} {number_text(cx)} {number_text(cy)})")
-    for row, width in (("lower_teeth", outlines.lower_width), ("upper_teeth", outlines.upper_width)):
-        if width > 0:
-            _el(inside, "path", {"d": paths[row], **style[row], "stroke-width": number_text(width)})
+    cx, cy, rx, ry = outlines.tongue
+    if ry > 0:
+        clip_id = f"cf-mouth-{uid}"
+        _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": paths["opening"]})
+        inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})"})
+        _el(inside, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
+                                "ry": number_text(ry), **style["tongue"]})
+        for row, width in (("lower_teeth", outlines.lower_width), ("upper_teeth", outlines.upper_width)):
+            if width > 0:
+                _el(inside, "path", {"d": paths[row], **style[row], "stroke-width": number_text(width)})
     if outlines.bite_width > 0:
-        _el(mouth, "path", {"d": paths["bite"], **style["upper_teeth"], "stroke-width": number_text(outlines.bite_width)})
-    _el(mouth, "path", {"d": paths["lip_line"], **style["lips_line"]})
+        lips_id = f"cf-lips-{uid}"
+        _el(_el(defs, "clipPath", {"id": lips_id}), "path", {"d": paths["lips"]})
+        _el(_el(mouth, "g", {"clip-path": f"url(#{lips_id})"}), "path",
+            {"d": paths["bite"], **style["upper_teeth"], "stroke-width": number_text(outlines.bite_width)})
     cx, cy, rx, ry = outlines.gloss
     _el(mouth, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
                            "ry": number_text(ry), **style["gloss"]})
