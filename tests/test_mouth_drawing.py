@@ -13,7 +13,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.mouth import MOUTH_SYMBOLS, shown_parts
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.mouth import ROWS, MouthOutlines, mouth_outlines, mouth_paths
+from cartoonface.render.mouth import ROWS, MouthOutlines, mouth_outlines, mouth_texts
 from cartoonface.render.svg import face_group
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -120,7 +120,7 @@ def test_the_teeth_and_tongue_are_clipped_by_the_opening(face):
         posed = pose_face(lifted, FaceState(pose=pose).with_mouth(symbol))
         group = face_group(face, posed, "t")
         mouth = group.find(f"{SVG}g[@class='mouth']")
-        opening = mouth_paths(mouth_outlines(posed.xy[ROWS], posed.mouth @ shown_parts(), face.fapu.d))["opening"]
+        opening = mouth_texts(mouth_outlines(posed.xy[ROWS], posed.mouth @ shown_parts(), face.fapu.d))["opening"]
         clipped = mouth.find(f"{SVG}g[@clip-path='url(#cf-mouth-t)']")
         if symbol in ("m", "f"):
             assert clipped is None and not mouth.findall(f".//{SVG}ellipse[@rx][@ry='0']")

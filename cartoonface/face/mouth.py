@@ -67,7 +67,8 @@ class MouthShape:
 #   the middle for UpperLipH/3): a wide-open mouth with a real jaw drop,
 #   clearly bigger than o, its upper edge flatter than its lower.
 # - i: dn MNS0/6 -> 0.22 MNS0, so both rows of teeth show; o: inward 0.2 ->
-#   0.14 MW0 and dn 0.65 -> 0.6 MNS0, round rather than a tall slot.
+#   0.14 MW0 and dn 0.65 -> 0.6 MNS0, round rather than a tall slot; u: up and
+#   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered.
 # - the lip thicknesses, teeth, tongue and bite are ours (MouthShape).
 MOUTH_SHAPES: dict[str, MouthShape] = {
     # m (b p m): the neutral (rest) shape, lips shut
@@ -76,10 +77,10 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "f": MouthShape(dn=(-0.5, "lower_lip_h"), bite=1.0),
     # h' (d t n l j q x): a narrow opening, the tongue tip near the teeth ridge
     "h'": MouthShape(up=(-0.25, "mns0"), dn=(0.3, "mns0"), corner_dy=(-0.1, "mns0"),
-                     upper_teeth=1.0, lower_teeth=0.7, tongue=0.6),
+                     upper_teeth=1.0, lower_teeth=0.4, tongue=0.7),
     # h (g k h, e eng er): a medium oval, jaw further down than h', teeth apart
     "h": MouthShape(up=(-0.25, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0"),
-                    upper_teeth=0.8, tongue=0.3),
+                    upper_teeth=0.5, tongue=0.45),
     # r (zh ch sh r): slightly rounded, protruded lips, teeth close together
     "r": MouthShape(up=(-0.25, "mns0"), dn=(0.25, "mns0"), inward=(0.15, "mw0"),
                     upper_lip=(0.06, "mns0"), lower_lip=(0.04, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
@@ -94,11 +95,11 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "i": MouthShape(dn=(0.22, "mns0"), inward=(-1 / 12, "mw0"), corner_dy=(-0.5, "upper_lip_h"),
                     upper_lip=(-0.05, "mns0"), lower_lip=(-0.05, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
     # u: small and puckered: corners well in, lips pushed out (thicker)
-    "u": MouthShape(up=(-0.3, "mns0"), dn=(0.3, "mns0"), inward=(0.2, "mw0"),
-                    upper_lip=(0.1, "mns0"), lower_lip=(0.1, "mns0")),
+    "u": MouthShape(up=(-0.35, "mns0"), dn=(0.35, "mns0"), inward=(0.2, "mw0"),
+                    upper_lip=(0.14, "mns0"), lower_lip=(0.14, "mns0")),
     # e: mid-spread, half open, the upper teeth and a low tongue showing
     "e": MouthShape(dn=(0.5, "mns0"), inward=(-1 / 12, "mw0"), corner_dy=(-0.5, "upper_lip_h"),
-                    upper_lip=(-0.03, "mns0"), upper_teeth=1.0, lower_teeth=0.4, tongue=0.2),
+                    upper_lip=(-0.03, "mns0"), upper_teeth=1.0, lower_teeth=0.6, tongue=0.2),
     # o: round, corners in, lips a little pushed out
     "o": MouthShape(up=(-0.25, "mns0"), dn=(0.6, "mns0"), inward=(0.14, "mw0"), corner_at_mid=True,
                     upper_lip=(0.05, "mns0"), lower_lip=(0.05, "mns0"), upper_teeth=0.3, tongue=0.2),

@@ -59,10 +59,10 @@ TEETH_SAG = 0.3   # the rows curve down in the middle (the dental arch) by this 
 LOWER_FOLLOW = 0.3  # the lower row follows the rise of the corners this much less than the upper
 TONGUE_WIDTH = 0.34  # tongue half-width, share of the opening's width
 TONGUE_HEIGHT = 0.32  # tongue half-height, share of the opening's height, doubled when raised
-TONGUE_TIP = 0.35  # a raised tongue is this much narrower (its tip)
+TONGUE_TIP = 0.5   # a raised tongue is this much narrower (its tip)
 BITE = 0.05        # height of the upper teeth resting on the lower lip (f), share of d
-BITE_OF_LIP = 0.5  # ... at most this share of the lower lip's thickness
-BITE_SPAN = 0.6    # ... across this share of the teeth's span
+BITE_OF_LIP = 0.8  # ... at most this share of the lower lip's thickness
+BITE_SPAN = 0.7    # ... across this share of the teeth's span
 GLOSS = 0.14       # half-width of the gloss on the lower lip, share of the opening's width
 
 
@@ -81,6 +81,7 @@ class MouthOutlines:
         only, where a turn of the head's small angles does not show); ry 0 when shut.
     bite: centre line (1 piece) and width of the teeth on the lower lip (0 when none).
     gloss: (cx, cy, rx, ry) the highlight on the lower lip.
+    rows: (44, 2) the paths' rows in one array: lips, opening, upper and lower teeth, bite.
     """
 
     lips: np.ndarray
@@ -93,53 +94,38 @@ class MouthOutlines:
     bite: np.ndarray
     bite_width: float
     gloss: tuple[float, float, float, float]
+    rows: np.ndarray
 
 
-def _row(middle: np.ndarray, half_width: float, sag: float, follow: float) -> np.ndarray:
-    """(4, 2) the centre line of a row of teeth through `middle` (local (2,)), from
+Point = tuple[float, float]  # a point in the mouth's frame (plain floats: a handful per drawing)
+
+
+def _row(middle: Point, half_width: float, sag: float, follow: float) -> list[Point]:
+    """The 4 control points of the centre line of a row of teeth through `middle`, from
     `half_width` left of it to as far right, `sag` pixels lower at the middle than at the
-    ends. Where the mouth's corners (at local y 0) lie above `middle`, the ends rise by
-    `follow` x that height x (half_width / the opening's half width)**2, as the edge of a
-    smiling opening does (`follow` already includes the square)."""
+    ends. Where the mouth's corners (at y 0) lie above `middle`, the ends rise by `follow`
+    x that height, as the edge of a smiling opening does (`follow` includes the square of
+    half_width / the opening's half width)."""
     x, y = middle
     end = y + follow * min(-y, 0.0)
-    dip = 4 * (sag + y - end) / 3  # a cubic's middle is 3/4 of the way to control points set this low
-    return np.array([[x - half_width, end], [x - half_width / 3, end + dip], [x + half_width / 3, end + dip],
-                     [x + half_width, end]])
+    dip = end + 4 * (sag + y - end) / 3  # a cubic's middle is 3/4 of the way to control points this low
+    return [(x - half_width, end), (x - half_width / 3, dip), (x + half_width / 3, dip), (x + half_width, end)]
 
 
-def _corner_arm(corner: np.ndarray, towards: np.ndarray, rise: float, roundness: float) -> np.ndarray:
-    """First control point leaving a corner (local (2,)) for a piece to `towards`: between the
-    third of the chord (roundness 0) and an ellipse arm of KAPPA x `rise` straight up or down
-    the y axis (roundness 1)."""
-    return corner + (1 - roundness) * (towards - corner) / 3 + roundness * np.array([0.0, KAPPA * rise])
+def _half(corner: Point, middle: Point, roundness: float) -> list[Point]:
+    """The 4 control points of a cubic from `corner` to `middle`, level at `middle`. At the
+    corner it leaves between along the chord (roundness 0: a third of it) and straight up or
+    down to `middle`'s height (roundness 1: an ellipse arm of KAPPA x the height); at
+    `middle` its arm is KAPPA (ellipse) to a third (chord) of the x distance."""
+    (cx, cy), (mx, my) = corner, middle
+    level = (roundness * KAPPA + (1 - roundness) / 3) * (cx - mx)
+    first = (cx + (1 - roundness) * (mx - cx) / 3, cy + (1 - roundness) * (my - cy) / 3 + roundness * KAPPA * (my - cy))
+    return [corner, first, (mx + level, my), middle]
 
 
-def _level_arm(point: np.ndarray, other: np.ndarray, roundness: float) -> np.ndarray:
-    """Control point next to `point` (local (2,)), on a level tangent towards `other`'s x:
-    KAPPA of the x distance for an ellipse, a third of it for a slit."""
-    arm = (roundness * KAPPA + (1 - roundness) / 3) * (other[0] - point[0])
-    return point + np.array([arm, 0.0])
-
-
-def _half(corner: np.ndarray, middle: np.ndarray, rise: float, roundness: float) -> np.ndarray:
-    """(4, 2) one cubic from `corner` to `middle` (level there), turning at the corner by
-    `roundness` (see _corner_arm)."""
-    return np.array([corner, _corner_arm(corner, middle, rise, roundness), _level_arm(middle, corner, roundness),
-                     middle])
-
-
-def _edge(left: np.ndarray, middle: np.ndarray, right: np.ndarray, roundness: float) -> np.ndarray:
-    """(2, 4, 2) the two cubics left -> middle -> right of an edge through `middle`, which lies
-    `middle[1] - corner y` below (or, negative, above) the corners."""
-    first = _half(left, middle, middle[1] - left[1], roundness)
-    second = _half(right, middle, middle[1] - right[1], roundness)[::-1]
-    return np.array([first, second])
-
-
-def _path(cubics: np.ndarray) -> np.ndarray:
-    """(1 + 3k, 2) path rows from (k, 4, 2) joined cubics."""
-    return np.concatenate([cubics[0, :1], cubics[:, 1:].reshape(-1, 2)])
+def _edge(left: Point, middle: Point, right: Point, roundness: float) -> list[Point]:
+    """The 7 path rows (start, then 2 cubics) of an edge left -> middle -> right."""
+    return _half(left, middle, roundness) + _half(right, middle, roundness)[2::-1]
 
 
 def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutlines:
@@ -149,87 +135,74 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
     face/mouth.py SHOWN (upper_teeth, lower_teeth, tongue, bite) of the mouth's mix of
     shapes, and `d` the FAPU d in pixels. Returns the MouthOutlines in image pixels.
     """
-    upper_teeth, lower_teeth, tongue, bite = (float(v) for v in shown)
-    left, right = points[0], points[1]
-    width = max(float(np.hypot(*(right - left))), 1e-9)
-    ex, ey = (right - left) / width
-    axes = np.array([[ex, ey], [-ey, ex]])  # rows: x along the mouth, y down the face
-    centre = (left + right) / 2
-    local = (points - centre) @ axes.T
-    corner_l, corner_r, peak_l, peak_r, bow, inner_up, inner_dn, bottom = local
+    upper_teeth, lower_teeth, tongue, bite = shown.tolist()
+    (lx, ly), (rx, ry), *others = points.tolist()
+    width = max(math.hypot(rx - lx, ry - ly), 1e-9)
+    ex, ey = (rx - lx) / width, (ry - ly) / width  # x along the mouth; y = (-ey, ex), down the face
+    ox, oy = (lx + rx) / 2, (ly + ry) / 2
+    half = width / 2
+    corner_l, corner_r = (-half, 0.0), (half, 0.0)
+    peak_l, peak_r, bow, inner_up, inner_dn, bottom = (
+        ((x - ox) * ex + (y - oy) * ey, (y - oy) * ex - (x - ox) * ey) for x, y in others)
 
-    height = max(float(inner_dn[1] - inner_up[1]), 0.0)
-    inset = min(INSET * height, INSET_MAX * d, 0.25 * width)
-    open_l, open_r = corner_l + (inset, 0.0), corner_r - (inset, 0.0)
-    inner_width = open_r[0] - open_l[0]
-    roundness = min(height / (ROUND * inner_width), 1.0)
-    upper = _edge(open_l, inner_up, open_r, roundness)
-    lower = _edge(open_r, inner_dn, open_l, roundness)
-    opening = np.concatenate([upper, lower])
+    height = max(inner_dn[1] - inner_up[1], 0.0)
+    inset = min(INSET * height, INSET_MAX * d, 0.5 * half)
+    open_l, open_r = (inset - half, 0.0), (half - inset, 0.0)
+    inner_half = half - inset
+    roundness = min(height / (ROUND * 2 * inner_half), 1.0)
+    opening = _edge(open_l, inner_up, open_r, roundness) + _edge(open_r, inner_dn, open_l, roundness)[1:]
 
     lip_round = max(LIP_ROUND, LIP_FOLLOWS * roundness)
-    upper_lip = np.array([
-        _half(corner_l, peak_l, peak_l[1], lip_round),
-        [peak_l, peak_l + (BOW * (bow[0] - peak_l[0]), 0.0), bow - (BOW * (bow[0] - peak_l[0]), 0.0), bow],
-        [bow, bow + (BOW * (peak_r[0] - bow[0]), 0.0), peak_r - (BOW * (peak_r[0] - bow[0]), 0.0), peak_r],
-        _half(corner_r, peak_r, peak_r[1], lip_round)[::-1],
-    ])
-    lips = np.concatenate([upper_lip, _edge(corner_r, bottom, corner_l, lip_round)])
+    (px, py), (bx, by), (qx, qy) = peak_l, bow, peak_r
+    left_bow, right_bow = BOW * (bx - px), BOW * (qx - bx)
+    lips = (_half(corner_l, peak_l, lip_round) + [(px + left_bow, py), (bx - left_bow, by), bow,
+                                                  (bx + right_bow, by), (qx - right_bow, qy)]
+            + _half(corner_r, peak_r, lip_round)[::-1] + _edge(corner_r, bottom, corner_l, lip_round)[1:])
 
     row = TEETH_OF_OPENING * height
     upper_h = upper_teeth * min(TEETH * d, row)
     lower_h = lower_teeth * min(LOWER_TEETH * d, row)
-    span = TEETH_SPAN * inner_width / 2
+    span = TEETH_SPAN * inner_half
     follow = TEETH_SPAN**2
-    teeth_up = _row(inner_up, span, TEETH_SAG * upper_h, follow)
-    teeth_dn = _row(inner_dn, span, TEETH_SAG * lower_h, LOWER_FOLLOW * follow)
-    bite_h = bite * min(BITE * d, BITE_OF_LIP * float(bottom[1] - inner_dn[1]))
-    bite_line = _row(inner_up + (0.0, bite_h / 2), span * BITE_SPAN, TEETH_SAG * bite_h, follow * BITE_SPAN**2)
+    lower_lip = bottom[1] - inner_dn[1]
+    bite_h = bite * min(BITE * d, BITE_OF_LIP * lower_lip)
+    teeth = (_row(inner_up, span, TEETH_SAG * upper_h, follow)
+             + _row(inner_dn, span, TEETH_SAG * lower_h, LOWER_FOLLOW * follow)
+             + _row((inner_up[0], inner_up[1] + bite_h / 2), span * BITE_SPAN, TEETH_SAG * bite_h,
+                    follow * BITE_SPAN**2))
 
-    tongue_rx = TONGUE_WIDTH * inner_width * (1 - TONGUE_TIP * tongue)
+    tongue_rx = TONGUE_WIDTH * 2 * inner_half * (1 - TONGUE_TIP * tongue)
     tongue_ry = TONGUE_HEIGHT * height * (1 + tongue)
     # at rest the tongue's top is a third of the way up the opening; raised, at its upper edge
     top = (1 - tongue) * (inner_dn[1] - height / 3) + tongue * inner_up[1]
-    tongue_c = np.array([inner_dn[0], top + tongue_ry])
+    centres = [(inner_dn[0], top + tongue_ry), (0.45 * inner_dn[0] + 0.55 * bottom[0], 0.45 * inner_dn[1] + 0.55 * bottom[1])]
 
-    gloss_c = 0.45 * inner_dn + 0.55 * bottom
-
-    def image(rows: np.ndarray) -> np.ndarray:
-        return centre + rows @ axes
-
-    tongue_xy = image(tongue_c)
-    gloss_xy = image(gloss_c)
+    local = np.array(lips + opening + teeth + centres)
+    image = local @ np.array([[ex, ey], [-ey, ex]]) + (ox, oy)
+    (tx, ty), (gx, gy) = image[-2:].tolist()
     return MouthOutlines(
-        lips=image(_path(lips)),
-        opening=image(_path(opening)),
-        upper_teeth=image(teeth_up),
-        upper_width=2 * upper_h,
-        lower_teeth=image(teeth_dn),
-        lower_width=2 * lower_h,
-        tongue=(float(tongue_xy[0]), float(tongue_xy[1]), float(tongue_rx), float(tongue_ry)),
-        bite=image(bite_line),
-        bite_width=bite_h,
-        gloss=(float(gloss_xy[0]), float(gloss_xy[1]), GLOSS * inner_width,
-               0.22 * float(bottom[1] - inner_dn[1])),
+        lips=image[:19], opening=image[19:32],
+        upper_teeth=image[32:36], upper_width=2 * upper_h,
+        lower_teeth=image[36:40], lower_width=2 * lower_h,
+        bite=image[40:44], bite_width=bite_h,
+        tongue=(tx, ty, tongue_rx, tongue_ry),
+        gloss=(gx, gy, GLOSS * 2 * inner_half, 0.22 * lower_lip),
+        rows=image[:44],
     )
 
 
-# Path templates: a start point, then cubic pieces.
-_CUBICS = {k: "M%s %s" + "C%s %s %s %s %s %s" * k for k in (1, 2, 4, 6)}
+# The SVG texts of a drawn mouth, "|" between them, in TEXTS order: the path data of the
+# lips and the opening (closed), the rows of teeth and the bite (one cubic each), in
+# MouthOutlines.rows order, then single numbers.
+TEXTS = ("lips", "opening", "upper_teeth", "lower_teeth", "bite", "upper_width", "lower_width", "bite_width",
+         "tongue_cx", "tongue_cy", "tongue_rx", "tongue_ry", "gloss_cx", "gloss_cy", "gloss_rx", "gloss_ry")
+_TEMPLATE = "|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close
+                      for pieces, close in ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))] + ["%s"] * 11)
 
 
-def _text(template: str, rows: np.ndarray) -> str:
-    """`template` filled with `rows` (n, 2) pixels as SVG numbers (0.1 px)."""
-    return (template % number_texts(rows)).replace(" -", "-")
-
-
-def mouth_paths(outlines: MouthOutlines) -> dict[str, str]:
-    """SVG path data of `outlines`: {"lips", "opening", "upper_teeth", "lower_teeth", "bite"};
-    closed outlines end in Z."""
-    return {
-        "lips": _text(_CUBICS[6], outlines.lips) + "Z",
-        "opening": _text(_CUBICS[4], outlines.opening) + "Z",
-        "upper_teeth": _text(_CUBICS[1], outlines.upper_teeth),
-        "lower_teeth": _text(_CUBICS[1], outlines.lower_teeth),
-        "bite": _text(_CUBICS[1], outlines.bite),
-    }
+def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
+    """The SVG texts of `outlines` by the names in TEXTS: path data and numbers (pixels to 0.1)."""
+    numbers = np.concatenate([outlines.rows.ravel(), (outlines.upper_width, outlines.lower_width,
+                                                      outlines.bite_width), outlines.tongue, outlines.gloss])
+    text = (_TEMPLATE % number_texts(numbers)).replace(" -", "-")
+    return dict(zip(TEXTS, text.split("|")))

@@ -34,7 +34,7 @@ from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
 from cartoonface.render.geometry import face_shapes, number_text
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import mouth_outlines, mouth_paths
+from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.scenery import Figure, background_layer, clothes_layer
 
 SVG = "http://www.w3.org/2000/svg"
@@ -221,28 +221,27 @@ def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: s
     upper teeth on the lower lip (f, clipped by the lips); a gloss on the lower lip. `d` is
     the FAPU d in pixels."""
     outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
-    paths = mouth_paths(outlines)
+    text = mouth_texts(outlines)
     mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round"})
-    _el(mouth, "path", {"d": paths["lips"], **style["lips"]})
-    _el(mouth, "path", {"d": paths["opening"], **style["opening"]})
-    cx, cy, rx, ry = outlines.tongue
-    if ry > 0:
+    _el(mouth, "path", {"d": text["lips"], **style["lips"]})
+    _el(mouth, "path", {"d": text["opening"], **style["opening"]})
+    if outlines.tongue[3] > 0:
         clip_id = f"cf-mouth-{uid}"
-        _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": paths["opening"]})
+        _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": text["opening"]})
         inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})"})
-        _el(inside, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
-                                "ry": number_text(ry), **style["tongue"]})
-        for row, width in (("lower_teeth", outlines.lower_width), ("upper_teeth", outlines.upper_width)):
+        _el(inside, "ellipse", {"cx": text["tongue_cx"], "cy": text["tongue_cy"], "rx": text["tongue_rx"],
+                                "ry": text["tongue_ry"], **style["tongue"]})
+        for row, width in (("lower", outlines.lower_width), ("upper", outlines.upper_width)):
             if width > 0:
-                _el(inside, "path", {"d": paths[row], **style[row], "stroke-width": number_text(width)})
+                _el(inside, "path", {"d": text[f"{row}_teeth"], **style[f"{row}_teeth"],
+                                     "stroke-width": text[f"{row}_width"]})
     if outlines.bite_width > 0:
         lips_id = f"cf-lips-{uid}"
-        _el(_el(defs, "clipPath", {"id": lips_id}), "path", {"d": paths["lips"]})
+        _el(_el(defs, "clipPath", {"id": lips_id}), "path", {"d": text["lips"]})
         _el(_el(mouth, "g", {"clip-path": f"url(#{lips_id})"}), "path",
-            {"d": paths["bite"], **style["upper_teeth"], "stroke-width": number_text(outlines.bite_width)})
-    cx, cy, rx, ry = outlines.gloss
-    _el(mouth, "ellipse", {"cx": number_text(cx), "cy": number_text(cy), "rx": number_text(rx),
-                           "ry": number_text(ry), **style["gloss"]})
+            {"d": text["bite"], **style["upper_teeth"], "stroke-width": text["bite_width"]})
+    _el(mouth, "ellipse", {"cx": text["gloss_cx"], "cy": text["gloss_cy"], "rx": text["gloss_rx"],
+                           "ry": text["gloss_ry"], **style["gloss"]})
 
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
