@@ -45,6 +45,8 @@ MOUTH_POINTS = ("8.4", "8.3", "8.9", "8.10", "8.1", "2.2", "2.3", "8.2")
 ROWS = [LIFTED_INDEX[name] for name in MOUTH_POINTS]
 
 KAPPA = 4 * (math.sqrt(2) - 1) / 3  # Bezier arm of a quarter circle of radius 1 (0.5523)
+SHUT = 0.005       # an opening less tall than this share of d is shut (a slanted mouth's 2.2 and 2.3
+                   # of a shut model, side by side, lie a fraction of a pixel apart across it)
 ROUND = 0.55       # an opening this tall for its width has fully round (elliptic) corners
 INSET = 0.1        # the opening's corners inside the lip corners, share of its height ...
 INSET_MAX = 0.03   # ... at most this share of the FAPU d
@@ -145,7 +147,9 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
     peak_l, peak_r, bow, inner_up, inner_dn, bottom = (
         ((x - ox) * ex + (y - oy) * ey, (y - oy) * ex - (x - ox) * ey) for x, y in others)
 
-    height = max(inner_dn[1] - inner_up[1], 0.0)
+    height = inner_dn[1] - inner_up[1]
+    if height < SHUT * d:  # 2.3 on 2.2 (or above it) in the model: shut, whatever the mouth's slant
+        inner_dn, height = inner_up, 0.0
     inset = min(INSET * height, INSET_MAX * d, 0.5 * half)
     open_l, open_r = (inset - half, 0.0), (half - inset, 0.0)
     inner_half = half - inset
