@@ -105,7 +105,7 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
                     upper_lip=(0.05, "mns0"), lower_lip=(0.05, "mns0"), upper_teeth=0.3, tongue=0.2),
     # n (en): open, the tongue tip up behind the upper teeth
     "n": MouthShape(up=(-0.3, "mns0"), dn=(0.4, "mns0"), corner_dy=(-1 / 3, "upper_lip_h"),
-                    upper_teeth=1.0, lower_teeth=0.5, tongue=1.0),
+                    upper_teeth=1.0, lower_teeth=0.3, tongue=1.0),
 }
 
 # Our addition to 5.2.2 (the thesis moves only the chin 2.1 with 8.2): a real
