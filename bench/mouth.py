@@ -143,8 +143,8 @@ def pictures(folder: Path) -> None:
                 w = k / BLEND_STEPS
                 mouth = ((s, 1.0 - w), (t, w)) if w else ((s, 1.0),)
                 row.append((f"{s}>{t} {w:g}" if w else s, _cell(face, FaceState(mouth=mouth), ZOOM / 2.4)))
-        half = len(row) // 2
-        blend.extend([row[:half], row[half:]])
+        middle = len(row) // 2
+        blend.extend([row[:middle], row[middle:]])
     _grid(blend, "Blends " + " > ".join(BLEND) + f" in steps of 1/{BLEND_STEPS} (female: rows 1-2, male: rows 3-4)"
           ).quantize(256).save(folder / "mouth-blend.png", optimize=True)
 
