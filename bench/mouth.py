@@ -7,6 +7,7 @@ than CHANGED (of 255). Figures are shares of the face's pixels: the pixels insid
 outline (class "face", the closed 'm' drawing), ears and hair not counted.
 
 Goals (issue 10): 'a' vs 'm' >= 5 %; every pair of the 12 shapes >= 1 %; 'a' vs 'o' >= 2.5 %.
+Also printed: the share of the face's pixels the mouth's drawing covers (m and a).
 
 `python -m bench.mouth --pictures DIR` also writes the mouth chart (mouth-chart.png: the 12
 shapes of both faces, zoomed, labelled with syllables that use them) and the blend strip
@@ -48,9 +49,14 @@ BLEND = ("m", "a", "o", "u", "i", "m")  # the blend strip's path through the sha
 BLEND_STEPS = 4  # pictures from one shape to the next (the last one is the next shape)
 
 
-def render(face: FaceModel, state: FaceState) -> np.ndarray:
-    """(height, width, 3) uint8 frontal render of `face` in `state` at the canvas size."""
-    png = svg_to_png(svg_bytes(face_svg(face, state)))
+def render(face: FaceModel, state: FaceState, mouth: bool = True) -> np.ndarray:
+    """(height, width, 3) uint8 frontal render of `face` in `state` at the canvas size; without
+    the drawing of the mouth (the group of class "mouth") unless `mouth`."""
+    root = face_svg(face, state)
+    if not mouth:
+        drawn = root.find(f".//{{{SVG}}}g[@class='mouth']")
+        drawn.getparent().remove(drawn)
+    png = svg_to_png(svg_bytes(root))
     with Image.open(io.BytesIO(png)) as image:
         return np.asarray(image.convert("RGB"))
 
@@ -79,13 +85,22 @@ def shares(face: FaceModel) -> dict[tuple[str, str], float]:
     return {(s, t): changed(renders[s], renders[t]) / area for s, t in itertools.combinations(MOUTH_SYMBOLS, 2)}
 
 
+def mouth_size(face: FaceModel, symbol: str) -> float:
+    """The pixels the mouth's drawing covers in shape `symbol` (those that change when it is
+    left out), as a share of the face's pixels."""
+    state = FaceState().with_mouth(symbol)
+    return changed(render(face, state), render(face, state, mouth=False)) / int(face_mask(face).sum())
+
+
 def main() -> None:
-    """Print, for each sample face, every shape's change from 'm', the closest pairs and 'a' vs 'o'."""
+    """Print, for each sample face, every shape's change from 'm', the closest pairs, 'a' vs 'o'
+    and the size of the drawn mouth at rest and wide open."""
     for name in ("female", "male"):
         face = load_face(FACES / f"{name}.json")
         pairs = shares(face)
         from_m = {t: pairs[("m", t)] for t in MOUTH_SYMBOLS[1:]}
-        print(f"{name}: face pixels {int(face_mask(face).sum())}")
+        print(f"{name}: face pixels {int(face_mask(face).sum())}; the drawn mouth covers "
+              f"{100 * mouth_size(face, 'm'):.1f} % of them in m, {100 * mouth_size(face, 'a'):.1f} % in a")
         print("  vs m: " + ", ".join(f"{t} {100 * v:.1f} %" for t, v in from_m.items()))
         closest = sorted(pairs.items(), key=lambda item: item[1])[:4]
         print("  closest pairs: " + ", ".join(f"{s}/{t} {100 * v:.2f} %" for (s, t), v in closest))
