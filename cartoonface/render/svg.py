@@ -133,8 +133,8 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
                     "stroke-width": number_text(FEATURE * d * 0.8)},
         "gloss": {"fill": "#ffffff", "opacity": "0.22", "stroke": "none"},
         "tongue": {"fill": _mix(p.lip, p.mouth, 0.3)},
-        "upper_teeth": {"fill": "none", "stroke": "#ffffff", "stroke-linecap": "round"},
-        "lower_teeth": {"fill": "none", "stroke": LOWER_TEETH_COLOUR, "stroke-linecap": "round"},
+        "upper_teeth": {"fill": "none", "stroke": "#ffffff"},
+        "lower_teeth": {"fill": "none", "stroke": LOWER_TEETH_COLOUR},
     }
 
 
@@ -222,7 +222,7 @@ def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: s
     the FAPU d in pixels."""
     outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
     text = mouth_texts(outlines)
-    mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round"})
+    mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
     _el(mouth, "path", {"d": text["lips"], **style["lips"]})
     _el(mouth, "path", {"d": text["opening"], **style["opening"]})
     if outlines.tongue[3] > 0:
