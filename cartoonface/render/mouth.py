@@ -32,6 +32,7 @@ them as a cartoonist would (docs/mouth.md):
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -181,7 +182,8 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
     top = (1 - tongue) * (inner_dn[1] - height / 3) + tongue * inner_up[1]
     centres = [(inner_dn[0], top + tongue_ry), (0.45 * inner_dn[0] + 0.55 * bottom[0], 0.45 * inner_dn[1] + 0.55 * bottom[1])]
 
-    local = np.array(lips + opening + teeth + centres)
+    rows = lips + opening + teeth + centres
+    local = np.fromiter(itertools.chain.from_iterable(rows), float, 2 * len(rows)).reshape(-1, 2)
     image = local @ np.array([[ex, ey], [-ey, ex]]) + (ox, oy)
     (tx, ty), (gx, gy) = image[-2:].tolist()
     return MouthOutlines(
