@@ -20,14 +20,17 @@ them as a cartoonist would (docs/mouth.md):
   bottom; level tangents at the peaks 8.9 / 8.10, the Cupid's bow 8.1 and 8.2; at the
   corners the same turn towards the perpendicular, never below LIP_ROUND, so the corners are
   round, not pointed.
-- Teeth: the upper row a band of height up to TEETH d along the middle of the upper edge of
-  the opening, the lower row (up to LOWER_TEETH d) along the lower edge, each at most
-  TEETH_OF_OPENING of the opening's height and scaled by the shape's upper_teeth /
-  lower_teeth; drawn as strokes clipped by the opening, so only the inside shows.
+- Teeth: two rows, bands drawn as strokes clipped by the opening, so only the inside shows:
+  the upper one hangs from the level of 2.2 (up to TEETH d), the lower one stands on 2.3 (up
+  to LOWER_TEETH d); each at most TEETH_OF_OPENING of the opening's height (a dark gap stays
+  between them) and scaled by the shape's upper_teeth / lower_teeth; they span TEETH_SPAN of
+  the opening's width, curve down in the middle (TEETH_SAG, the dental arch) and, where the
+  corners lie above them (a spread or smiling mouth), rise towards the ends with them.
 - Tongue: an ellipse at the bottom of the opening, raised with the shape's `tongue` until
   its top reaches the upper edge, taller and narrower (n: tongue tip behind the upper teeth).
 - Bite (f): the upper teeth as a band of height up to BITE d under the line where the lips
   meet, over the lower lip (clipped by the lips' outline).
+- The line where the lips meet is the opening's outline, stroked (render/svg.py).
 """
 
 from __future__ import annotations
