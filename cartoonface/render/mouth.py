@@ -210,8 +210,12 @@ _TEMPLATE = "|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close
 
 
 def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
-    """The SVG texts of `outlines` by the names in TEXTS: path data and numbers (pixels to 0.1)."""
-    numbers = np.concatenate([outlines.rows.ravel(), (outlines.upper_width, outlines.lower_width,
-                                                      outlines.bite_width), outlines.tongue, outlines.gloss])
+    """The SVG texts of `outlines` by the names in TEXTS: path data and positions to 0.1 px; the
+    sizes (stroke widths, radii) in whole pixels, as the animation writer draws the paths: then
+    mouths that differ by less than a pixel are written once, not once per tenth."""
+    sizes = np.rint([outlines.upper_width, outlines.lower_width, outlines.bite_width, *outlines.tongue[2:],
+                     *outlines.gloss[2:]])
+    numbers = np.concatenate([outlines.rows.ravel(), sizes[:3], outlines.tongue[:2], sizes[3:5], outlines.gloss[:2],
+                              sizes[5:]])
     text = (_TEMPLATE % number_texts(numbers)).replace(" -", "-")
     return dict(zip(TEXTS, text.split("|")))
