@@ -46,7 +46,7 @@ from cartoonface.render.geometry import number_texts
 
 # The posed points the mouth is drawn from, in this order (thesis 002, Alg. 2.2 step 13).
 MOUTH_POINTS = ("8.4", "8.3", "8.9", "8.10", "8.1", "2.2", "2.3", "8.2")
-ROWS = [LIFTED_INDEX[name] for name in MOUTH_POINTS]
+ROWS = np.array([LIFTED_INDEX[name] for name in MOUTH_POINTS])
 
 KAPPA = 4 * (math.sqrt(2) - 1) / 3  # Bezier arm of a quarter circle of radius 1 (0.5523)
 SHUT = 0.005       # an opening less tall than this share of d is shut (a slanted mouth's 2.2 and 2.3
