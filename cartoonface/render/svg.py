@@ -217,25 +217,25 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
 def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: str,
            style: dict[str, dict[str, str]], d: float) -> None:
     """Append the mouth (render/mouth.py): lips; the opening, its outline the line where the
-    lips meet; the tongue and the lower and upper teeth clipped to it (when it is open); the
-    upper teeth on the lower lip (f, clipped by the lips); a gloss on the lower lip. `d` is
-    the FAPU d in pixels."""
+    lips meet; the tongue and the lower and upper teeth clipped to it (when it is open by a
+    pixel or more; each row when it shows a pixel or more); the upper teeth on the lower lip
+    (f, clipped by the lips); a gloss on the lower lip. `d` is the FAPU d in pixels."""
     outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
     text = mouth_texts(outlines)
     mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
     _el(mouth, "path", {"d": text["lips"], **style["lips"]})
     _el(mouth, "path", {"d": text["opening"], **style["opening"]})
-    if outlines.tongue[3] > 0:
+    if text["tongue_ry"] != "0":  # open by a pixel or more (sizes are whole pixels)
         clip_id = f"cf-mouth-{uid}"
         _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": text["opening"]})
         inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})"})
         _el(inside, "ellipse", {"cx": text["tongue_cx"], "cy": text["tongue_cy"], "rx": text["tongue_rx"],
                                 "ry": text["tongue_ry"], **style["tongue"]})
-        for row, width in (("lower", outlines.lower_width), ("upper", outlines.upper_width)):
-            if width > 0:
+        for row in ("lower", "upper"):
+            if text[f"{row}_width"] != "0":
                 _el(inside, "path", {"d": text[f"{row}_teeth"], **style[f"{row}_teeth"],
                                      "stroke-width": text[f"{row}_width"]})
-    if outlines.bite_width > 0:
+    if text["bite_width"] != "0":
         lips_id = f"cf-lips-{uid}"
         _el(_el(defs, "clipPath", {"id": lips_id}), "path", {"d": text["lips"]})
         _el(_el(mouth, "g", {"clip-path": f"url(#{lips_id})"}), "path",
