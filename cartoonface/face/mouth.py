@@ -9,6 +9,7 @@ a negative dy moves a point up.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -26,12 +27,20 @@ ZERO: Term = (0.0, "mns0")
 
 @dataclass(frozen=True)
 class MouthShape:
-    """One basic mouth shape as FAPU terms (image y down).
+    """One basic mouth shape as FAPU terms (image y down) and what the drawing shows.
 
     up: dy of 8.9; dn: dy of 8.2; inward: dx of each corner towards the mouth
     centre (8.4 moves +inward, 8.3 -inward; negative widens); corner_dy: dy of
     both corners, measured from their neutral y, or, when corner_at_mid, from
     the middle of the moved up and dn points (the thesis's (up.y + dn.y)/2).
+
+    Our additions (the thesis's control points stay where it puts them):
+    upper_lip / lower_lip: change of the upper / lower lip's thickness
+    (positive thicker), made by moving the inner lip points 2.2 / 2.3 against
+    8.9 / 8.2: lips stretched wide get thinner, protruded lips thicker. upper_teeth / lower_teeth: how much of each row of teeth shows in
+    the opening (0..1 of render/mouth.py's full tooth height); tongue: how far
+    the tongue rises (0 lying low, 1 its tip at the upper teeth); bite: the
+    upper teeth resting on the lower lip (0..1, f).
     """
 
     up: Term = ZERO
@@ -39,33 +48,64 @@ class MouthShape:
     inward: Term = ZERO
     corner_dy: Term = ZERO
     corner_at_mid: bool = False
+    upper_lip: Term = ZERO
+    lower_lip: Term = ZERO
+    upper_teeth: float = 0.0
+    lower_teeth: float = 0.0
+    tongue: float = 0.0
+    bite: float = 0.0
 
 
-# Thesis 002, 5.2.2 (m and f: 5.2.1, which 5.2.2 item 1 keeps). Choices where
-# the text is garbled or ambiguous (docs/face-model.md, "Mouth shapes"):
-# - a: the text says lf.x = 8.4.x + 0.8 x MW0, which would carry each corner
-#   past the other; we use MW0/8, the value of the same shape in 5.2.1, whose
-#   up/dn terms 5.2.2 repeats unchanged.
+# Thesis 002, 5.2.2 (m and f: 5.2.1, which 5.2.2 item 1 keeps): up, dn, inward
+# and corner_dy. Choices where the text is garbled or ambiguous, and where we
+# depart from it to make each shape read at a glance (docs/mouth.md):
 # - 5.2.1's pixel offsets ("- 1", "- 3") are not used: 5.2.2 replaced them by
 #   FAPU terms (0.1 x MNS0, UpperLipH/2), which we take as they stand.
+# - a: the text says lf.x = 8.4.x + 0.8 x MW0, which would carry each corner
+#   past the other; 5.2.1 has MW0/8. We take MW0/24 and open it further
+#   (up 0.35, dn 1.1 MNS0 for the thesis's 0.3, 0.8; corners 0.25 MNS0 above
+#   the middle for UpperLipH/3): a wide-open mouth with a real jaw drop,
+#   clearly bigger than o, its upper edge flatter than its lower.
+# - i: dn MNS0/6 -> 0.22 MNS0, so both rows of teeth show; o: inward 0.2 ->
+#   0.14 MW0 and dn 0.65 -> 0.6 MNS0, round rather than a tall slot; u: up and
+#   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered.
+# - the lip thicknesses, teeth, tongue and bite are ours (MouthShape).
 MOUTH_SHAPES: dict[str, MouthShape] = {
-    # m: the neutral (rest) shape
+    # m (b p m): the neutral (rest) shape, lips shut
     "m": MouthShape(),
-    # f: part of the lower lip hidden by the upper lip
-    "f": MouthShape(dn=(-0.5, "lower_lip_h")),
-    "h'": MouthShape(up=(-0.25, "mns0"), dn=(0.3, "mns0"), corner_dy=(-0.1, "mns0")),
-    "h": MouthShape(up=(-0.25, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0")),
-    "r": MouthShape(up=(-0.25, "mns0"), dn=(0.25, "mns0"), inward=(0.15, "mw0")),
-    "z": MouthShape(up=(-0.15, "mns0"), dn=(0.15, "mns0")),
+    # f: part of the lower lip hidden by the upper lip; the upper teeth rest on it
+    "f": MouthShape(dn=(-0.5, "lower_lip_h"), bite=1.0),
+    # h' (d t n l j q x): a narrow opening, the tongue tip near the teeth ridge
+    "h'": MouthShape(up=(-0.25, "mns0"), dn=(0.3, "mns0"), corner_dy=(-0.1, "mns0"),
+                     upper_teeth=1.0, lower_teeth=0.4, tongue=0.7),
+    # h (g k h, e eng er): a medium oval, jaw further down than h', teeth apart
+    "h": MouthShape(up=(-0.25, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0"),
+                    upper_teeth=0.5, tongue=0.45),
+    # r (zh ch sh r): slightly rounded, protruded lips, teeth close together
+    "r": MouthShape(up=(-0.25, "mns0"), dn=(0.25, "mns0"), inward=(0.15, "mw0"),
+                    upper_lip=(0.06, "mns0"), lower_lip=(0.04, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
+    # z (z c s): teeth almost closed, both rows showing
+    "z": MouthShape(up=(-0.15, "mns0"), dn=(0.15, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
+    # a: wide open and round, the jaw dropped, teeth and tongue showing
     "a": MouthShape(
-        up=(-0.3, "mns0"), dn=(0.8, "mns0"), inward=(1 / 8, "mw0"),
-        corner_dy=(-1 / 3, "upper_lip_h"), corner_at_mid=True,
+        up=(-0.35, "mns0"), dn=(1.1, "mns0"), inward=(1 / 24, "mw0"),
+        corner_dy=(-0.25, "mns0"), corner_at_mid=True, upper_teeth=1.0, lower_teeth=0.5,
     ),
-    "i": MouthShape(dn=(1 / 6, "mns0"), inward=(-1 / 12, "mw0"), corner_dy=(-0.5, "upper_lip_h")),
-    "u": MouthShape(up=(-0.3, "mns0"), dn=(0.3, "mns0"), inward=(0.2, "mw0")),
-    "e": MouthShape(dn=(0.5, "mns0"), inward=(-1 / 12, "mw0"), corner_dy=(-0.5, "upper_lip_h")),
-    "o": MouthShape(up=(-0.25, "mns0"), dn=(0.65, "mns0"), inward=(0.2, "mw0"), corner_at_mid=True),
-    "n": MouthShape(up=(-0.3, "mns0"), dn=(0.4, "mns0"), corner_dy=(-1 / 3, "upper_lip_h")),
+    # i: spread lips, thinned, both rows of teeth nearly together
+    "i": MouthShape(dn=(0.22, "mns0"), inward=(-1 / 12, "mw0"), corner_dy=(-0.5, "upper_lip_h"),
+                    upper_lip=(-0.05, "mns0"), lower_lip=(-0.05, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
+    # u: small and puckered: corners well in, lips pushed out (thicker)
+    "u": MouthShape(up=(-0.35, "mns0"), dn=(0.35, "mns0"), inward=(0.2, "mw0"),
+                    upper_lip=(0.14, "mns0"), lower_lip=(0.14, "mns0")),
+    # e: mid-spread, half open, the upper teeth and a low tongue showing
+    "e": MouthShape(dn=(0.5, "mns0"), inward=(-1 / 12, "mw0"), corner_dy=(-0.5, "upper_lip_h"),
+                    upper_lip=(-0.03, "mns0"), upper_teeth=1.0, lower_teeth=0.6, tongue=0.2),
+    # o: round, corners in, lips a little pushed out
+    "o": MouthShape(up=(-0.25, "mns0"), dn=(0.6, "mns0"), inward=(0.14, "mw0"), corner_at_mid=True,
+                    upper_lip=(0.05, "mns0"), lower_lip=(0.05, "mns0"), upper_teeth=0.3, tongue=0.2),
+    # n (en): open, the tongue tip up behind the upper teeth
+    "n": MouthShape(up=(-0.3, "mns0"), dn=(0.4, "mns0"), corner_dy=(-1 / 3, "upper_lip_h"),
+                    upper_teeth=1.0, lower_teeth=0.3, tongue=1.0),
 }
 
 # Our addition to 5.2.2 (the thesis moves only the chin 2.1 with 8.2): a real
@@ -89,12 +129,12 @@ def shape_displacements(face: FaceModel) -> np.ndarray:
     """Image displacement of every model point for each basic shape.
 
     Returns (len(MOUTH_SYMBOLS), P, 2) pixels in MOUTH_SYMBOLS / POINT_NAMES
-    order; row m is all zeros. Besides the four control points: 8.1 and the
-    inner upper lip 2.2 rise with 8.9; the peaks 8.9 / 8.10 also move inwards
+    order; row m is all zeros. Besides the four control points: 8.1 rises
+    with 8.9, the inner upper lip 2.2 too, less the shape's upper_lip; the peaks 8.9 / 8.10 also move inwards
     with the corners in proportion to their distance from the mouth centre
     (so a narrowing shape never carries a corner past a peak); 8.10 mirrors
-    8.9; the chin 2.1 follows 8.2, the jaw corners by JAW_CORNER_SHARE of it; the inner lower lip 2.3 follows 8.2 but
-    never rises above 2.2 (in f the lower lip tucks under the upper one).
+    8.9; the chin 2.1 follows 8.2, the jaw corners by JAW_CORNER_SHARE of it; the inner lower lip 2.3 follows 8.2 (less
+    lower_lip) but never rises above 2.2 (in f the lower lip tucks under the upper one).
     """
     i = POINT_INDEX
     p = face.points
@@ -105,7 +145,9 @@ def shape_displacements(face: FaceModel) -> np.ndarray:
     out = np.zeros((len(MOUTH_SYMBOLS), len(POINT_NAMES), 2))
     for k, symbol in enumerate(MOUTH_SYMBOLS):
         shape = MOUTH_SHAPES[symbol]
-        up, dn, inward, corner = (_px(face, t) for t in (shape.up, shape.dn, shape.inward, shape.corner_dy))
+        up, dn, inward, corner, upper_lip, lower_lip = (
+            _px(face, t) for t in (shape.up, shape.dn, shape.inward, shape.corner_dy, shape.upper_lip,
+                                   shape.lower_lip))
         d = out[k]
         if shape.corner_at_mid:
             mid = (p[i["8.9"], 1] + up + p[i["8.2"], 1] + dn) / 2 + corner
@@ -117,14 +159,27 @@ def shape_displacements(face: FaceModel) -> np.ndarray:
         d[i["8.9"]] = (inward * frac_89, up)
         d[i["8.10"]] = (-inward * frac_810, up)
         d[i["8.1"], 1] = up
-        d[i["2.2"], 1] = up
+        d[i["2.2"], 1] = up + upper_lip
         d[i["8.2"], 1] = dn
         d[i["2.1"], 1] = dn
         d[i["2.13"], 1] = JAW_CORNER_SHARE * dn
         d[i["2.14"], 1] = JAW_CORNER_SHARE * dn
-        lower = max(p[i["2.3"], 1] + dn, p[i["2.2"], 1] + up)
+        lower = max(p[i["2.3"], 1] + dn - lower_lip, p[i["2.2"], 1] + up + upper_lip)
         d[i["2.3"], 1] = lower - p[i["2.3"], 1]
     return out
+
+
+# What the drawing shows besides the points, per shape (MouthShape fields), in this order.
+SHOWN = ("upper_teeth", "lower_teeth", "tongue", "bite")
+
+
+@functools.lru_cache(maxsize=1)
+def shown_parts() -> np.ndarray:
+    """(len(MOUTH_SYMBOLS), len(SHOWN)) the SHOWN amounts of each basic shape (read-only); a mix
+    of shapes shows its weights @ this table."""
+    table = np.array([[getattr(MOUTH_SHAPES[s], name) for name in SHOWN] for s in MOUTH_SYMBOLS])
+    table.flags.writeable = False
+    return table
 
 
 def mouth_weights(mouth: Sequence[tuple[str, float]]) -> np.ndarray:

@@ -77,6 +77,8 @@ class PosedFace:
     iris_r: (2,) iris radii r1, r2 in pixels, same order.
     nose_side: +1 draw the nose bridge through 9.7, C, 9.13 (turn > 0, step 8),
         -1 through 9.6, C, 9.14.
+    mouth: (len(MOUTH_SYMBOLS),) weights of the basic mouth shapes (the drawing
+        shows their teeth, tongue and bite: face/mouth.py shown_parts).
     """
 
     xy: np.ndarray
@@ -84,6 +86,7 @@ class PosedFace:
     pupils: np.ndarray
     iris_r: np.ndarray
     nose_side: int
+    mouth: np.ndarray
 
     def p(self, name: str) -> np.ndarray:
         """(2,) image position of a lifted point by name."""
@@ -265,7 +268,8 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
             xy[replaced] = xy[by]
         else:
             xy[replaced] += weight * (xy[by] - xy[replaced])
-    return PosedFace(xy=xy, hair=out[n:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if turn > 0 else -1)
+    return PosedFace(xy=xy, hair=out[n:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if turn > 0 else -1,
+                     mouth=coef[:_N_MOUTH])
 
 
 def unrolled(state: FaceState) -> FaceState:

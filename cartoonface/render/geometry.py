@@ -146,11 +146,7 @@ PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
     ("eye_r", "corner", (("3.7", "3.1", "3.11"), ("3.11", "3.3", "3.7"))),         # step 10
     ("lid_l", "open", (("3.12", "3.2", "3.8"),)),    # upper lid line, drawn bolder
     ("lid_r", "open", (("3.7", "3.1", "3.11"),)),
-    ("mouth", "corner", (("8.1", "8.9", "8.4"), ("8.4", "8.2", "8.3"), ("8.3", "8.10", "8.1"))),  # step 13
-    ("mouth_inner", "corner", (("R", "2.2", "S"), ("S", "2.3", "R"))),             # step 13
-    ("lips_line", "open", (("R", "2.2", "S"),)),     # the line where the lips meet
-    ("lower_inner", "open", (("S", "2.3", "R"),)),   # lower edge of the opening (tongue)
-)
+)  # the mouth (step 13): render/mouth.py
 # Points made for the drawing as linear combinations of named points: (coefficient, name).
 DERIVED: dict[str, tuple[tuple[float, str], ...]] = {
     "ear_l": ((1.0, "10.2"), (0.6, "10.8"), (-0.6, "A")),
@@ -221,7 +217,7 @@ def face_shapes(posed: Posed) -> dict[str, str]:
     order with the contour replacement of Alg. 2.3 already applied, `hair` (H, 2),
     `nose_side`). Returns {part: path d} for "hair",
     "face", "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
-    "lid_r", "mouth", "mouth_inner", "lips_line", "lower_inner"; coordinates in pixels rounded to 0.1.
+    "lid_r" (the mouth: render/mouth.py); coordinates in pixels rounded to 0.1.
     """
     from cartoonface.face.lift import LIFTED_NAMES
 

@@ -30,8 +30,11 @@ from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
+from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, element, svg_root
 from cartoonface.render.geometry import face_shapes
+from cartoonface.render.mouth import ROWS as MOUTH_ROWS
+from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
 from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
 
@@ -43,10 +46,7 @@ LID = 0.045       # upper lid (lash line)
 LID_SHADOW = 0.09  # width of the lid's shadow on the eyeball (half of it falls inside the eye)
 FEATURE = 0.02    # nose, the line between the lips
 HAIR_LINE = 0.018
-TEETH = 0.07      # height of the visible upper teeth
-TEETH_OF_WIDTH = 0.12  # ... at most this fraction of the opening's width
-TONGUE = 0.1      # height of the tongue at the bottom of an open mouth
-GLOSS = 0.14      # half-width of the gloss on the lower lip / width of the mouth opening
+LOWER_TEETH_COLOUR = "#ece6e1"  # the lower teeth, in the upper ones' shade: a touch darker than white
 PUPIL = 0.48      # pupil radius / iris radius
 GLINT = 0.26      # highlight radius / iris radius
 CHEEK = (0.2, 0.12)  # blush ellipse radii / d
@@ -140,17 +140,19 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
         "lid_shadow": {"fill": "none", "stroke": p.outline, "stroke-opacity": LID_SHADOW_OPACITY,
                        "stroke-width": number_text(LID_SHADOW * d)},
         "lips": {"fill": "url(#cf-lip)", "stroke": _mix(p.lip, p.outline, 0.4), "stroke-width": number_text(0.012 * d)},
-        "opening": {"fill": p.mouth},
+        # the opening, outlined: the line where the lips meet when it is shut
+        "opening": {"fill": p.mouth, "stroke": _mix(p.mouth, p.lip, 0.25),
+                    "stroke-width": number_text(FEATURE * d * 0.8)},
         "gloss": {"fill": "#ffffff", "opacity": "0.22", "stroke": "none"},
-        "tongue": {"stroke": _mix(p.lip, p.mouth, 0.3), "stroke-width": number_text(2 * TONGUE * d)},
-        "teeth": {"stroke": "#ffffff"},
-        "lips_line": {"fill": "none", "stroke": _mix(p.mouth, p.lip, 0.25), "stroke-width": number_text(FEATURE * d * 0.8)},
+        "tongue": {"fill": _mix(p.lip, p.mouth, 0.3)},
+        "upper_teeth": {"fill": "none", "stroke": "#ffffff"},
+        "lower_teeth": {"fill": "none", "stroke": LOWER_TEETH_COLOUR},
     }
 
 
-# Rows of posed.xy read by the cheeks, the eyes and the mouth: the eye outlines of "l" and "r",
-# the mouth corners 8.4 and 8.3, the corners R and S of the opening, the lower lip 2.3 and 8.2.
-_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3", "R", "S", "2.3", "8.2")]
+# Rows of posed.xy read by the cheeks and the eyes: the eye outlines of "l" and "r", the mouth
+# corners 8.4 and 8.3.
+_ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
@@ -175,7 +177,7 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
         element(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
     for side, eyeball in zip("lr", _eyeballs(posed, points)):
         _eye(group, defs, shapes, side, eyeball, face, uid, style)
-    _mouth(group, defs, shapes, uid, style, face.fapu.d, points[10:14])
+    _mouth(group, defs, posed, uid, style, face.fapu.d)
     return group
 
 
@@ -224,31 +226,34 @@ def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], si
     element(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
 
 
-# _mouth (being redrawn on branch mouth) calls the element helper by its old name.
-_el = element
-
-
-def _mouth(group: etree._Element, defs: etree._Element, shapes: dict[str, str], uid: str,
-           style: dict[str, dict[str, str]], d: float, points: list[list[float]]) -> None:
-    """Append the mouth: lips, the opening with the upper teeth and the tongue clipped to it,
-    the line where the lips meet, a gloss on the lower lip. `d` is the FAPU d in pixels,
-    `points` the posed R, S, 2.3, 8.2 as [x, y]: a narrow, rounded opening (o, u) shows
-    less of the teeth."""
-    (rx, ry), (sx, sy), (ix, iy), (ox, oy) = points
-    width = math.hypot(rx - sx, ry - sy)
-    clip_id = f"cf-mouth-{uid}"
-    _el(_el(defs, "clipPath", {"id": clip_id}), "path", {"d": shapes["mouth_inner"]})
-    mouth = _el(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
-    _el(mouth, "path", {"d": shapes["mouth"], **style["lips"]})
-    _el(mouth, "path", {"d": shapes["mouth_inner"], **style["opening"]})
-    inside = _el(mouth, "g", {"clip-path": f"url(#{clip_id})", "fill": "none"})
-    _el(inside, "path", {"d": shapes["lower_inner"], **style["tongue"]})
-    teeth = min(TEETH * d, TEETH_OF_WIDTH * width)
-    _el(inside, "path", {"d": shapes["lips_line"], **style["teeth"], "stroke-width": number_text(2 * teeth)})
-    _el(mouth, "path", {"d": shapes["lips_line"], **style["lips_line"]})
-    _el(mouth, "ellipse", {"cx": number_text(0.45 * ix + 0.55 * ox), "cy": number_text(0.45 * iy + 0.55 * oy),
-                           "rx": number_text(GLOSS * width), "ry": number_text(0.22 * math.hypot(ox - ix, oy - iy)),
-                           **style["gloss"]})
+def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: str,
+           style: dict[str, dict[str, str]], d: float) -> None:
+    """Append the mouth (render/mouth.py): lips; the opening, its outline the line where the
+    lips meet; the tongue and the lower and upper teeth clipped to it (when it is open by a
+    pixel or more; each row when it shows a pixel or more); the upper teeth on the lower lip
+    (f, clipped by the lips); a gloss on the lower lip. `d` is the FAPU d in pixels."""
+    outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
+    text = mouth_texts(outlines)
+    mouth = element(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
+    element(mouth, "path", {"d": text["lips"], **style["lips"]})
+    element(mouth, "path", {"d": text["opening"], **style["opening"]})
+    if text["tongue_ry"] != "0":  # open by a pixel or more (sizes are whole pixels)
+        clip_id = f"cf-mouth-{uid}"
+        element(element(defs, "clipPath", {"id": clip_id}), "path", {"d": text["opening"]})
+        inside = element(mouth, "g", {"clip-path": f"url(#{clip_id})"})
+        element(inside, "ellipse", {"cx": text["tongue_cx"], "cy": text["tongue_cy"], "rx": text["tongue_rx"],
+                                "ry": text["tongue_ry"], **style["tongue"]})
+        for row in ("lower", "upper"):
+            if text[f"{row}_width"] != "0":
+                element(inside, "path", {"d": text[f"{row}_teeth"], **style[f"{row}_teeth"],
+                                     "stroke-width": text[f"{row}_width"]})
+    if text["bite_width"] != "0":
+        lips_id = f"cf-lips-{uid}"
+        element(element(defs, "clipPath", {"id": lips_id}), "path", {"d": text["lips"]})
+        element(element(mouth, "g", {"clip-path": f"url(#{lips_id})"}), "path",
+            {"d": text["bite"], **style["upper_teeth"], "stroke-width": text["bite_width"]})
+    element(mouth, "ellipse", {"cx": text["gloss_cx"], "cy": text["gloss_cy"], "rx": text["gloss_rx"],
+                           "ry": text["gloss_ry"], **style["gloss"]})
 
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:

@@ -1,0 +1,174 @@
+"""How far apart the 12 mouth shapes look: changed pixels between frontal renders.
+
+For each sample face (female, male) every basic mouth shape is drawn frontally (face_svg:
+plain background, shirt, neutral expression) at the model's canvas size and rasterised
+with resvg. A pixel "changes" between two renders when any colour channel differs by more
+than CHANGED (of 255). Figures are shares of the face's pixels: the pixels inside the face
+outline (class "face", the closed 'm' drawing), ears and hair not counted.
+
+Goals (issue 10): 'a' vs 'm' >= 5 %; every pair of the 12 shapes >= 1 %; 'a' vs 'o' >= 2.5 %.
+Also printed: the share of the face's pixels the mouth's drawing covers (m and a).
+
+`python -m bench.mouth --pictures DIR` also writes the mouth chart (mouth-chart.png: the 12
+shapes of both faces, zoomed, labelled with syllables that use them) and the blend strip
+(mouth-blend.png) into DIR.
+"""
+
+from __future__ import annotations
+
+import io
+import itertools
+import sys
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+from PIL import Image, ImageDraw, ImageFont
+
+from cartoonface.data import SAMPLE_FACES
+from cartoonface.face.lift import lift
+from cartoonface.face.model import FaceModel, load_face
+from cartoonface.face.mouth import MOUTH_SYMBOLS
+from cartoonface.face.pose import pose_face
+from cartoonface.face.state import FaceState
+from cartoonface.render.geometry import face_shapes
+from cartoonface.render.elements import NSMAP, SVG, svg_bytes
+from cartoonface.render.png import svg_to_png
+from cartoonface.render.svg import face_svg
+
+FACES = SAMPLE_FACES
+CHANGED = 24  # a channel difference above this (of 255) counts as a changed pixel
+# Goals of issue 10, as shares of the face's pixels.
+GOAL_A = 0.05
+GOAL_PAIR = 0.01
+GOAL_A_O = 0.025
+
+# The mouth chart: examples of pinyin syllables that use each shape (docs/mandarin-mouth-shapes.md).
+SYLLABLES = {"m": "b p m", "f": "f", "h'": "d t n l j q x", "h": "g k h / e eng er", "r": "zh ch sh r",
+             "z": "z c s", "a": "a (ba, da)", "i": "i (yi, bi)", "u": "u, yu (wu, ju)", "e": "ye, ei",
+             "o": "o (wo, ou)", "n": "en (ben, hen)"}
+ZOOM = 4.0  # chart cells: the mouth region drawn this many times the model size
+BLEND = ("m", "a", "o", "u", "i", "m")  # the blend strip's path through the shapes
+BLEND_STEPS = 4  # pictures from one shape to the next (the last one is the next shape)
+
+
+def render(face: FaceModel, state: FaceState, mouth: bool = True) -> np.ndarray:
+    """(height, width, 3) uint8 frontal render of `face` in `state` at the canvas size; without
+    the drawing of the mouth (the group of class "mouth") unless `mouth`."""
+    root = face_svg(face, state)
+    if not mouth:
+        drawn = root.find(f".//{{{SVG}}}g[@class='mouth']")
+        drawn.getparent().remove(drawn)
+    png = svg_to_png(svg_bytes(root))
+    with Image.open(io.BytesIO(png)) as image:
+        return np.asarray(image.convert("RGB"))
+
+
+def face_mask(face: FaceModel) -> np.ndarray:
+    """(height, width) bool: the pixels inside the face outline of the closed 'm' drawing."""
+    root = etree.Element(f"{{{SVG}}}svg", {"width": f"{face.width:g}", "height": f"{face.height:g}",
+                                            "viewBox": f"0 0 {face.width:g} {face.height:g}"}, nsmap=NSMAP)
+    etree.SubElement(root, f"{{{SVG}}}rect", {"width": "100%", "height": "100%", "fill": "#000000"})
+    etree.SubElement(root, f"{{{SVG}}}path", {"d": face_shapes(pose_face(lift(face), FaceState()))["face"],
+                                              "fill": "#ffffff"})
+    with Image.open(io.BytesIO(svg_to_png(svg_bytes(root)))) as image:
+        return np.asarray(image.convert("L")) > 127
+
+
+def changed(first: np.ndarray, second: np.ndarray) -> int:
+    """Number of pixels where two (h, w, 3) renders differ by more than CHANGED in a channel."""
+    return int((np.abs(first.astype(np.int16) - second.astype(np.int16)).max(axis=2) > CHANGED).sum())
+
+
+def shares(face: FaceModel) -> dict[tuple[str, str], float]:
+    """{(s, t): changed pixels between the renders of shapes s and t / face pixels} for every
+    pair of MOUTH_SYMBOLS (s before t in that order)."""
+    renders = {s: render(face, FaceState().with_mouth(s)) for s in MOUTH_SYMBOLS}
+    area = int(face_mask(face).sum())
+    return {(s, t): changed(renders[s], renders[t]) / area for s, t in itertools.combinations(MOUTH_SYMBOLS, 2)}
+
+
+def mouth_size(face: FaceModel, symbol: str) -> float:
+    """The pixels the mouth's drawing covers in shape `symbol` (those that change when it is
+    left out), as a share of the face's pixels."""
+    state = FaceState().with_mouth(symbol)
+    return changed(render(face, state), render(face, state, mouth=False)) / int(face_mask(face).sum())
+
+
+def main() -> None:
+    """Print, for each sample face, every shape's change from 'm', the closest pairs, 'a' vs 'o'
+    and the size of the drawn mouth at rest and wide open."""
+    for name in ("female", "male"):
+        face = load_face(FACES / f"{name}.json")
+        pairs = shares(face)
+        from_m = {t: pairs[("m", t)] for t in MOUTH_SYMBOLS[1:]}
+        print(f"{name}: face pixels {int(face_mask(face).sum())}; the drawn mouth covers "
+              f"{100 * mouth_size(face, 'm'):.1f} % of them in m, {100 * mouth_size(face, 'a'):.1f} % in a")
+        print("  vs m: " + ", ".join(f"{t} {100 * v:.1f} %" for t, v in from_m.items()))
+        closest = sorted(pairs.items(), key=lambda item: item[1])[:4]
+        print("  closest pairs: " + ", ".join(f"{s}/{t} {100 * v:.2f} %" for (s, t), v in closest))
+        a_o = pairs[("a", "o")]
+        print(f"  a/o {100 * a_o:.1f} %")
+        ok = from_m["a"] >= GOAL_A and closest[0][1] >= GOAL_PAIR and a_o >= GOAL_A_O
+        print(f"  goals (a >= {100 * GOAL_A:g} %, pairs >= {100 * GOAL_PAIR:g} %, a/o >= {100 * GOAL_A_O:g} %): "
+              f"{'met' if ok else 'NOT met'}")
+
+
+def _cell(face: FaceModel, state: FaceState, zoom: float) -> Image.Image:
+    """The mouth region of `face` in `state` (frontal render, nose tip to below the chin),
+    drawn `zoom` times the model size: an RGB image."""
+    d = face.fapu.d
+    centre = (face.point("8.4") + face.point("8.3")) / 2
+    x0, y0, w, h = centre[0] - 0.55 * d, face.point("9.15")[1] - 0.12 * d, 1.1 * d, 1.15 * d
+    root = face_svg(face, state)
+    root.set("viewBox", f"{x0:.2f} {y0:.2f} {w:.2f} {h:.2f}")
+    root.set("width", f"{w * zoom:.0f}")
+    root.set("height", f"{h * zoom:.0f}")
+    with Image.open(io.BytesIO(svg_to_png(svg_bytes(root)))) as image:
+        return image.convert("RGB")
+
+
+def _grid(cells: list[list[tuple[str, Image.Image]]], title: str) -> Image.Image:
+    """Cells (label, image) in rows on white, each labelled above, under a title line."""
+    font = ImageFont.load_default(size=18)
+    width, height = cells[0][0][1].size
+    pad, label = 8, 26
+    sheet = Image.new("RGB", (pad + len(cells[0]) * (width + pad), 34 + len(cells) * (height + label + pad)), "white")
+    draw = ImageDraw.Draw(sheet)
+    draw.text((pad, 6), title, fill="#222222", font=font)
+    for i, row in enumerate(cells):
+        for j, (text, image) in enumerate(row):
+            x, y = pad + j * (width + pad), 34 + i * (height + label + pad)
+            draw.text((x + 2, y + 2), text, fill="#222222", font=font)
+            sheet.paste(image, (x, y + label))
+    return sheet
+
+
+def pictures(folder: Path) -> None:
+    """Write mouth-chart.png and mouth-blend.png into `folder` (256-colour palettes: small files)."""
+    faces = [load_face(FACES / f"{name}.json") for name in ("female", "male")]
+    rows = []
+    for face in faces:
+        for half in (MOUTH_SYMBOLS[:6], MOUTH_SYMBOLS[6:]):
+            rows.append([(f"{s}: {SYLLABLES[s]}", _cell(face, FaceState().with_mouth(s), ZOOM / 1.6)) for s in half])
+    _grid(rows, "The 12 basic mouth shapes (thesis 002, 5.2.2), female (rows 1-2) and male (rows 3-4) "
+                "sample faces, with pinyin that use them").quantize(256).save(folder / "mouth-chart.png", optimize=True)
+    blend = []
+    for face in faces:
+        row = []
+        for s, t in zip(BLEND, BLEND[1:]):
+            for k in range(BLEND_STEPS):
+                w = k / BLEND_STEPS
+                mouth = ((s, 1.0 - w), (t, w)) if w else ((s, 1.0),)
+                row.append((f"{s}>{t} {w:g}" if w else s, _cell(face, FaceState(mouth=mouth), ZOOM / 2.4)))
+        middle = len(row) // 2
+        blend.extend([row[:middle], row[middle:]])
+    _grid(blend, "Blends " + " > ".join(BLEND) + f" in steps of 1/{BLEND_STEPS} (female: rows 1-2, male: rows 3-4)"
+          ).quantize(256).save(folder / "mouth-blend.png", optimize=True)
+
+
+if __name__ == "__main__":
+    if sys.argv[1:2] == ["--pictures"]:
+        pictures(Path(sys.argv[2]))
+    else:
+        main()

@@ -1,0 +1,221 @@
+"""The drawn mouth: outlines of the lips, the opening, the teeth and the tongue from posed points.
+
+Thesis 002, Alg. 2.2 step 13 draws the lips as arc(8.1, 8.9, 8.4), arc(8.4, 8.2, 8.3),
+arc(8.3, 8.10, 8.1) and the opening as arc(R, 2.2, S), arc(S, 2.3, R), with R, S the mouth
+corners. Drawn that way an open mouth is a diamond with beak points at the corners. We keep
+the points (every outline passes through the thesis's points) but shape the curves between
+them as a cartoonist would (docs/mouth.md):
+
+- A frame along the mouth: x from the corner 8.4 to 8.3, y perpendicular (down the face).
+  All curves are cubic Bezier pieces built in that frame, so a turned or rolled head draws
+  the same mouth, turned.
+- Opening: its corners sit inside the lip corners (by INSET of its height, at most
+  INSET_MAX d), so the lips wrap round them. From each corner the upper edge runs to the
+  inner upper lip 2.2 and on to the other corner, the lower edge through 2.3, each with a
+  level tangent at 2.2 / 2.3. The tangent at a corner turns from the chord (a slit, pointed
+  ends) towards the perpendicular (an ellipse) as the opening gets taller for its width:
+  `roundness` = height / (ROUND x width), clipped to 0..1. A quarter ellipse has arms of
+  KAPPA times its half axes.
+- Lips: 8.4 -> 8.9 -> 8.1 -> 8.10 -> 8.3 along the top, 8.3 -> 8.2 -> 8.4 along the
+  bottom; level tangents at the peaks 8.9 / 8.10, the Cupid's bow 8.1 and 8.2; at the
+  corners the same turn towards the perpendicular, never below LIP_ROUND, so the corners are
+  round, not pointed.
+- Teeth: two rows, bands drawn as strokes clipped by the opening, so only the inside shows:
+  the upper one hangs from the level of 2.2 (up to TEETH d), the lower one stands on 2.3 (up
+  to LOWER_TEETH d); each at most TEETH_OF_OPENING of the opening's height (a dark gap stays
+  between them) and scaled by the shape's upper_teeth / lower_teeth; they span TEETH_SPAN of
+  the opening's width, curve down in the middle (TEETH_SAG, the dental arch) and, where the
+  corners lie above them (a spread or smiling mouth), rise towards the ends with them.
+- Tongue: an ellipse at the bottom of the opening, raised with the shape's `tongue` until
+  its top reaches the upper edge, taller and narrower (n: tongue tip behind the upper teeth).
+- Bite (f): the upper teeth as a band of height up to BITE d under the line where the lips
+  meet, over the lower lip (clipped by the lips' outline).
+- The line where the lips meet is the opening's outline, stroked (render/svg.py).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cartoonface.face.lift import LIFTED_INDEX
+from cartoonface.render.numbers import number_texts
+
+# The posed points the mouth is drawn from, in this order (thesis 002, Alg. 2.2 step 13).
+MOUTH_POINTS = ("8.4", "8.3", "8.9", "8.10", "8.1", "2.2", "2.3", "8.2")
+ROWS = np.array([LIFTED_INDEX[name] for name in MOUTH_POINTS])
+
+KAPPA = 4 * (math.sqrt(2) - 1) / 3  # Bezier arm of a quarter circle of radius 1 (0.5523)
+SHUT = 0.005       # an opening less tall than this share of d is shut (a slanted mouth's 2.2 and 2.3
+                   # of a shut model, side by side, lie a fraction of a pixel apart across it)
+ROUND = 0.55       # an opening this tall for its width has fully round (elliptic) corners
+INSET = 0.1        # the opening's corners inside the lip corners, share of its height ...
+INSET_MAX = 0.03   # ... at most this share of the FAPU d
+LIP_ROUND = 0.5    # the lips' corners are at least this round (0: pointed, 1: a half circle) ...
+LIP_FOLLOWS = 0.8  # ... and as round as this share of the opening's roundness
+BOW = 0.4          # Bezier arm between a peak 8.9 / 8.10 and the Cupid's bow 8.1, share of their distance
+TEETH = 0.075      # full height of the upper teeth showing, share of d
+LOWER_TEETH = 0.055  # ... of the lower teeth
+TEETH_OF_OPENING = 0.46  # a row of teeth at most this share of the opening's height
+TEETH_SPAN = 0.9  # the rows of teeth span this share of the opening's width
+TEETH_SAG = 0.3   # the rows curve down in the middle (the dental arch) by this share of their height
+LOWER_FOLLOW = 0.3  # the lower row follows the rise of the corners this much less than the upper
+TONGUE_WIDTH = 0.34  # tongue half-width, share of the opening's width
+TONGUE_HEIGHT = 0.32  # tongue half-height, share of the opening's height, doubled when raised
+TONGUE_TIP = 0.5   # a raised tongue is this much narrower (its tip)
+BITE = 0.05        # height of the upper teeth resting on the lower lip (f), share of d
+BITE_OF_LIP = 0.8  # ... at most this share of the lower lip's thickness
+BITE_SPAN = 0.7    # ... across this share of the teeth's span
+GLOSS = 0.14       # half-width of the gloss on the lower lip, share of the opening's width
+
+
+@dataclass(frozen=True)
+class MouthOutlines:
+    """A drawn mouth in image pixels. A path is (1 + 3k, 2): its start point, then k cubic
+    Bezier pieces (first control, second control, end).
+
+    lips: closed outer outline from 8.4 over the top and back under the bottom (6 pieces).
+    opening: closed, from the left inner corner along the upper edge and back along the
+        lower edge (4 pieces); it clips the teeth and the tongue; its upper edge (the first
+        2 pieces) is where the lips meet.
+    upper_teeth, lower_teeth: centre lines (1 piece) of the rows, with their stroke widths
+        (twice the height that shows inside the opening); width 0 when a row is hidden.
+    tongue: (cx, cy, rx, ry): an ellipse, level in the image (it shows through the opening
+        only, where a turn of the head's small angles does not show); ry 0 when shut.
+    bite: centre line (1 piece) and width of the teeth on the lower lip (0 when none).
+    gloss: (cx, cy, rx, ry) the highlight on the lower lip.
+    rows: (44, 2) the paths' rows in one array: lips, opening, upper and lower teeth, bite.
+    """
+
+    lips: np.ndarray
+    opening: np.ndarray
+    upper_teeth: np.ndarray
+    upper_width: float
+    lower_teeth: np.ndarray
+    lower_width: float
+    tongue: tuple[float, float, float, float]
+    bite: np.ndarray
+    bite_width: float
+    gloss: tuple[float, float, float, float]
+    rows: np.ndarray
+
+
+Point = tuple[float, float]  # a point in the mouth's frame (plain floats: a handful per drawing)
+
+
+def _row(middle: Point, half_width: float, sag: float, follow: float) -> list[Point]:
+    """The 4 control points of the centre line of a row of teeth through `middle`, from
+    `half_width` left of it to as far right, `sag` pixels lower at the middle than at the
+    ends. Where the mouth's corners (at y 0) lie above `middle`, the ends rise by `follow`
+    x that height, as the edge of a smiling opening does (`follow` includes the square of
+    half_width / the opening's half width)."""
+    x, y = middle
+    end = y + follow * min(-y, 0.0)
+    dip = end + 4 * (sag + y - end) / 3  # a cubic's middle is 3/4 of the way to control points this low
+    return [(x - half_width, end), (x - half_width / 3, dip), (x + half_width / 3, dip), (x + half_width, end)]
+
+
+def _half(corner: Point, middle: Point, roundness: float) -> list[Point]:
+    """The 4 control points of a cubic from `corner` to `middle`, level at `middle`. At the
+    corner it leaves between along the chord (roundness 0: a third of it) and straight up or
+    down to `middle`'s height (roundness 1: an ellipse arm of KAPPA x the height); at
+    `middle` its arm is KAPPA (ellipse) to a third (chord) of the x distance."""
+    (cx, cy), (mx, my) = corner, middle
+    level = (roundness * KAPPA + (1 - roundness) / 3) * (cx - mx)
+    first = (cx + (1 - roundness) * (mx - cx) / 3, cy + (1 - roundness) * (my - cy) / 3 + roundness * KAPPA * (my - cy))
+    return [corner, first, (mx + level, my), middle]
+
+
+def _edge(left: Point, middle: Point, right: Point, roundness: float) -> list[Point]:
+    """The 7 path rows (start, then 2 cubics) of an edge left -> middle -> right."""
+    return _half(left, middle, roundness) + _half(right, middle, roundness)[2::-1]
+
+
+def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutlines:
+    """The drawn mouth from posed points.
+
+    Takes `points` (8, 2) image pixels of MOUTH_POINTS, `shown` (4,) the amounts of
+    face/mouth.py SHOWN (upper_teeth, lower_teeth, tongue, bite) of the mouth's mix of
+    shapes, and `d` the FAPU d in pixels. Returns the MouthOutlines in image pixels.
+    """
+    upper_teeth, lower_teeth, tongue, bite = shown.tolist()
+    (lx, ly), (rx, ry), *others = points.tolist()
+    width = max(math.hypot(rx - lx, ry - ly), 1e-9)
+    ex, ey = (rx - lx) / width, (ry - ly) / width  # x along the mouth; y = (-ey, ex), down the face
+    ox, oy = (lx + rx) / 2, (ly + ry) / 2
+    half = width / 2
+    corner_l, corner_r = (-half, 0.0), (half, 0.0)
+    peak_l, peak_r, bow, inner_up, inner_dn, bottom = (
+        ((x - ox) * ex + (y - oy) * ey, (y - oy) * ex - (x - ox) * ey) for x, y in others)
+
+    height = inner_dn[1] - inner_up[1]
+    if height < SHUT * d:  # 2.3 on 2.2 (or above it) in the model: shut, whatever the mouth's slant
+        inner_dn, height = inner_up, 0.0
+    inset = min(INSET * height, INSET_MAX * d, 0.5 * half)
+    open_l, open_r = (inset - half, 0.0), (half - inset, 0.0)
+    inner_half = half - inset
+    roundness = min(height / (ROUND * 2 * inner_half), 1.0)
+    opening = _edge(open_l, inner_up, open_r, roundness) + _edge(open_r, inner_dn, open_l, roundness)[1:]
+
+    lip_round = max(LIP_ROUND, LIP_FOLLOWS * roundness)
+    (px, py), (bx, by), (qx, qy) = peak_l, bow, peak_r
+    left_bow, right_bow = BOW * (bx - px), BOW * (qx - bx)
+    lips = (_half(corner_l, peak_l, lip_round) + [(px + left_bow, py), (bx - left_bow, by), bow,
+                                                  (bx + right_bow, by), (qx - right_bow, qy)]
+            + _half(corner_r, peak_r, lip_round)[::-1] + _edge(corner_r, bottom, corner_l, lip_round)[1:])
+
+    row = TEETH_OF_OPENING * height
+    upper_h = upper_teeth * min(TEETH * d, row)
+    lower_h = lower_teeth * min(LOWER_TEETH * d, row)
+    span = TEETH_SPAN * inner_half
+    follow = TEETH_SPAN**2
+    lower_lip = bottom[1] - inner_dn[1]
+    bite_h = bite * min(BITE * d, BITE_OF_LIP * lower_lip)
+    teeth = (_row(inner_up, span, TEETH_SAG * upper_h, follow)
+             + _row(inner_dn, span, TEETH_SAG * lower_h, LOWER_FOLLOW * follow)
+             + _row((inner_up[0], inner_up[1] + bite_h / 2), span * BITE_SPAN, TEETH_SAG * bite_h,
+                    follow * BITE_SPAN**2))
+
+    tongue_rx = TONGUE_WIDTH * 2 * inner_half * (1 - TONGUE_TIP * tongue)
+    tongue_ry = TONGUE_HEIGHT * height * (1 + tongue)
+    # at rest the tongue's top is a third of the way up the opening; raised, at its upper edge
+    top = (1 - tongue) * (inner_dn[1] - height / 3) + tongue * inner_up[1]
+    centres = [(inner_dn[0], top + tongue_ry), (0.45 * inner_dn[0] + 0.55 * bottom[0], 0.45 * inner_dn[1] + 0.55 * bottom[1])]
+
+    rows = lips + opening + teeth + centres
+    local = np.fromiter(itertools.chain.from_iterable(rows), float, 2 * len(rows)).reshape(-1, 2)
+    image = local @ np.array([[ex, ey], [-ey, ex]]) + (ox, oy)
+    (tx, ty), (gx, gy) = image[-2:].tolist()
+    return MouthOutlines(
+        lips=image[:19], opening=image[19:32],
+        upper_teeth=image[32:36], upper_width=2 * upper_h,
+        lower_teeth=image[36:40], lower_width=2 * lower_h,
+        bite=image[40:44], bite_width=bite_h,
+        tongue=(tx, ty, tongue_rx, tongue_ry),
+        gloss=(gx, gy, GLOSS * 2 * inner_half, 0.22 * lower_lip),
+        rows=image[:44],
+    )
+
+
+# The SVG texts of a drawn mouth, "|" between them, in TEXTS order: the path data of the
+# lips and the opening (closed), the rows of teeth and the bite (one cubic each), in
+# MouthOutlines.rows order, then single numbers.
+TEXTS = ("lips", "opening", "upper_teeth", "lower_teeth", "bite", "upper_width", "lower_width", "bite_width",
+         "tongue_cx", "tongue_cy", "tongue_rx", "tongue_ry", "gloss_cx", "gloss_cy", "gloss_rx", "gloss_ry")
+_TEMPLATE = "|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close
+                      for pieces, close in ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))] + ["%s"] * 11)
+
+
+def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
+    """The SVG texts of `outlines` by the names in TEXTS: path data and positions to 0.1 px; the
+    sizes (stroke widths, radii) in whole pixels, as the animation writer draws the paths: then
+    mouths that differ by less than a pixel are written once, not once per tenth."""
+    sizes = np.rint([outlines.upper_width, outlines.lower_width, outlines.bite_width, *outlines.tongue[2:],
+                     *outlines.gloss[2:]])
+    numbers = np.concatenate([outlines.rows.ravel(), sizes[:3], outlines.tongue[:2], sizes[3:5], outlines.gloss[:2],
+                              sizes[5:]])
+    text = (_TEMPLATE % number_texts(numbers)).replace(" -", "-")
+    return dict(zip(TEXTS, text.split("|")))
