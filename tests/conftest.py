@@ -60,6 +60,15 @@ def speak(text: str, path: Path, speed: int | None = None) -> Path:
     return path
 
 
+def spoken_inputs(folder: Path, text: str, speed: int) -> tuple[Path, Path]:
+    """`text` read by espeak-ng at `speed` words per minute into `folder`/speech.wav, and the
+    text itself in `folder`/text.txt (UTF-8). Returns (recording, transcript) paths."""
+    speech, transcript = folder / "speech.wav", folder / "text.txt"
+    speak(text, speech, speed=speed)
+    transcript.write_text(text + "\n", encoding="utf-8")
+    return speech, transcript
+
+
 def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subprocess.CompletedProcess[str]:
     """Run `python -m cartoonface ARGS` as a user would; return the finished process."""
     return subprocess.run(

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import run_cli, speak
+from tests.conftest import run_cli, spoken_inputs
 
 pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
 
@@ -20,11 +20,7 @@ TEXT = "你好。谢谢你。"
 @pytest.fixture(scope="module")
 def inputs(tmp_path_factory) -> tuple[Path, Path]:
     """A short espeak-ng recording and its transcript file."""
-    folder = tmp_path_factory.mktemp("cli")
-    speech, transcript = folder / "speech.wav", folder / "text.txt"
-    speak(TEXT, speech, speed=150)
-    transcript.write_text(TEXT, encoding="utf-8")
-    return speech, transcript
+    return spoken_inputs(tmp_path_factory.mktemp("cli"), TEXT, speed=150)
 
 
 def generate_args(speech: Path, transcript: Path, out: Path, *extra: str) -> list[str]:

@@ -13,7 +13,7 @@ from lxml import etree, html
 from cartoonface.errors import ActionsError, AudioError, FaceModelError, InputError, OptionError, TranscriptError
 from cartoonface.pipeline import STAGES, Options, generate
 from cartoonface.speech.textgrid import read_textgrid
-from tests.conftest import speak
+from tests.conftest import spoken_inputs
 
 pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
 
@@ -25,11 +25,7 @@ TEXT = "今天天气很好。我们去公园。"
 @pytest.fixture(scope="module")
 def inputs(tmp_path_factory) -> tuple[Path, Path]:
     """A short espeak-ng Mandarin recording and its transcript file."""
-    folder = tmp_path_factory.mktemp("inputs")
-    speech, transcript = folder / "speech.wav", folder / "text.txt"
-    speak(TEXT, speech, speed=160)
-    transcript.write_text(TEXT + "\n", encoding="utf-8")
-    return speech, transcript
+    return spoken_inputs(tmp_path_factory.mktemp("inputs"), TEXT, speed=160)
 
 
 @pytest.fixture(scope="module")
