@@ -43,18 +43,19 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-ges
                  "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
 
 
-def build_input(folder: Path) -> tuple[Path, Path, float]:
-    """Write speech.wav and transcript.txt (>= TARGET_SECONDS) into `folder`; return paths and seconds."""
+def build_input(folder: Path, target: float = TARGET_SECONDS) -> tuple[Path, Path, float]:
+    """Write speech.wav and transcript.txt (THCHS-30 sentences with GAP s between them, repeated
+    until >= `target` seconds) into `folder`; return their paths and the seconds of audio."""
     with (THCHS / "transcripts.tsv").open(encoding="utf-8") as handle:
         rows = [row for row in csv.DictReader(handle, delimiter="\t") if row["hanzi"].strip()]
     pieces, lines, total, rate = [], [], 0.0, None
-    while total < TARGET_SECONDS:
+    while total < target:
         for row in rows:
             samples, rate = soundfile.read(THCHS / row["wav"], dtype="float32")
             pieces += [samples, np.zeros(round(GAP * rate), dtype=np.float32)]
             lines.append(row["hanzi"].strip() + "。")
             total += len(samples) / rate + GAP
-            if total >= TARGET_SECONDS:
+            if total >= target:
                 break
     audio, transcript = folder / "speech.wav", folder / "transcript.txt"
     soundfile.write(audio, np.concatenate(pieces), rate, subtype="PCM_16")

@@ -2,7 +2,7 @@
 
 Input built at bench time in a temporary folder (never committed): the THCHS-30 recordings
 of ../shared/bench/zh/thchs30_mfa_example that have a Hanzi transcript, one after another
-with 0.4 s of silence, repeated until TARGET_SECONDS (as bench/generate.py does for 3 minutes).
+with 0.4 s of silence, repeated until TARGET_SECONDS (bench/generate.py build_input).
 It is aligned once; then for each style (animate/style.py) the schedule of seed 0 is drawn
 with the recording's pitch peaks, sampled at 30 fps with the idle sway, and measured:
 
@@ -20,15 +20,13 @@ with the recording's pitch peaks, sampled at 30 fps with the idle sway, and meas
 
 from __future__ import annotations
 
-import csv
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-import soundfile
 
-from bench.generate import GAP, THCHS
+from bench.generate import build_input
 from cartoonface.animate.behaviour import schedule, speech_pauses
 from cartoonface.animate.frames import sample_frames
 from cartoonface.animate.gaze import DART_RADIUS
@@ -39,7 +37,7 @@ from cartoonface.animate.timeline import build_timeline
 from cartoonface.data import SAMPLE_FACES
 from cartoonface.face.model import load_face
 from cartoonface.render.animation import animation_svg
-from cartoonface.speech.alignment import analyse
+from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
 
 TARGET_SECONDS = 600.0
@@ -48,24 +46,6 @@ SEED = 0
 PEAK_WINDOW = 0.1  # seconds: a brow "on" a peak is fully up within this of it
 MOVING = 0.05  # degrees per frame: slower head frames count as still
 BLINK_RATE = (10.5, 32.5)  # per minute: the target range
-
-
-def build_input(folder: Path) -> tuple[Path, str]:
-    """Write speech.wav (>= TARGET_SECONDS) into `folder`; return it and its transcript text."""
-    with (THCHS / "transcripts.tsv").open(encoding="utf-8") as handle:
-        rows = [row for row in csv.DictReader(handle, delimiter="\t") if row["hanzi"].strip()]
-    pieces, lines, total, rate = [], [], 0.0, 16000
-    while total < TARGET_SECONDS:
-        for row in rows:
-            samples, rate = soundfile.read(THCHS / row["wav"], dtype="float32")
-            pieces += [samples, np.zeros(round(GAP * rate), dtype=np.float32)]
-            lines.append(row["hanzi"].strip() + "。")
-            total += len(samples) / rate + GAP
-            if total >= TARGET_SECONDS:
-                break
-    audio = folder / "speech.wav"
-    soundfile.write(audio, np.concatenate(pieces), rate, subtype="PCM_16")
-    return audio, "\n".join(lines) + "\n"
 
 
 def near_share(starts: np.ndarray, peaks: np.ndarray) -> float:
@@ -122,7 +102,8 @@ def main() -> None:
     """Build the 10-minute input, align it, and print the figures of every style."""
     face = load_face(SAMPLE_FACES / "female.json")
     with tempfile.TemporaryDirectory() as tmp:
-        audio_path, text = build_input(Path(tmp))
+        audio_path, transcript, _ = build_input(Path(tmp), TARGET_SECONDS)
+        text = transcript.read_text(encoding="utf-8")
         recording = load_audio(audio_path)
         started = time.perf_counter()
         alignment = analyse(recording, text)
