@@ -82,7 +82,7 @@ def analyse(
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
     spans = reconcile(audio, parts, counts)
     aligned: list[Sentence] = []
-    for block in _blocks(spans):
+    for block in _blocks(spans, owners):
         report("align", len(aligned) / len(pieces))
         span = Span(spans[block[0]].start, spans[block[-1]].end)
         if len(block) > 1 and span.duration <= MAX_JOINT:
@@ -143,11 +143,14 @@ def _check_rate(syllables: int, speech: float, source: str, notes: list[str]) ->
         )
 
 
-def _blocks(spans: tuple[Span, ...]) -> list[list[int]]:
-    """Indices of the sentences in runs whose spans touch (cut inside one speaking part)."""
+def _blocks(spans: tuple[Span, ...], owners: list[int]) -> list[list[int]]:
+    """Indices of the pieces in runs whose spans touch (cut inside one speaking part) or that
+    are pieces of one sentence (`owners[k]`: the sentence of piece k). A long sentence without
+    commas is cut into pieces by count, not at its pauses: aligned together, the aligner puts
+    its pauses between the right syllables."""
     blocks = [[0]]
     for index in range(1, len(spans)):
-        if spans[index - 1].end >= spans[index].start:
+        if spans[index - 1].end >= spans[index].start or owners[index - 1] == owners[index]:
             blocks[-1].append(index)
         else:
             blocks.append([index])
