@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
+from pypinyin.seg.mmseg import seg
 
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import align_syllables
@@ -157,10 +158,30 @@ def _blocks(spans: tuple[Span, ...], owners: list[int]) -> list[list[int]]:
     return blocks
 
 
+def word_lengths(texts: Sequence[str]) -> list[int]:
+    """The characters each syllable speaks, in order ("" for the later syllables of a word
+    read out as one token) -> syllables per word, by pypinyin's word segmentation (maximum
+    matching over its phrase dictionary); the lengths sum to len(texts)."""
+    ends, position = {0}, 0
+    for word in seg.cut("".join(texts)):
+        position += len(word)
+        ends.add(position)
+    lengths: list[int] = []
+    position = 0
+    for text in texts:
+        if not lengths or (text and position in ends):
+            lengths.append(0)
+        lengths[-1] += 1
+        position += len(text)
+    return lengths
+
+
 def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[Sentence]:
-    """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`."""
+    """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`
+    (pauses likelier between words, and always possible between sentences)."""
     pinyin = [syllable.pinyin for sentence in texts for syllable in sentence.syllables]
-    timings = iter(align_syllables(audio, span, pinyin))
+    words = [n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])]
+    timings = iter(align_syllables(audio, span, pinyin, words))
     sentences = []
     for sentence in texts:
         syllables = tuple(
