@@ -14,11 +14,24 @@ Biaobei is also run on the speaking parts that the project's segmenter
 (sentences.find_speech_parts, automatic mode) finds, whose edges are looser, and a second
 Chao run widens every part by up to 0.25 s of the surrounding silence, so that the first
 onset has to be found too.
+
+Issue 17 material, made from Biaobei with exact references (each half separately): the
+recordings time-stretched to 0.8x and 1.25x speed and pitch-shifted by +-4 semitones with sox
+(reference times divided by the tempo); paragraphs of PARAGRAPH consecutive recordings joined
+with their own leading and trailing silence (the natural pauses) and aligned as one part; and
+the whole analyser (`analyse.analyse`: segmenter, reconciling, aligner) run on each recording
+and on each paragraph with the transcript's punctuation kept or removed. For every set the
+confidence is scored as a detector of misses: of the onsets flagged below
+analyse.LOW_CONFIDENCE, the share more than 50 ms off (precision), and of those off, the share
+flagged (recall).
 """
 
 from __future__ import annotations
 
 import csv
+import re
+import subprocess
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,16 +40,22 @@ import numpy as np
 import soundfile
 
 from cartoonface.speech.align import align_syllables, initial_class, syllable_type
+from cartoonface.speech.analyse import LOW_CONFIDENCE, analyse
 from cartoonface.speech import textgrid
 from cartoonface.speech.audio import Audio
 from tests.espeak import synthesize
 from cartoonface.speech.features import HOP, frames
 from cartoonface.speech.sentences import Span, find_speech_parts
+from cartoonface.speech.transcript import parse_transcript
 
 ZH = Path(__file__).resolve().parents[1].parent / "shared" / "bench" / "zh"
 TUNING = range(1, 36)     # Biaobei 000001-000035: the only sentences the aligner was tuned on
 SILENCE = {"sil", "[SIL]"}
 LOOSE = 0.25              # seconds of surrounding silence added to each part in the loose run
+PARAGRAPH = 5             # Biaobei recordings joined into one unpunctuated paragraph
+TEMPI = (0.8, 1.25)       # speed factors of the time-stretched copies (issue 17)
+SEMITONES = (-4, 4)       # pitch shifts of the pitch-shifted copies (issue 17)
+PUNCTUATION = re.compile(r"[^\w]|_")  # everything but letters and digits (Han characters are letters)
 
 
 @dataclass(frozen=True)
@@ -51,9 +70,12 @@ class Part:
 
 @dataclass(frozen=True)
 class Recording:
+    """One recording, its reference speaking parts and its transcript as written ("" when none)."""
+
     name: str
     audio: Audio
     parts: tuple[Part, ...]
+    text: str = ""
 
 
 def read_tiers(path: Path) -> dict[str, list[tuple[float, float, str]]]:
@@ -83,11 +105,69 @@ def parts_from_intervals(intervals: list[tuple[float, float, str | None]]) -> tu
 
 
 def biaobei() -> list[Recording]:
+    table = {row["id"]: row["hanzi_meta"]
+             for row in csv.DictReader((ZH / "biaobei" / "transcripts.tsv").open(encoding="utf-8"), delimiter="\t")}
     out = []
     for grid in sorted((ZH / "biaobei" / "TextGrid").glob("*.TextGrid")):
         tier = read_tiers(grid)["syllables_pinyin"]
         rows = [(a, b, None if t == "sp" else t) for a, b, t in tier]
-        out.append(Recording(grid.stem, load_audio(ZH / "biaobei" / "wav" / f"{grid.stem}.wav"), parts_from_intervals(rows)))
+        out.append(Recording(grid.stem, load_audio(ZH / "biaobei" / "wav" / f"{grid.stem}.wav"), parts_from_intervals(rows),
+                             table.get(grid.stem, "")))
+    return out
+
+
+def sox_copy(recording: Recording, effect: list[str], tempo: float) -> Recording:
+    """The recording passed through sox `effect` (e.g. ["tempo", "-s", "0.8"]), its reference
+    times divided by `tempo` (the speed factor; 1 for a pitch shift, which keeps the length)."""
+    with tempfile.TemporaryDirectory() as folder:
+        source, target = Path(folder) / "in.wav", Path(folder) / "out.wav"
+        soundfile.write(source, recording.audio.samples, recording.audio.rate, subtype="FLOAT")
+        subprocess.run(["sox", str(source), str(target), *effect], check=True, capture_output=True)
+        audio = load_audio(target)
+    parts = tuple(Part(p.start / tempo, p.end / tempo, p.syllables, tuple(o / tempo for o in p.onsets))
+                  for p in recording.parts)
+    return Recording(recording.name, Audio(audio.samples, audio.rate, recording.name), parts, recording.text)
+
+
+def stretched(recordings: list[Recording], tempo: float) -> list[Recording]:
+    """Time-stretched copies (sox tempo, speech mode): `tempo` times the speed, same pitch."""
+    return [sox_copy(r, ["tempo", "-s", f"{tempo}"], tempo) for r in recordings]
+
+
+def pitched(recordings: list[Recording], semitones: int) -> list[Recording]:
+    """Pitch-shifted copies (sox pitch), same timing."""
+    return [sox_copy(r, ["pitch", f"{100 * semitones}"], 1.0) for r in recordings]
+
+
+def transcribed(recordings: list[Recording]) -> list[Recording]:
+    """The recordings whose transcript reads as many syllables as their reference has (the
+    analyser's onsets are compared with the reference's one by one; erhua written as a
+    separate 儿 syllable in the reference is one syllable in ours)."""
+    return [r for r in recordings
+            if sum(len(s.syllables) for s in parse_transcript(r.text)) == sum(len(p.syllables) for p in r.parts)]
+
+
+def paragraphs(recordings: list[Recording], size: int = PARAGRAPH) -> list[Recording]:
+    """Runs of `size` consecutive recordings joined end to end with their own leading and
+    trailing silence (the natural pauses between sentences), each run one speaking part from
+    its first syllable onset to its last syllable end, its text the transcripts joined."""
+    out = []
+    for k in range(0, len(recordings) - size + 1, size):
+        run = recordings[k:k + size]
+        offset, end = 0.0, 0.0
+        samples: list[np.ndarray] = []
+        syllables: list[str] = []
+        onsets: list[float] = []
+        for r in run:
+            samples.append(r.audio.samples)
+            for p in r.parts:
+                syllables += p.syllables
+                onsets += [offset + o for o in p.onsets]
+            end = offset + r.parts[-1].end
+            offset += r.audio.samples.size / r.audio.rate
+        audio = Audio(np.concatenate(samples), run[0].audio.rate, f"{run[0].name}-{run[-1].name}")
+        part = Part(onsets[0], end, tuple(syllables), tuple(onsets))
+        out.append(Recording(audio.source, audio, (part,), "".join(r.text for r in run)))
     return out
 
 
@@ -211,8 +291,14 @@ class Result:
     confidence: np.ndarray
 
 
-def evaluate(recordings: list[Recording], with_dtw: bool = False) -> Result:
-    """Onset errors of the aligner, the baseline and (`with_dtw`) espeak+DTW over every part."""
+def evaluate(recordings: list[Recording], with_dtw: bool = False, pipeline: str = "") -> Result:
+    """Onset errors of the aligner, the baseline and (`with_dtw`) espeak+DTW over every part.
+    With `pipeline` "kept" or "removed" the onsets come from the whole analyser run on each
+    recording with its transcript's punctuation kept or removed instead (recordings whose
+    transcript gives another syllable count than the reference are to be left out first: see
+    `transcribed`)."""
+    if pipeline:
+        return evaluate_pipeline(recordings, pipeline == "removed")
     signed: list[float] = []
     classes: list[str] = []
     base: list[float] = []
@@ -238,6 +324,49 @@ def evaluate(recordings: list[Recording], with_dtw: bool = False) -> Result:
         return np.round(np.array(x), 6)
     return Result(rounded(np.abs(signed)), rounded(base), rounded(warped), np.array(inner), np.array(signed),
                   np.array(classes), seconds, speech, np.array(confidence))
+
+
+def evaluate_pipeline(recordings: list[Recording], unpunctuated: bool) -> Result:
+    """Onset errors of `analyse` (automatic segmentation) on each whole recording against its
+    reference parts, the transcript without punctuation when `unpunctuated`. Equal split over
+    the reference parts as the baseline; `inner` marks onsets not first in a reference part."""
+    signed: list[float] = []
+    classes: list[str] = []
+    base: list[float] = []
+    inner: list[bool] = []
+    confidence: list[float] = []
+    seconds = speech = 0.0
+    for rec in recordings:
+        text = PUNCTUATION.sub("", rec.text) if unpunctuated else rec.text
+        started = time.process_time()
+        alignment = analyse(rec.audio, text)
+        elapsed = time.process_time() - started
+        timed = [s for sentence in alignment.sentences for s in sentence.syllables]
+        reference = np.array([o for p in rec.parts for o in p.onsets])
+        if len(timed) != reference.size:
+            raise ValueError(f"{rec.name}: the transcript gives {len(timed)} syllables, the reference {reference.size}")
+        seconds += elapsed
+        speech += sum(p.end - p.start for p in rec.parts)
+        signed.extend(np.array([s.start for s in timed]) - reference)
+        classes.extend(initial_class(syllable_type(p).initial) for part in rec.parts for p in part.syllables)
+        for part in rec.parts:
+            base.extend(np.abs(equal_split(part) - np.array(part.onsets)))
+            inner.extend([False] + [True] * (len(part.onsets) - 1))
+        confidence.extend(s.confidence for s in timed)
+    rounded = np.round(np.array(signed), 6)
+    return Result(np.abs(rounded), np.round(np.array(base), 6), np.array([]), np.array(inner, dtype=bool),
+                  np.array(signed), np.array(classes), seconds, speech, np.array(confidence))
+
+
+def flag_scores(errors: np.ndarray, confidence: np.ndarray, threshold: float = LOW_CONFIDENCE) -> tuple[int, int, float, float]:
+    """(N,) onset errors (s) and confidences -> (flagged, misses, precision, recall) of
+    'confidence below `threshold`' as a detector of onsets more than 50 ms off (nan when
+    nothing is flagged / nothing is off)."""
+    flagged, miss = confidence < threshold, errors > 0.05
+    hits = int(np.sum(flagged & miss))
+    precision = hits / flagged.sum() if flagged.any() else float("nan")
+    recall = hits / miss.sum() if miss.any() else float("nan")
+    return int(flagged.sum()), int(miss.sum()), precision, recall
 
 
 def by_class(result: Result) -> str:
@@ -283,8 +412,9 @@ def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
             f"  within 20/50/100 ms {within[0]:5.1f}% {within[1]:5.1f}% {within[2]:5.1f}%  inner@50 {inner50:5.1f}%")
 
 
-def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_landmarks: bool = False) -> None:
-    result = evaluate(recordings, with_dtw)
+def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_landmarks: bool = False,
+           pipeline: str = "") -> None:
+    result = evaluate(recordings, with_dtw, pipeline)
     print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result.speech:.1f} s of speech, "
           f"aligner {result.speech / max(result.seconds, 1e-9):.0f}x real time (CPU time)")
     print(row("aligner", result.errors, result.inner))
@@ -298,6 +428,9 @@ def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_
     conf = result.confidence
     if bad.any() and (~bad).any():
         print(f"  mean confidence: onsets within 50 ms {conf[~bad].mean():.2f}, beyond {conf[bad].mean():.2f}")
+    flagged, misses, precision, recall = flag_scores(result.errors, conf)
+    print(f"  low confidence (< {LOW_CONFIDENCE}) as a miss detector: {flagged} flagged, {misses} off by > 50 ms,"
+          f" precision {100 * precision:.1f}%, recall {100 * recall:.1f}%")
 
 
 def main() -> None:
@@ -311,6 +444,17 @@ def main() -> None:
     report("AISHELL-3 (2 speakers)", aishell3(), with_dtw=True, with_landmarks=True)
     report("Chao 1922, reference parts", chao(loose=False), with_landmarks=True)
     report(f"Chao 1922, parts widened by <= {LOOSE} s", chao(loose=True))
+    for label, half in (("tuning", tuning), ("held-out", held_out)):
+        for tempo in TEMPI:
+            report(f"Biaobei {label}, tempo {tempo}x (sox tempo)", stretched(half, tempo))
+        for semitones in SEMITONES:
+            report(f"Biaobei {label}, pitch {semitones:+d} semitones (sox pitch)", pitched(half, semitones))
+        report(f"Biaobei {label}, paragraphs of {PARAGRAPH} recordings as one part", paragraphs(half))
+        readable = transcribed(half)
+        for mode in ("kept", "removed"):
+            report(f"Biaobei {label}, analyse, punctuation {mode}", readable, pipeline=mode)
+        report(f"Biaobei {label}, paragraphs of {PARAGRAPH}, analyse, punctuation removed", paragraphs(readable),
+               pipeline="removed")
 
 
 if __name__ == "__main__":

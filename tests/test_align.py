@@ -241,3 +241,26 @@ def test_a_dip_above_1_khz_alone_is_evidence_for_a_sonorant_onset_not_for_a_stop
     assert evidence["sonorant"].max() > 0.0 and abs(int(np.argmax(evidence["sonorant"])) - 30) <= 4
     assert evidence["closure"].max() == 0.0 and evidence["frication"].max() == 0.0
     assert onset_evidence(flat, flat)["sonorant"].max() == 0.0
+
+
+def test_pauses_cost_more_inside_words_and_less_after_long_ones():
+    from cartoonface.speech.align import pause_penalties
+    words = [2, 1, 3, 1]
+    plain = pause_penalties(7, None)
+    penalty = pause_penalties(7, words)
+    assert np.all(plain == plain[0])
+    ends = set(np.cumsum([0, *words]))
+    inside = [k for k in range(8) if k not in ends]
+    assert min(penalty[inside]) > max(penalty[sorted(ends)])
+    assert penalty[2] < penalty[3]  # after a 2-syllable word, cheaper than after a 1-syllable one
+    assert np.array_equal(pause_penalties(7, [2, 2]), plain)  # words that do not fit are ignored
+
+
+def test_word_lengths_cover_every_syllable_and_keep_words_whole():
+    from cartoonface.speech.analyse import word_lengths
+    texts = list("我们今天去公园") + ["O", "", "K"]
+    lengths = word_lengths(texts)
+    assert sum(lengths) == len(texts)
+    ends = set(np.cumsum(lengths))
+    assert 1 not in ends and 2 in ends  # 我们 is one word (pypinyin's phrase dictionary)
+    assert 8 not in ends  # the "" syllable stays with the token before it

@@ -14,6 +14,7 @@ from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.sentences import find_speech_parts
 from cartoonface.speech.transcript import parse_transcript
 from tests.conftest import speak
+from tests.espeak import synthesize
 from tests.synthetic import noisy, recording
 
 
@@ -175,3 +176,42 @@ def test_analyse_espeak_speech(tmp_path):
     for sentence in alignment.sentences:  # no sentence crosses a pause between speaking parts
         assert any(p.start - 1e-6 <= sentence.start < sentence.end <= p.end + 1e-6 for p in parts)
     assert stages[0] == ("segment", 0.0) and stages[-1] == ("align", 1.0)
+
+
+def paused_speech(chunks: list[str], pause: float) -> tuple[Audio, list[float]] | None:
+    """Each of `chunks` (Hanzi, no punctuation) read by espeak-ng, its own syllables' readings,
+    with `pause` seconds of faint noise between chunks; (audio, true onset of every syllable)
+    or None when espeak-ng cannot read them syllable by syllable."""
+    pieces, onsets, position, rate = [], [], 0.0, 0
+    rng = np.random.default_rng(0)
+    for chunk in chunks:
+        pinyin = [s.pinyin for sentence in parse_transcript(chunk) for s in sentence.syllables]
+        speech = synthesize(pinyin)
+        if speech is None:
+            return None
+        rate = speech.rate
+        onsets += [position + t for t in speech.onsets]
+        gap = np.zeros(int(pause * rate), np.float32)
+        pieces += [speech.samples, gap]
+        position += (speech.samples.size + gap.size) / rate
+    samples = np.concatenate(pieces)
+    samples = samples + (1e-3 * rng.standard_normal(samples.size)).astype(np.float32)
+    return Audio(samples, rate, "espeak"), onsets
+
+
+@pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency (scripts/setup.sh)")
+def test_pauses_in_a_long_unpunctuated_sentence_land_between_the_right_syllables():
+    # 79 syllables > MAX_PIECE: the sentence is cut into pieces by count (at 40), while the
+    # reader paused before syllables 20, 39 and 59 (inside words, too)
+    chunks = ["我们今天一起去公园散步天气非常好大家都很", "高兴地唱歌跳舞小朋友在草地上跑来跑去老", "师站在树下看着他们笑了起来时间过得很快转",
+              "眼太阳就要下山了我们收拾好东西准备回家去"]
+    made = paused_speech(chunks, 0.5)
+    if made is None:
+        pytest.skip("espeak-ng does not read these syllables one by one")
+    audio, truth = made
+    alignment = analyse(audio, "".join(chunks))
+    syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
+    assert len(syllables) == len(truth) > MAX_PIECE
+    after_pauses = [20, 39, 59]
+    errors = [abs(syllables[k].start - truth[k]) for k in after_pauses]
+    assert max(errors) < 0.1, errors

@@ -176,6 +176,13 @@ SILENCE_SHARE = 0.3        # frames below floor + this share of the range are si
 MIN_RANGE_DB = 10.0        # a part with a smaller range is noise or silence: duration-prior split
 QUALITY_RANGE_DB = 20.0    # dB of range above MIN_RANGE_DB at which the signal quality reaches 1
 PAUSE_PENALTY = 3.0        # per pause, in units of evidence
+# Phrase breaks fall at word boundaries, likelier after longer words: with the words known
+# (align_syllables' `words`), a pause inside a word costs INSIDE_WORD_PAUSE more, one after a
+# word of k syllables AFTER_WORD_PAUSE * min(k - 1, LONG_WORD) less. Tuned on Biaobei
+# 000001-000035 read as unpunctuated paragraphs (bench/align.py; docs/BENCHMARKS.md).
+INSIDE_WORD_PAUSE = 2.0
+AFTER_WORD_PAUSE = 0.5
+LONG_WORD = 2
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
 MIN_FRAMES = 3             # frames: the shortest syllable
@@ -273,13 +280,31 @@ class _Lattice:
     from_pause: np.ndarray       # (N, T + 1) whether syllable i ending at k followed a pause
 
 
-def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray) -> _Lattice:
+def pause_penalties(count: int, words: Sequence[int] | None) -> np.ndarray:
+    """(count + 1,) cost of a pause after i syllables of `count`, i = 0..count: PAUSE_PENALTY,
+    and with `words` (syllables per word, in order, summing to `count`; None: unknown) more
+    inside a word and less after a long one (INSIDE_WORD_PAUSE, AFTER_WORD_PAUSE)."""
+    penalty = np.full(count + 1, PAUSE_PENALTY)
+    if words is None or sum(words) != count or min(words, default=1) < 1:
+        return penalty
+    ends = np.cumsum(words)
+    inside = np.ones(count + 1, dtype=bool)
+    inside[0] = inside[-1] = False
+    inside[ends] = False
+    penalty[inside] += INSIDE_WORD_PAUSE
+    penalty[ends[:-1]] -= AFTER_WORD_PAUSE * np.minimum(np.array(words[:-1]) - 1, LONG_WORD)
+    return penalty
+
+
+def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray,
+             penalty: np.ndarray) -> _Lattice:
     """Score every cut of T frames into N syllables with optional pauses between and around them.
 
     evidence: (N, T + 1) onset evidence of syllable i starting at boundary k when no pause
     precedes it (row 0 unused: the part's start is given); silence: (T,) per-frame pause
     evidence; edges: (2, T + 1) evidence that a pause starts (sound falls) / ends (sound
-    rises) at k; means: (N,) expected durations in frames.
+    rises) at k; means: (N,) expected durations in frames; penalty: (N + 1,) cost of a pause
+    after i syllables.
     """
     n, positions = evidence.shape
     total = positions - 1
@@ -299,7 +324,7 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
         gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
         shifted = np.full(positions, _NEG)
         shifted[gap:] = best[:-gap]
-        after_pause[i] = shifted + cum - PAUSE_PENALTY + edges[1]
+        after_pause[i] = shifted + cum - penalty[i] + edges[1]
         pause_from[i, gap:] = arg[:-gap]
         if i == n:
             break
@@ -333,7 +358,7 @@ def _best_cut(lattice: _Lattice) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _onset_margins(lattice: _Lattice, evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
-                   means: np.ndarray, starts: np.ndarray) -> np.ndarray:
+                   means: np.ndarray, penalty: np.ndarray, starts: np.ndarray) -> np.ndarray:
     """(N,) how much worse the best cut gets when syllable i's onset is moved more than
     SURE_DISTANCE frames from where it is (large: the onset is well determined).
 
@@ -345,7 +370,7 @@ def _onset_margins(lattice: _Lattice, evidence: np.ndarray, silence: np.ndarray,
     total = positions - 1
     flipped = np.zeros_like(evidence)
     flipped[1:] = evidence[:0:-1, ::-1]
-    backward = _forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1])
+    backward = _forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1], penalty[::-1])
     k = np.arange(positions)
     margins = np.zeros(n)
     for i in range(n):
@@ -365,8 +390,12 @@ def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> 
     return tuple(SyllableTiming(float(a), float(b), confidence) for a, b in zip(edges[:-1], edges[1:]))
 
 
-def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> tuple[SyllableTiming, ...]:
+def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
+                    words: Sequence[int] | None = None) -> tuple[SyllableTiming, ...]:
     """Start, end and confidence of each of `syllables` (tone-numbered pinyin) inside `span`.
+
+    `words`: syllables per word of the text, in order (None: not known); pauses then fall
+    at word boundaries rather than inside words (pause_penalties).
 
     audio: samples (n,) float mono and rate; span: .start/.end in seconds. Returns one
     SyllableTiming per syllable, in order, inside the span (see the module docstring for
@@ -404,9 +433,10 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str]) -> t
     evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
     edges = edge_evidence(low, high)[:, index]
     evidence[0] = 0.0
-    lattice = _forward(evidence, silence, edges, means)
+    penalty = pause_penalties(n, words)
+    lattice = _forward(evidence, silence, edges, means, penalty)
     starts, ends = _best_cut(lattice)
-    margins = _onset_margins(lattice, evidence, silence, edges, means, starts)
+    margins = _onset_margins(lattice, evidence, silence, edges, means, penalty, starts)
     quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
     confidence = _confidence(margins, quality)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so

@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
+from pypinyin.seg.mmseg import seg
 
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import align_syllables
@@ -35,7 +36,10 @@ from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 MAX_RATE = 12.0
 FAST_RATE = 8.0
 MIN_RATE = 1.0
-LOW_CONFIDENCE = 0.5
+# Syllables below this confidence are reported as low-confidence: the threshold of best F1 for
+# "more than 50 ms off" over Biaobei 000001-000035 and its issue-17 copies (bench/align.py:
+# 0.3 / 0.4 / 0.5 gave F1 27.5 / 31.0 / 25.4 %; docs/BENCHMARKS.md).
+LOW_CONFIDENCE = 0.4
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
 # cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
 MAX_JOINT = 60.0
@@ -82,7 +86,7 @@ def analyse(
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
     spans = reconcile(audio, parts, counts)
     aligned: list[Sentence] = []
-    for block in _blocks(spans):
+    for block in _blocks(spans, owners):
         report("align", len(aligned) / len(pieces))
         span = Span(spans[block[0]].start, spans[block[-1]].end)
         if len(block) > 1 and span.duration <= MAX_JOINT:
@@ -143,21 +147,44 @@ def _check_rate(syllables: int, speech: float, source: str, notes: list[str]) ->
         )
 
 
-def _blocks(spans: tuple[Span, ...]) -> list[list[int]]:
-    """Indices of the sentences in runs whose spans touch (cut inside one speaking part)."""
+def _blocks(spans: tuple[Span, ...], owners: list[int]) -> list[list[int]]:
+    """Indices of the pieces in runs whose spans touch (cut inside one speaking part) or that
+    are pieces of one sentence (`owners[k]`: the sentence of piece k). A long sentence without
+    commas is cut into pieces by count, not at its pauses: aligned together, the aligner puts
+    its pauses between the right syllables."""
     blocks = [[0]]
     for index in range(1, len(spans)):
-        if spans[index - 1].end >= spans[index].start:
+        if spans[index - 1].end >= spans[index].start or owners[index - 1] == owners[index]:
             blocks[-1].append(index)
         else:
             blocks.append([index])
     return blocks
 
 
+def word_lengths(texts: Sequence[str]) -> list[int]:
+    """The characters each syllable speaks, in order ("" for the later syllables of a word
+    read out as one token) -> syllables per word, by pypinyin's word segmentation (maximum
+    matching over its phrase dictionary); the lengths sum to len(texts)."""
+    ends, position = {0}, 0
+    for word in seg.cut("".join(texts)):
+        position += len(word)
+        ends.add(position)
+    lengths: list[int] = []
+    position = 0
+    for text in texts:
+        if not lengths or (text and position in ends):
+            lengths.append(0)
+        lengths[-1] += 1
+        position += len(text)
+    return lengths
+
+
 def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[Sentence]:
-    """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`."""
+    """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`
+    (pauses likelier between words, and always possible between sentences)."""
     pinyin = [syllable.pinyin for sentence in texts for syllable in sentence.syllables]
-    timings = iter(align_syllables(audio, span, pinyin))
+    words = [n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])]
+    timings = iter(align_syllables(audio, span, pinyin, words))
     sentences = []
     for sentence in texts:
         syllables = tuple(
