@@ -35,7 +35,7 @@ programme, times the part's signal quality (its loudness range).
 Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
 all give a duration-prior split with low confidence.
 
-Approach (b) of issue 3, espeak-ng speech of the same syllables warped onto the recording by
+Another approach, espeak-ng speech of the same syllables warped onto the recording by
 DTW, was measured (bench/align.py) far below this one, also as a prior for it, so it is not used.
 """
 

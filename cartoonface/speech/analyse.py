@@ -37,7 +37,7 @@ MAX_RATE = 12.0
 FAST_RATE = 8.0
 MIN_RATE = 1.0
 # Syllables below this confidence are reported as low-confidence: the threshold of best F1 for
-# "more than 50 ms off" over Biaobei 000001-000035 and its issue-17 copies (bench/align.py:
+# "more than 50 ms off" over Biaobei 000001-000035 and its tempo, pitch and paragraph copies (bench/align.py:
 # 0.3 / 0.4 / 0.5 gave F1 27.5 / 31.0 / 25.4 %; docs/BENCHMARKS.md).
 LOW_CONFIDENCE = 0.4
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
