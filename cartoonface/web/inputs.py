@@ -19,7 +19,7 @@ from pathlib import Path
 from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
-from cartoonface.face.model import face_from_dict, face_to_dict
+from cartoonface.face.model import face_from_dict, face_to_dict, json_with_long_numbers
 from cartoonface.photo.model_from_photo import face_from_photo, load_photo
 from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
@@ -155,8 +155,8 @@ def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], li
             errors["face_file"] = f"{name}: a face model must be at most {MAX_FACE_BYTES >> 10} kB of JSON."
             return None, name, ()
         try:
-            obj = json.loads(data.decode("utf-8-sig"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            obj = json_with_long_numbers(data.decode("utf-8-sig"))
+        except ValueError as exc:  # not UTF-8, not JSON
             errors["face_file"] = f"{name}: not a face model: expected UTF-8 JSON ({exc})."
             return None, name, ()
         except RecursionError:
