@@ -22,7 +22,9 @@ from cartoonface.face.model import face_from_dict
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import create_app
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
-from cartoonface.web.runner import STOPPED, Runner
+from cartoonface.web.runner import STOPPED, QueueFull, Runner
+from cartoonface.web.views import stage_label
+from cartoonface.web.worker import JobLimits
 from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, valid_id, write_status)
@@ -637,3 +639,41 @@ def test_serve_reports_a_port_it_cannot_use(tmp_path):
     done = run_cli("serve", "--port", "70000")
     assert done.returncode == 2
     assert "expected a port number from 1 to 65535" in done.stderr
+
+
+# --- limits a hostile job cannot break ---------------------------------------------------------
+
+
+def test_a_job_over_its_memory_limit_fails_alone_with_a_clear_message(tmp_path, speech):
+    job = create_job(tmp_path, spec(), stored_inputs(speech))
+    runner = Runner(1, limits=JobLimits(memory_bytes=300 << 20, cpu_seconds=600))
+    try:
+        runner.submit(job.folder)
+        deadline = time.monotonic() + 120
+        while load_job(tmp_path, job.id).status.state not in (DONE, FAILED) and time.monotonic() < deadline:
+            time.sleep(0.1)
+    finally:
+        runner.close()
+    status = load_job(tmp_path, job.id).status
+    assert status.state == FAILED
+    assert status.error == JobLimits(300 << 20, 600).memory_message()
+    assert "0.293 GB of memory" in status.error
+
+
+def test_the_queue_is_capped_and_tells_a_waiting_job_its_place(tmp_path, speech):
+    jobs = [create_job(tmp_path, spec(f"job {i}"), stored_inputs(speech)) for i in range(3)]
+    runner = Runner(1, queue_max=1)
+    try:
+        runner.submit(jobs[0].folder)
+        deadline = time.monotonic() + 60
+        while load_job(tmp_path, jobs[0].id).status.state == QUEUED and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert runner.has_room()
+        runner.submit(jobs[1].folder)
+        assert runner.ahead_of(jobs[1].folder) == 0
+        assert not runner.has_room()
+        with pytest.raises(QueueFull):
+            runner.submit(jobs[2].folder)
+    finally:
+        runner.close()
+    assert stage_label(Status(state=QUEUED), 3) == "Waiting for a free worker: 3 jobs ahead of you"
