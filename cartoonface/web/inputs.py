@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import tempfile
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +30,13 @@ PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 SHOWN_NAME_CHARS = 80
+
+# One photo is read at a time, by the form and by /photos alike (the face mesh is one model,
+# ~0.5 s a photo, and a large photo takes a few hundred MB while it is read): a request that
+# cannot start within DETECT_WAIT seconds is told the server is busy.
+DETECT_WAIT = 20.0
+DETECTING = threading.Lock()
+PHOTO_BUSY = "The server is busy reading other photos; please try again in a minute."
 
 
 @dataclass(frozen=True)
@@ -122,14 +130,19 @@ def check_photo(name: str, data: bytes, too_big: bool,
     if ext is None:
         errors["photo"] = f"{name}: not a photo this app reads (by its content); expected JPEG, PNG or WebP."
         return None, name, ()
-    with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
-        path = Path(tmp) / f"photo.{ext}"
-        path.write_bytes(data)
-        try:
+    if not DETECTING.acquire(timeout=DETECT_WAIT):
+        errors["photo"] = PHOTO_BUSY
+        return None, name, ()
+    try:
+        with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
+            path = Path(tmp) / f"photo.{ext}"
+            path.write_bytes(data)
             made = face_from_photo(load_photo(path), "photo")
-        except InputError as exc:
-            errors["photo"] = str(exc).replace(str(path), name)
-            return None, name, ()
+    except InputError as exc:
+        errors["photo"] = str(exc).replace(str(path), name)
+        return None, name, ()
+    finally:
+        DETECTING.release()
     face = json.dumps(face_to_dict(made.face), ensure_ascii=False).encode("utf-8")
     return face, name, tuple(f"{name}: {warning}" for warning in made.warnings)
 

@@ -173,7 +173,7 @@ def submit() -> BaseResponse | tuple[str, int]:
         return render_form(values, {"form": "This form has expired or did not come from this page. "
                                             "Please check the fields and press Generate again."}, 400)
     if not state().runner.has_room():
-        return render_form(values, {"form": busy_message()}, 503)
+        return render_form(values, {"form": busy_message()}, 429)
     draft_id = values["face_draft"]
     chosen = draft_choice(state().settings.instance, draft_id) if draft_id else None
     checked = check_submission(request.form, request.files, state().limits, chosen)
@@ -187,7 +187,7 @@ def submit() -> BaseResponse | tuple[str, int]:
         state().runner.submit(job.folder)
     except QueueFull:  # filled up while this form was checked
         delete_job(job.folder)
-        return render_form(values, {"form": busy_message()}, 503)
+        return render_form(values, {"form": busy_message()}, 429)
     session["jobs"] = [job.id, *[i for i in session.get("jobs", []) if isinstance(i, str)]][:RECENT]
     return redirect(url_for(".job_page", job_id=job.id), code=303)
 
