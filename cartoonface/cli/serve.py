@@ -58,8 +58,12 @@ def run(args: argparse.Namespace) -> int:
     if args.host in LOOPBACK_HOSTS and app.config.get("TRUSTED_HOSTS") is None:
         app.config["TRUSTED_HOSTS"] = list(LOOPBACK_HOSTS)
     runner = app.extensions["cartoonface"].runner
+    # A connection that sends nothing for CHANNEL_TIMEOUT seconds (a body announced and not sent)
+    # is closed; waitress checks idle connections this often (seconds).
+    timeout = app.extensions["cartoonface"].settings.channel_timeout
     try:
-        server = waitress.create_server(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface")
+        server = waitress.create_server(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface",
+                                        channel_timeout=timeout, cleanup_interval=max(1, timeout // 2))
     except (OSError, ValueError) as exc:  # in use, not ours; waitress says ValueError for an unknown host
         runner.close()
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
