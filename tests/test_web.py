@@ -345,6 +345,18 @@ def test_transcript_limits_and_encoding(client, speech, sample_name):
     assert 'id="transcript_file-error"' in page and "long.txt" in page
 
 
+@pytest.mark.parametrize("content, expected", [
+    (png_bytes(40, 30, (200, 10, 10)) * 30, "not a text file (it holds NUL bytes)"),
+    (b"\xff\xfe" + "好".encode("utf-16-le") * 2000, "not a text file"),
+    ("你好\x07世界。".encode(), "control character U+0007"),
+])
+def test_binary_or_control_characters_in_a_transcript_file_are_refused(client, speech, sample_name, content, expected):
+    page = errors_of(post(client, form(client, speech, sample_name, transcript_file=(io.BytesIO(content), "t.bin"))))
+    assert 'id="transcript_file-error"' in page
+    assert expected in page
+    assert "longer than" not in page
+
+
 def test_transcript_file_is_used_instead_of_pasted_text(app, client, speech, sample_name):
     response = post(client, form(client, speech, sample_name, transcript="",
                                  transcript_file=(io.BytesIO("\ufeff你好，世界。\r\n".encode()), "t.txt")))
@@ -422,6 +434,11 @@ def test_photo_size_and_either_model_or_photo(client, speech, sample_name):
     ("background", "<img src=x>", "Choose one of the backgrounds"),
     ("clothes", "", "Choose one of the clothes"),
     ("title", "x" * 201, "at most 200 are accepted"),
+    ("title", "ring\x07bell", "control character U+0007"),
+    ("title", "\x1b[31mred", "control character U+001B"),
+    ("title", "nul\x00", "control character U+0000"),
+    ("transcript", "你好\x00世界。", "control character U+0000"),
+    ("transcript", "你好\x1b世界。", "control character U+001B"),
 ])
 def test_choices_and_title_are_checked(client, speech, sample_name, field, value, message):
     page = errors_of(post(client, form(client, speech, sample_name, **{field: value})))

@@ -10,7 +10,9 @@ numbers), never from the file name; the user's file name is only ever shown
 
 from __future__ import annotations
 
+import codecs
 import json
+import re
 import tempfile
 import threading
 from collections.abc import Mapping
@@ -30,6 +32,8 @@ PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 SHOWN_NAME_CHARS = 80
+# Control characters refused in a title or transcript (tab, line feed and carriage return are kept).
+CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 
 # One photo is read at a time, by the form and by /photos alike (the face mesh is one model,
 # ~0.5 s a photo, and a large photo takes a few hundred MB while it is read): a request that
@@ -226,19 +230,24 @@ def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     field, name = "transcript", "transcript"
     if data is not None:
         field, name = "transcript_file", shown_name(upload, "transcript")
-        if too_big:
-            errors[field] = f"{name}: the transcript is longer than {limits.transcript_chars} characters."
+        if b"\x00" in data:
+            errors[field] = f"{name}: not a text file (it holds NUL bytes): expected UTF-8 text."
             return None
-        try:
-            text = data.decode("utf-8-sig")
+        try:  # a file cut at the limit may end inside a character: only a whole file must end well
+            text = codecs.getincrementaldecoder("utf-8-sig")().decode(data, final=not too_big)
         except UnicodeDecodeError:
             errors[field] = f"{name}: not a text file: expected UTF-8 text."
             return None
-        if "\x00" in text:
-            errors[field] = f"{name}: not a text file (it holds NUL bytes): expected UTF-8 text."
+        if too_big:
+            errors[field] = f"{name}: the transcript is longer than {limits.transcript_chars} characters."
             return None
     else:
         text = _text(form, "transcript")
+    control = CONTROL.search(text)
+    if control:
+        errors[field] = (f"{name}: holds the control character U+{ord(control.group()):04X}; "
+                         "expected plain text (tabs and line breaks are fine).")
+        return None
     text = text.replace("\r\n", "\n").strip()
     if not text:
         errors["transcript"] = "Paste the transcript of the recording, or upload it as a UTF-8 text file."
@@ -270,7 +279,10 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     Submission, or field -> message for each problem."""
     errors: dict[str, str] = {}
     title = " ".join(_text(form, "title").split())
-    if len(title) > MAX_TITLE:
+    control = CONTROL.search(title)
+    if control:
+        errors["title"] = f"The title holds the control character U+{ord(control.group()):04X}; expected plain text."
+    elif len(title) > MAX_TITLE:
         errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE} are accepted."
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
