@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import stat
 import os
 import re
 import socket
@@ -26,7 +27,7 @@ from cartoonface.web.runner import STOPPED, QueueFull, Runner
 from cartoonface.web.views import stage_label
 from cartoonface.web.worker import JobLimits
 from cartoonface.web.security import download_name
-from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
+from cartoonface.web.store import (DONE, FILE_MODE, FOLDER_MODE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, valid_id, write_status)
 from tests.conftest import ROOT, SPOKEN, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli, speak
 from tests.synthetic import wav_bytes
@@ -694,3 +695,11 @@ def test_the_queue_is_capped_and_tells_a_waiting_job_its_place(tmp_path, speech)
     finally:
         runner.close()
     assert stage_label(Status(state=QUEUED), 3) == "Waiting for a free worker: 3 jobs ahead of you"
+
+
+def test_job_folders_and_files_are_private(tmp_path, speech):
+    job = create_job(tmp_path, spec(), stored_inputs(speech))
+    assert stat.S_IMODE(job.folder.stat().st_mode) == FOLDER_MODE
+    modes = {path.name: stat.S_IMODE(path.stat().st_mode) for path in job.folder.iterdir()}
+    assert set(modes) == {"face.json", "audio.wav", "transcript.txt", "job.json", "status.json"}
+    assert set(modes.values()) == {FILE_MODE}

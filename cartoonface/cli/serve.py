@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from pathlib import Path
@@ -15,6 +16,8 @@ THREADS = 8  # waitress request threads; jobs run in the app's own worker pool
 # Host headers accepted when listening on IPv4 loopback (unless TRUSTED_HOSTS is set): a web
 # page that rebinds its own domain name to 127.0.0.1 then cannot drive the app.
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost")
+# Everything the server writes (jobs, their results, photo drafts) is readable by its user only.
+UMASK = 0o077
 
 
 def port_number(text: str) -> int:
@@ -54,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
 
     from cartoonface.web import create_app
 
+    os.umask(UMASK)
     app = create_app({"INSTANCE_PATH": str(args.instance)} if args.instance else None)
     if args.host in LOOPBACK_HOSTS and app.config.get("TRUSTED_HOSTS") is None:
         app.config["TRUSTED_HOSTS"] = list(LOOPBACK_HOSTS)

@@ -31,6 +31,9 @@ ID_PATTERN = re.compile(r"[A-Za-z0-9_-]{32}")
 QUEUED, RUNNING, DONE, FAILED = "queued", "running", "done", "failed"
 FINAL_STATES = (DONE, FAILED)
 
+# A job folder and its files are the server user's alone (its inputs are someone's recording).
+FOLDER_MODE, FILE_MODE = 0o700, 0o600
+
 INTERRUPTED = "Interrupted: the server stopped before this job finished. Please submit it again."
 
 
@@ -124,10 +127,12 @@ def create_job(instance: Path, spec: Mapping[str, object], files: Mapping[str, b
     status = Status(state=QUEUED, updated=created)
     target = job_folder(instance, job_id)
     with atomic_directory(target) as tmp:
-        for name, data in files.items():
-            (tmp / name).write_bytes(data)
-        (tmp / "job.json").write_text(json.dumps(full_spec, ensure_ascii=False), encoding="utf-8")
-        (tmp / "status.json").write_text(json.dumps(status.to_dict()), encoding="utf-8")
+        tmp.chmod(FOLDER_MODE)
+        contents = {**files, "job.json": json.dumps(full_spec, ensure_ascii=False).encode("utf-8"),
+                    "status.json": json.dumps(status.to_dict()).encode("utf-8")}
+        for name, data in contents.items():
+            with os.fdopen(os.open(tmp / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, FILE_MODE), "wb") as out:
+                out.write(data)
     return Job(job_id, target, full_spec, status)
 
 
