@@ -27,8 +27,9 @@ from cartoonface.web.runner import STOPPED, QueueFull, Runner
 from cartoonface.web.views import stage_label
 from cartoonface.web.worker import JobLimits
 from cartoonface.web.security import download_name
-from cartoonface.web.store import (DONE, FILE_MODE, FOLDER_MODE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
-                                   create_job, list_jobs, load_job, new_id, valid_id, write_status)
+from cartoonface.web.store import (DONE, FAILED, FILE_MODE, FOLDER_MODE, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
+                                   create_job, list_jobs, load_job, new_id, space_problem, valid_id,
+                                   write_status)
 from tests.conftest import ROOT, SPOKEN, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli, speak
 from tests.synthetic import wav_bytes
 
@@ -587,10 +588,14 @@ def test_retention_by_age_and_by_total_size(tmp_path, speech):
         (job.folder / "job.json").write_text(json.dumps(data))
         write_status(job.folder, Status(state=DONE))
     write_status(jobs[1].folder, Status(state=RUNNING))  # never deleted while it runs
-    deleted = apply_retention(tmp_path, max_age_days=7, max_total_mb=0.6, now=now)
-    assert deleted[0] == jobs[0].id  # too old
-    assert jobs[2].id in deleted  # oldest finished one over the size limit
-    assert {job.id for job in list_jobs(tmp_path)} == {jobs[1].id, jobs[3].id}
+    deleted = apply_retention(tmp_path, max_age_days=7, now=now)
+    assert deleted == [jobs[0].id]  # too old; younger finished jobs stay whatever their size
+    assert {job.id for job in list_jobs(tmp_path)} == {job.id for job in jobs[1:]}
+    # a full disk refuses new jobs instead: per user, then all together
+    mine = [jobs[2].id, jobs[3].id]
+    assert "of the 0.5 MB kept for each user" in space_problem(tmp_path, mine, 1000, 2**19, 10 * 2**20)
+    assert space_problem(tmp_path, mine, 1000, 2**20, 10 * 2**20) == ""
+    assert "storage for jobs is full" in space_problem(tmp_path, [], 1000, 2**20, 2**19)
     assert not any(path.name.startswith(".deleted") for path in (tmp_path / "jobs").iterdir())
 
 

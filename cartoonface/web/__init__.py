@@ -75,7 +75,7 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
 
     def sweep(_folder: Path | None = None) -> None:
         with sweep_lock:
-            apply_retention(settings.instance, settings.retention_days, settings.retention_mb)
+            apply_retention(settings.instance, settings.retention_days)
             sweep_drafts(settings.instance)
 
     fail_interrupted(settings.instance)

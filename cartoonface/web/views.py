@@ -29,7 +29,7 @@ from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, Limits, c
                                     megabytes)
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
-from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, delete_job, load_job
+from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, delete_job, load_job, space_problem
 from cartoonface.web.worker import SITE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
@@ -182,7 +182,13 @@ def submit() -> BaseResponse | tuple[str, int]:
         return render_form(values, {**(checked if isinstance(checked, dict) else {}), "face_sample": DRAFT_GONE}, 400)
     if isinstance(checked, dict):
         return render_form(values, checked, 400)
-    job = create_job(state().settings.instance, checked.spec, checked.files)
+    settings = state().settings
+    problem = space_problem(settings.instance, [i for i in session.get("jobs", []) if isinstance(i, str)],
+                            sum(len(data) for data in checked.files.values()), settings.user_quota_bytes,
+                            int(settings.retention_mb * 2**20))
+    if problem:
+        return render_form(values, {"form": problem}, 429)
+    job = create_job(settings.instance, checked.spec, checked.files)
     try:
         state().runner.submit(job.folder)
     except QueueFull:  # filled up while this form was checked
