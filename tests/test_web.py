@@ -156,6 +156,9 @@ def test_zip_download_is_the_folder_generate_writes(app, client, done_job, tmp_p
     assert set(got) == set(expected)
     assert "index.html" in got
     assert all(got[name] == expected[name] for name in expected)
+    # the recording is stored once: the job's input is the generated folder's copy
+    recording = job.folder / str(spec["audio_file"])
+    assert recording.stat().st_ino == (job.folder / "site" / recording.name).stat().st_ino
 
 
 def test_recent_jobs_are_listed_for_the_browser_that_made_them(app, speech, sample_name):
