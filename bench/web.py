@@ -328,6 +328,30 @@ def restart_run(work: Path, sentences: list) -> None:
         server.stop()
 
 
+def hostile_face(face: bytes, kind: str) -> bytes:
+    """The sample face made hostile (docs/web.md, "Limits against hostile input"): "digits" a 5000-digit FAPU, "fapu" a FAPU of
+    1e300, "hair" a 30,000-point hair outline."""
+    obj = json.loads(face)
+    if kind == "digits":
+        obj["fapu"]["r1"] = 424242
+        return json.dumps(obj).replace("424242", "9" * 5000).encode()
+    if kind == "fapu":
+        obj["fapu"]["r1"] = 1e300
+    else:
+        obj["hair"] = [obj["hair"][i % len(obj["hair"])] for i in range(30000)]
+    return json.dumps(obj).encode()
+
+
+def peak_mb(pid: int) -> float:
+    """Peak resident memory (VmHWM) of process `pid` in MB, read from /proc."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    return 0.0
+
+
+
+
 # A fuzz request: method, path, body (bytes, None, or ("huge", size) for a streamed body), headers.
 FuzzRequest = tuple[str, str, bytes | tuple[str, int] | None, dict[str, str]]
 
@@ -353,7 +377,8 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
         "csrf_token": lambda: rng.choice(["", "x", token[:-1], junk_text(50)]),
         "face_sample": lambda: rng.choice(["", "../../etc/passwd", junk_text(30), "female.json"]),
         "page": lambda: rng.choice(["", "video", junk_text(10)]),
-        "title": lambda: rng.choice([junk_text(300), "x" * 5000, "<script>alert(1)</script>" * 10]),
+        "title": lambda: rng.choice([junk_text(300), "x" * 5000, "<script>alert(1)</script>" * 10,
+                                     "bell\x07", "nul\x00", "\x1b[31mred"]),
         "background": lambda: junk_text(rng.randrange(0, 40)),
         "clothes": lambda: junk_text(rng.randrange(0, 40)),
         "transcript": lambda: rng.choice(["", junk_text(30000), "\x00" * 10, junk_text(100)]),
@@ -369,12 +394,16 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
                                          ("f.json", json.dumps({"format": "cartoonface-face", "points": junk_text(5)}).encode(),
                                           "application/json"),
                                          ("f.json", b"[" * 5000, "application/json"),
-                                         ("f.json", b"1e999999", "application/json")]),
+                                         ("f.json", b"1e999999", "application/json"),
+                                         ("f.json", hostile_face(face, "digits"), "application/json"),
+                                         ("f.json", hostile_face(face, "fapu"), "application/json"),
+                                         ("f.json", hostile_face(face, "hair"), "application/json")]),
         "photo": lambda: rng.choice([("p.jpg", b"\xff\xd8\xff" + junk(rng.randrange(0, 3000)), "image/jpeg"),
                                      ("p.png", photo[: rng.randrange(0, len(photo))], "image/png"),
                                      ("p.webp", b"RIFF" + junk(4) + b"WEBP" + junk(800), "image/webp"),
                                      ("p.png", junk(2000), "image/png")]),
-        "transcript_file": lambda: ("t.txt", rng.choice([junk(300), "好".encode() * 30000, b"\xff\xfe" + junk(40)]),
+        "transcript_file": lambda: ("t.txt", rng.choice([junk(300), "好".encode() * 30000, b"\xff\xfe" + junk(40),
+                                                         photo, "你好\x00。".encode()]),
                                     "text/plain"),
     }
     requests: list[FuzzRequest] = []
@@ -474,9 +503,12 @@ def fuzz_run(work: Path, sentences: list) -> None:
                 fives.append((method, path[:80], status))
         took = time.monotonic() - began
         alive = Client(server.base).get("/")[0]
+        assert server.process is not None
+        tracebacks = (work / f"server-{server.port}.log").read_text(errors="replace").count("Traceback")
         print(f"fuzz: {len(requests)} requests in {took:.1f} s: " +
               ", ".join(f"{key} {value}" for key, value in sorted(counts.items())) +
-              f"; 5xx answers: {len(fives)}; home page afterwards: {alive}")
+              f"; 5xx answers: {len(fives)}; tracebacks in the server log: {tracebacks}; "
+              f"server peak memory {peak_mb(server.process.pid):.0f} MB; home page afterwards: {alive}")
         for item in fives[:10]:
             print(f"fuzz: 5xx {item}")
     finally:

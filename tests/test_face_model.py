@@ -12,6 +12,8 @@ from cartoonface.errors import FaceModelError
 from cartoonface.face.model import (
     FAPU_NAMES,
     HAIR_POINTS,
+    MAX_HAIR_POINTS,
+    MAX_NUMBER_DIGITS,
     POINT_NAMES,
     computed_fapu,
     face_from_dict,
@@ -127,6 +129,9 @@ BAD_EDITS = [
     (("palette", "hair"), "#12345", "palette.hair"),
     (("palette", "lip"), DELETE, "'lip'"),
     (("canvas",), [400, -1], "canvas height"),
+    (("canvas",), [100, 100], "off the 100 x 100 canvas"),
+    (("fapu", "r1"), 1e300, "fapu.r1 is 1e+300"),
+    (("fapu", "eyebrow_h"), 101.0, "fapu.eyebrow_h"),
     (("name",), "", "name"),
 ]
 
@@ -171,3 +176,34 @@ def test_to_dict_lists_every_point_and_fapu(sample_path):
     assert obj["version"] == 1
     assert list(obj["points"]) == list(POINT_NAMES)
     assert set(obj["fapu"]) == set(FAPU_NAMES)
+
+
+def test_hair_outline_of_too_many_points_is_refused(sample_path):
+    obj = json.loads(sample_path.read_text())
+    ring = np.linspace(0, 2 * np.pi, MAX_HAIR_POINTS + 1, endpoint=False)
+    centre = np.mean(obj["hair"], axis=0)
+    obj["hair"] = (centre + 60 * np.column_stack([np.cos(ring), np.sin(ring)])).tolist()
+    with pytest.raises(FaceModelError, match=f"hair has {MAX_HAIR_POINTS + 1} points"):
+        face_from_dict(obj, "many.json")
+    obj["hair"] = obj["hair"][:MAX_HAIR_POINTS]
+    assert face_from_dict(obj, "many.json").hair.shape == (MAX_HAIR_POINTS, 2)
+
+
+@pytest.mark.parametrize("number", ["9" * 5000, "1" * 5000 + ".5", "-" + "7" * 200])
+def test_number_of_absurd_length_names_the_field(sample_path, tmp_path, number):
+    text = sample_path.read_text()
+    obj = json.loads(text)
+    obj["fapu"]["r2"] = 424242
+    bad = tmp_path / "long.json"
+    bad.write_text(json.dumps(obj).replace("424242", number))
+    with pytest.raises(FaceModelError, match=rf"long.json: fapu.r2 is a number of {len(number)} characters"):
+        load_face(bad)
+
+
+def test_number_as_long_as_allowed_is_read(sample_path, tmp_path):
+    obj = json.loads(sample_path.read_text())
+    obj["fapu"]["r2"] = 424242
+    padded = "12." + "0" * (MAX_NUMBER_DIGITS - 3)
+    good = tmp_path / "padded.json"
+    good.write_text(json.dumps(obj).replace("424242", padded))
+    assert load_face(good).fapu.r2 == 12.0

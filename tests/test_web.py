@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import stat
 import os
 import re
 import socket
@@ -22,10 +23,13 @@ from cartoonface.face.model import face_from_dict
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import create_app
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
-from cartoonface.web.runner import STOPPED, Runner
+from cartoonface.web.runner import STOPPED, QueueFull, Runner
+from cartoonface.web.views import stage_label
+from cartoonface.web.worker import JobLimits
 from cartoonface.web.security import download_name
-from cartoonface.web.store import (DONE, FAILED, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
-                                   create_job, list_jobs, load_job, new_id, valid_id, write_status)
+from cartoonface.web.store import (DONE, FAILED, FILE_MODE, FOLDER_MODE, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
+                                   create_job, list_jobs, load_job, new_id, space_problem, valid_id,
+                                   write_status)
 from tests.conftest import ROOT, SPOKEN, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli, speak
 from tests.synthetic import wav_bytes
 
@@ -152,6 +156,9 @@ def test_zip_download_is_the_folder_generate_writes(app, client, done_job, tmp_p
     assert set(got) == set(expected)
     assert "index.html" in got
     assert all(got[name] == expected[name] for name in expected)
+    # the recording is stored once: the job's input is the generated folder's copy
+    recording = job.folder / str(spec["audio_file"])
+    assert recording.stat().st_ino == (job.folder / "site" / recording.name).stat().st_ino
 
 
 def test_recent_jobs_are_listed_for_the_browser_that_made_them(app, speech, sample_name):
@@ -343,6 +350,18 @@ def test_transcript_limits_and_encoding(client, speech, sample_name):
     assert 'id="transcript_file-error"' in page and "long.txt" in page
 
 
+@pytest.mark.parametrize("content, expected", [
+    (png_bytes(40, 30, (200, 10, 10)) * 30, "not a text file (it holds NUL bytes)"),
+    (b"\xff\xfe" + "好".encode("utf-16-le") * 2000, "not a text file"),
+    ("你好\x07世界。".encode(), "control character U+0007"),
+])
+def test_binary_or_control_characters_in_a_transcript_file_are_refused(client, speech, sample_name, content, expected):
+    page = errors_of(post(client, form(client, speech, sample_name, transcript_file=(io.BytesIO(content), "t.bin"))))
+    assert 'id="transcript_file-error"' in page
+    assert expected in page
+    assert "longer than" not in page
+
+
 def test_transcript_file_is_used_instead_of_pasted_text(app, client, speech, sample_name):
     response = post(client, form(client, speech, sample_name, transcript="",
                                  transcript_file=(io.BytesIO("\ufeff你好，世界。\r\n".encode()), "t.txt")))
@@ -421,6 +440,11 @@ def test_photo_size_and_either_model_or_photo(client, speech, sample_name):
     ("clothes", "", "Choose one of the clothes"),
     ("style", "lively", "Choose one of the styles"),
     ("title", "x" * 201, "at most 200 are accepted"),
+    ("title", "ring\x07bell", "control character U+0007"),
+    ("title", "\x1b[31mred", "control character U+001B"),
+    ("title", "nul\x00", "control character U+0000"),
+    ("transcript", "你好\x00世界。", "control character U+0000"),
+    ("transcript", "你好\x1b世界。", "control character U+001B"),
 ])
 def test_choices_and_title_are_checked(client, speech, sample_name, field, value, message):
     page = errors_of(post(client, form(client, speech, sample_name, **{field: value})))
@@ -568,10 +592,14 @@ def test_retention_by_age_and_by_total_size(tmp_path, speech):
         (job.folder / "job.json").write_text(json.dumps(data))
         write_status(job.folder, Status(state=DONE))
     write_status(jobs[1].folder, Status(state=RUNNING))  # never deleted while it runs
-    deleted = apply_retention(tmp_path, max_age_days=7, max_total_mb=0.6, now=now)
-    assert deleted[0] == jobs[0].id  # too old
-    assert jobs[2].id in deleted  # oldest finished one over the size limit
-    assert {job.id for job in list_jobs(tmp_path)} == {jobs[1].id, jobs[3].id}
+    deleted = apply_retention(tmp_path, max_age_days=7, now=now)
+    assert deleted == [jobs[0].id]  # too old; younger finished jobs stay whatever their size
+    assert {job.id for job in list_jobs(tmp_path)} == {job.id for job in jobs[1:]}
+    # a full disk refuses new jobs instead: per user, then all together
+    mine = [jobs[2].id, jobs[3].id]
+    assert "of the 0.5 MB kept for each user" in space_problem(tmp_path, mine, 1000, 2**19, 10 * 2**20)
+    assert space_problem(tmp_path, mine, 1000, 2**20, 10 * 2**20) == ""
+    assert "storage for jobs is full" in space_problem(tmp_path, [], 1000, 2**20, 2**19)
     assert not any(path.name.startswith(".deleted") for path in (tmp_path / "jobs").iterdir())
 
 
@@ -638,3 +666,49 @@ def test_serve_reports_a_port_it_cannot_use(tmp_path):
     done = run_cli("serve", "--port", "70000")
     assert done.returncode == 2
     assert "expected a port number from 1 to 65535" in done.stderr
+
+
+# --- limits a hostile job cannot break ---------------------------------------------------------
+
+
+def test_a_job_over_its_memory_limit_fails_alone_with_a_clear_message(tmp_path, speech):
+    job = create_job(tmp_path, spec(), stored_inputs(speech))
+    runner = Runner(1, limits=JobLimits(memory_bytes=300 << 20, cpu_seconds=600))
+    try:
+        runner.submit(job.folder)
+        deadline = time.monotonic() + 120
+        while load_job(tmp_path, job.id).status.state not in (DONE, FAILED) and time.monotonic() < deadline:
+            time.sleep(0.1)
+    finally:
+        runner.close()
+    status = load_job(tmp_path, job.id).status
+    assert status.state == FAILED
+    assert status.error == JobLimits(300 << 20, 600).memory_message()
+    assert "0.293 GB of memory" in status.error
+
+
+def test_the_queue_is_capped_and_tells_a_waiting_job_its_place(tmp_path, speech):
+    jobs = [create_job(tmp_path, spec(f"job {i}"), stored_inputs(speech)) for i in range(3)]
+    runner = Runner(1, queue_max=1)
+    try:
+        runner.submit(jobs[0].folder)
+        deadline = time.monotonic() + 60
+        while load_job(tmp_path, jobs[0].id).status.state == QUEUED and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert runner.has_room()
+        runner.submit(jobs[1].folder)
+        assert runner.ahead_of(jobs[1].folder) == 0
+        assert not runner.has_room()
+        with pytest.raises(QueueFull):
+            runner.submit(jobs[2].folder)
+    finally:
+        runner.close()
+    assert stage_label(Status(state=QUEUED), 3) == "Waiting for a free worker: 3 jobs ahead of you"
+
+
+def test_job_folders_and_files_are_private(tmp_path, speech):
+    job = create_job(tmp_path, spec(), stored_inputs(speech))
+    assert stat.S_IMODE(job.folder.stat().st_mode) == FOLDER_MODE
+    modes = {path.name: stat.S_IMODE(path.stat().st_mode) for path in job.folder.iterdir()}
+    assert set(modes) == {"face.json", "audio.wav", "transcript.txt", "job.json", "status.json"}
+    assert set(modes.values()) == {FILE_MODE}

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import http.client
+import socket
+import time
 import zipfile
 from pathlib import Path
 
 import pytest
 
+from cartoonface.web.config import DEFAULTS
 from tests.conftest import ROOT, speak
 
 pytestmark = pytest.mark.browser
@@ -123,3 +126,18 @@ def test_served_on_loopback_only_loopback_host_names_are_accepted(server):
         answers[host] = connection.getresponse().status
         connection.close()
     assert answers == {"rebound.example": 400, f"127.0.0.1:{port}": 200, f"localhost:{port}": 200}
+
+
+def test_a_body_announced_and_not_sent_is_dropped_within_seconds(server):
+    port = int(server.rsplit(":", 1)[1])
+    timeout = DEFAULTS["CHANNEL_TIMEOUT"]
+    assert isinstance(timeout, int)
+    with socket.create_connection(("127.0.0.1", port), timeout=120) as slow:
+        slow.sendall(b"POST /jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: multipart/form-data; boundary=x\r\n"
+                     b"Content-Length: 314572800\r\n\r\n--x\r\n")
+        started = time.monotonic()
+        while slow.recv(65536):
+            pass
+        held = time.monotonic() - started
+    # closed once idle for CHANNEL_TIMEOUT, found by a sweep every CHANNEL_TIMEOUT / 2
+    assert held < 2 * timeout, held

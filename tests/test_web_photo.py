@@ -17,7 +17,7 @@ from markupsafe import escape
 from PIL import Image
 
 from cartoonface.face.model import POINT_NAMES, face_from_dict
-from cartoonface.web import photo_views
+from cartoonface.web import inputs, photo_views
 from cartoonface.web.draft_store import (DELETED_PREFIX, DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, delete_draft,
                                          drafts_root, linear_map, load_draft, sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
@@ -123,12 +123,12 @@ def test_several_faces_are_warned_about_and_the_largest_is_used(app, client):
 
 def test_a_busy_server_says_so(app, client, photo, monkeypatch):
     monkeypatch.setattr(photo_views, "DETECT_WAIT", 0.05)
-    assert photo_views._detecting.acquire(timeout=5)
+    assert photo_views.DETECTING.acquire(timeout=5)
     try:
         answer = upload(client, photo)
     finally:
-        photo_views._detecting.release()
-    assert answer.status_code == 503
+        photo_views.DETECTING.release()
+    assert answer.status_code == 429
     assert "busy" in answer.get_data(as_text=True)
     assert upload(client, photo).status_code == 303
 
@@ -400,3 +400,14 @@ def test_check_drag_and_generate_in_chromium(server, speech, browser, tmp_path):
     page.wait_for_function("() => document.getElementById('editor').hasAttribute('data-updated')", timeout=10_000)
     assert json.loads(page.input_value("#points"))["2.1"][1] > start[1] + 5
     phone.close()
+
+
+def test_the_main_form_waits_for_the_same_photo_lock(client, photo, monkeypatch, speech):
+    monkeypatch.setattr(inputs, "DETECT_WAIT", 0.05)
+    assert inputs.DETECTING.acquire(timeout=5)
+    try:
+        answer = post(client, form(client, speech.read_bytes(), "", face_sample=None, photo=(io.BytesIO(photo), "me.jpg")))
+    finally:
+        inputs.DETECTING.release()
+    assert answer.status_code == 400
+    assert inputs.PHOTO_BUSY in answer.get_data(as_text=True)

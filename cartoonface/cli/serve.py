@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from pathlib import Path
@@ -16,6 +17,8 @@ THREADS = 8  # waitress request threads; jobs run in the app's own worker pool
 # page that rebinds its own domain name to 127.0.0.1 then cannot drive the app.
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost")
 HELP = "run the web app (upload, progress, results)"
+# Everything the server writes (jobs, their results, photo drafts) is readable by its user only.
+UMASK = 0o077
 
 
 def port_number(text: str) -> int:
@@ -55,12 +58,17 @@ def run(args: argparse.Namespace) -> int:
 
     from cartoonface.web import create_app
 
+    os.umask(UMASK)
     app = create_app({"INSTANCE_PATH": str(args.instance)} if args.instance else None)
     if args.host in LOOPBACK_HOSTS and app.config.get("TRUSTED_HOSTS") is None:
         app.config["TRUSTED_HOSTS"] = list(LOOPBACK_HOSTS)
     runner = app.extensions["cartoonface"].runner
+    # A connection that sends nothing for CHANNEL_TIMEOUT seconds (a body announced and not sent)
+    # is closed; waitress checks idle connections this often (seconds).
+    timeout = app.extensions["cartoonface"].settings.channel_timeout
     try:
-        server = waitress.create_server(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface")
+        server = waitress.create_server(app, host=args.host, port=args.port, threads=THREADS, ident="cartoonface",
+                                        channel_timeout=timeout, cleanup_interval=max(1, timeout // 2))
     except (OSError, ValueError) as exc:  # in use, not ours; waitress says ValueError for an unknown host
         runner.close()
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)

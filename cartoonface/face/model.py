@@ -54,6 +54,22 @@ POINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(POINT_NAMES)}
 # other sources may use more or fewer; at least a triangle is required.
 HAIR_POINTS = 23
 MIN_HAIR_POINTS = 3
+# At most this many hair points: 17 x the thesis's 23, room for a finely traced outline,
+# while the drawing stays small (render/geometry.py compiles the hair into a matrix of
+# (8 H) x (49 + H) numbers, which grows with the square of H: 400 points take 12 MB,
+# 30,000 points would take 57 GB).
+MAX_HAIR_POINTS = 400
+
+# Every point and hair point lies on the canvas or within this share of its size
+# outside it (hair may reach past the edge of the picture).
+CANVAS_MARGIN = 0.5
+# A free FAPU (eyebrow thickness, iris radius) is at most this many eye distances d
+# (the samples: 0.10 .. 0.15 d): a larger one is a wrong number, and would draw a shape
+# far larger than the face.
+MAX_FREE_FAPU_D = 1.0
+# A JSON number with more digits than this is refused before it is read (Python refuses
+# integers of over 4300 digits with a ValueError; a coordinate needs a dozen).
+MAX_NUMBER_DIGITS = 100
 
 # Half-size of the face box in median deviations of the model points from
 # their median (about 2.4 d across and 3.6 d down for the samples): room for
@@ -179,6 +195,9 @@ _MAY_BE_ZERO = ("lower_lip_h",)
 
 
 def _number(value: object, where: str, source: str) -> float:
+    if isinstance(value, LongNumber):
+        raise FaceModelError(f"{source}: {where} is {value!r}; expected a number of at most "
+                             f"{MAX_NUMBER_DIGITS} characters")
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise FaceModelError(f"{source}: {where} is {value!r}; expected a number")
     if not math.isfinite(value):
@@ -226,7 +245,7 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
     _check_keys(top, known, "top-level", source, known)
 
     name = top["name"]
-    if not isinstance(name, str) or not name.strip():
+    if not isinstance(name, str) or isinstance(name, LongNumber) or not name.strip():
         raise FaceModelError(f"{source}: name is {name!r}; expected a non-empty string")
 
     canvas = top["canvas"]
@@ -242,7 +261,10 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
     hair_list = top["hair"]
     if not isinstance(hair_list, list) or len(hair_list) < MIN_HAIR_POINTS:
         raise FaceModelError(f"{source}: hair must be a list of at least {MIN_HAIR_POINTS} [x, y] points")
+    if len(hair_list) > MAX_HAIR_POINTS:
+        raise FaceModelError(f"{source}: hair has {len(hair_list)} points; expected at most {MAX_HAIR_POINTS}")
     hair = np.array([_xy(p, f"hair[{i}]", source) for i, p in enumerate(hair_list)])
+    _check_canvas(points, hair, width, height, source)
 
     given_fapu = _obj(top["fapu"], "fapu", source)
     _check_keys(given_fapu, FAPU_NAMES, "fapu", source, FREE_FAPU)
@@ -262,6 +284,10 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
                 f"{source}: fapu.{key} computed from the points is {value:g}: {_COMPUTED_RULE[key]}"
             )
         values[key] = value
+    for key in FREE_FAPU:
+        if values[key] > MAX_FREE_FAPU_D * values["d"]:
+            raise FaceModelError(f"{source}: fapu.{key} is {values[key]:g}; expected at most "
+                                 f"{MAX_FREE_FAPU_D:g} x the eye distance d = {values['d']:g} pixels")
 
     given_palette = _obj(top["palette"], "palette", source)
     _check_keys(given_palette, PALETTE_NAMES, "palette", source, PALETTE_NAMES)
@@ -278,6 +304,22 @@ def face_from_dict(obj: object, source: str) -> FaceModel:
         width=width,
         height=height,
     )
+
+
+def _check_canvas(points: np.ndarray, hair: np.ndarray, width: float, height: float, source: str) -> None:
+    """Every point ((P, 2) and hair (H, 2), pixels) lies on the `width` x `height` canvas
+    or within CANVAS_MARGIN of its size outside it; FaceModelError naming the first that does not."""
+    low = -CANVAS_MARGIN * np.array([width, height])
+    high = (1 + CANVAS_MARGIN) * np.array([width, height])
+    area = f"[{low[0]:g}..{high[0]:g}] x [{low[1]:g}..{high[1]:g}]"
+    for label, array in (("points", points), ("hair", hair)):
+        outside = np.nonzero(np.any((array < low) | (array > high), axis=1))[0]
+        if outside.size:
+            i = int(outside[0])
+            where = f"points[{POINT_NAMES[i]!r}]" if label == "points" else f"hair[{i}]"
+            x, y = array[i]
+            raise FaceModelError(f"{source}: {where} = [{x:g}, {y:g}] is off the {width:g} x {height:g} canvas; "
+                                 f"expected within {area}")
 
 
 def _check_box(points: np.ndarray, hair: np.ndarray, source: str) -> None:
@@ -306,13 +348,42 @@ def load_face(path: str | os.PathLike[str]) -> FaceModel:
     """Read and validate a face JSON file; FaceModelError names the file and field."""
     source = str(path)
     text = read_user_text(path, FaceModelError, "face file")
+    return face_from_dict(parse_face_json(text, source), source)
+
+
+class LongNumber(str):
+    """The text of a JSON number of more than MAX_NUMBER_DIGITS characters, kept unread."""
+
+    def __repr__(self) -> str:
+        return f"a number of {len(self)} characters"
+
+
+def _int_or_long(text: str) -> int | LongNumber:
+    return LongNumber(text) if len(text) > MAX_NUMBER_DIGITS else int(text)
+
+
+def _float_or_long(text: str) -> float | LongNumber:
+    return LongNumber(text) if len(text) > MAX_NUMBER_DIGITS else float(text)
+
+
+def json_with_long_numbers(text: str) -> object:
+    """json.loads(`text`), except that a number of more than MAX_NUMBER_DIGITS characters
+    becomes a LongNumber (which face_from_dict refuses naming its field) instead of being
+    read. Raises what json.loads raises (ValueError, RecursionError)."""
+    return json.loads(text, parse_int=_int_or_long, parse_float=_float_or_long)
+
+
+def parse_face_json(text: str, source: str) -> object:
+    """The JSON value of a face file's `text` (json_with_long_numbers); FaceModelError
+    naming `source` when the text is not JSON or nests too deeply."""
     try:
-        obj = json.loads(text)
+        return json_with_long_numbers(text)
     except json.JSONDecodeError as exc:
         raise FaceModelError(
             f"{source}: not valid JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
         ) from None
-    return face_from_dict(obj, source)
+    except (ValueError, RecursionError) as exc:  # deep nesting, or a number Python will not read
+        raise FaceModelError(f"{source}: not a face model this program reads ({exc})") from None
 
 
 def _round(value: float) -> float:

@@ -24,6 +24,7 @@ from cartoonface.web.runner import Runner
 from cartoonface.web.security import add_headers
 from cartoonface.web.store import apply_retention, fail_interrupted
 from cartoonface.web.views import JobIdConverter, WebState, bp
+from cartoonface.web.worker import JobLimits
 
 ENV_PREFIX = "CARTOONFACE"
 
@@ -74,7 +75,7 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
 
     def sweep(_folder: Path | None = None) -> None:
         with sweep_lock:
-            apply_retention(settings.instance, settings.retention_days, settings.retention_mb)
+            apply_retention(settings.instance, settings.retention_days)
             sweep_drafts(settings.instance)
 
     fail_interrupted(settings.instance)
@@ -82,7 +83,8 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     limits = Limits(upload_bytes=settings.upload_bytes, transcript_chars=settings.transcript_chars,
                     samples=sample_faces(settings.samples_dir), backgrounds=tuple(BACKGROUNDS),
                     clothes=tuple(CLOTHES))
-    app.extensions["cartoonface"] = WebState(settings, limits, Runner(settings.workers, sweep))
+    app.extensions["cartoonface"] = WebState(settings, limits, Runner(
+        settings.workers, sweep, JobLimits(settings.job_memory_bytes, settings.job_cpu_seconds), settings.queue_max))
     app.url_map.converters["jobid"] = JobIdConverter
     app.register_blueprint(bp)
     app.register_blueprint(photo_views.bp)

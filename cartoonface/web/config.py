@@ -25,6 +25,16 @@ DEFAULTS: dict[str, object] = {
     "RETENTION_DAYS": 7,
     "RETENTION_MB": 2048,
     "SAMPLES_DIR": str(SAMPLE_FACES),
+    # A job's worker process may use this much memory (address space, MiB) and CPU time
+    # (seconds): a 30-minute recording takes about 4.2 GB and a few minutes of CPU.
+    "JOB_MEMORY_MB": 6144,
+    "JOB_CPU_SECONDS": 3600,
+    # At most this many jobs wait for a worker; a submission beyond it is refused (429).
+    "QUEUE_MAX": 20,
+    # The jobs of one browser session may take this much disk (MiB) while they are kept.
+    "USER_QUOTA_MB": 1024,
+    # `serve`: a connection that sends nothing for this many seconds is closed.
+    "CHANNEL_TIMEOUT": 10,
 }
 
 # key -> (type, smallest value)
@@ -34,12 +44,19 @@ NUMBERS = {
     "WORKERS": (int, 1),
     "RETENTION_DAYS": (float, 0.0),
     "RETENTION_MB": (float, 0.0),
+    "JOB_MEMORY_MB": (float, 64.0),
+    "JOB_CPU_SECONDS": (int, 1),
+    "QUEUE_MAX": (int, 1),
+    "USER_QUOTA_MB": (float, 0.001),
+    "CHANNEL_TIMEOUT": (int, 1),
 }
 
 
 @dataclass(frozen=True)
 class Settings:
-    """Checked settings: instance folder, byte/char limits, pool size, retention, sample faces."""
+    """Checked settings: instance folder, byte/char limits, pool size, retention, sample faces,
+    per-job memory (bytes) and CPU time (seconds), queue length, per-session disk quota
+    (bytes) and the idle-connection timeout (seconds)."""
 
     instance: Path
     upload_bytes: int
@@ -48,6 +65,11 @@ class Settings:
     retention_days: float
     retention_mb: float
     samples_dir: Path
+    job_memory_bytes: int
+    job_cpu_seconds: int
+    queue_max: int
+    user_quota_bytes: int
+    channel_timeout: int
 
 
 def settings_from(config: Mapping[str, object], instance: Path) -> Settings:
@@ -73,6 +95,11 @@ def settings_from(config: Mapping[str, object], instance: Path) -> Settings:
         retention_days=values["RETENTION_DAYS"],
         retention_mb=values["RETENTION_MB"],
         samples_dir=Path(str(config.get("SAMPLES_DIR"))),
+        job_memory_bytes=int(values["JOB_MEMORY_MB"] * 2**20),
+        job_cpu_seconds=values["JOB_CPU_SECONDS"],
+        queue_max=values["QUEUE_MAX"],
+        user_quota_bytes=int(values["USER_QUOTA_MB"] * 2**20),
+        channel_timeout=values["CHANNEL_TIMEOUT"],
     )
 
 

@@ -10,8 +10,11 @@ numbers), never from the file name; the user's file name is only ever shown
 
 from __future__ import annotations
 
+import codecs
 import json
+import re
 import tempfile
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +22,7 @@ from pathlib import Path
 from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
-from cartoonface.face.model import face_from_dict, face_to_dict
+from cartoonface.face.model import face_from_dict, face_to_dict, json_with_long_numbers
 from cartoonface.photo.model_from_photo import face_from_photo, load_photo
 from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
@@ -32,6 +35,15 @@ STYLE_CHOICES = {"": "the page's own (audio book: storyteller, announcer: announ
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 SHOWN_NAME_CHARS = 80
+# Control characters refused in a title or transcript (tab, line feed and carriage return are kept).
+CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+# One photo is read at a time, by the form and by /photos alike (the face mesh is one model,
+# ~0.5 s a photo, and a large photo takes a few hundred MB while it is read): a request that
+# cannot start within DETECT_WAIT seconds is told the server is busy.
+DETECT_WAIT = 20.0
+DETECTING = threading.Lock()
+PHOTO_BUSY = "The server is busy reading other photos; please try again in a minute."
 
 
 @dataclass(frozen=True)
@@ -125,14 +137,19 @@ def check_photo(name: str, data: bytes, too_big: bool,
     if ext is None:
         errors["photo"] = f"{name}: not a photo this app reads (by its content); expected JPEG, PNG or WebP."
         return None, name, ()
-    with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
-        path = Path(tmp) / f"photo.{ext}"
-        path.write_bytes(data)
-        try:
+    if not DETECTING.acquire(timeout=DETECT_WAIT):
+        errors["photo"] = PHOTO_BUSY
+        return None, name, ()
+    try:
+        with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
+            path = Path(tmp) / f"photo.{ext}"
+            path.write_bytes(data)
             made = face_from_photo(load_photo(path), "photo")
-        except InputError as exc:
-            errors["photo"] = str(exc).replace(str(path), name)
-            return None, name, ()
+    except InputError as exc:
+        errors["photo"] = str(exc).replace(str(path), name)
+        return None, name, ()
+    finally:
+        DETECTING.release()
     face = json.dumps(face_to_dict(made.face), ensure_ascii=False).encode("utf-8")
     return face, name, tuple(f"{name}: {warning}" for warning in made.warnings)
 
@@ -158,8 +175,8 @@ def check_face(form: MultiDict[str, str], files: MultiDict[str, FileStorage], li
             errors["face_file"] = f"{name}: a face model must be at most {MAX_FACE_BYTES >> 10} kB of JSON."
             return None, name, ()
         try:
-            obj = json.loads(data.decode("utf-8-sig"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            obj = json_with_long_numbers(data.decode("utf-8-sig"))
+        except ValueError as exc:  # not UTF-8, not JSON
             errors["face_file"] = f"{name}: not a face model: expected UTF-8 JSON ({exc})."
             return None, name, ()
         except RecursionError:
@@ -216,19 +233,24 @@ def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     field, name = "transcript", "transcript"
     if data is not None:
         field, name = "transcript_file", shown_name(upload, "transcript")
-        if too_big:
-            errors[field] = f"{name}: the transcript is longer than {limits.transcript_chars} characters."
+        if b"\x00" in data:
+            errors[field] = f"{name}: not a text file (it holds NUL bytes): expected UTF-8 text."
             return None
-        try:
-            text = data.decode("utf-8-sig")
+        try:  # a file cut at the limit may end inside a character: only a whole file must end well
+            text = codecs.getincrementaldecoder("utf-8-sig")().decode(data, final=not too_big)
         except UnicodeDecodeError:
             errors[field] = f"{name}: not a text file: expected UTF-8 text."
             return None
-        if "\x00" in text:
-            errors[field] = f"{name}: not a text file (it holds NUL bytes): expected UTF-8 text."
+        if too_big:
+            errors[field] = f"{name}: the transcript is longer than {limits.transcript_chars} characters."
             return None
     else:
         text = _text(form, "transcript")
+    control = CONTROL.search(text)
+    if control:
+        errors[field] = (f"{name}: holds the control character U+{ord(control.group()):04X}; "
+                         "expected plain text (tabs and line breaks are fine).")
+        return None
     text = text.replace("\r\n", "\n").strip()
     if not text:
         errors["transcript"] = "Paste the transcript of the recording, or upload it as a UTF-8 text file."
@@ -260,7 +282,10 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     Submission, or field -> message for each problem."""
     errors: dict[str, str] = {}
     title = " ".join(_text(form, "title").split())
-    if len(title) > MAX_TITLE:
+    control = CONTROL.search(title)
+    if control:
+        errors["title"] = f"The title holds the control character U+{ord(control.group()):04X}; expected plain text."
+    elif len(title) > MAX_TITLE:
         errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE} are accepted."
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     style = check_choice(form, "style", STYLE_CHOICES, "styles", errors)

@@ -14,7 +14,6 @@ POST /photos/<id>               save the edited points, 303 to the form with thi
 from __future__ import annotations
 
 import json
-import threading
 
 from flask import Blueprint, Response, abort, jsonify, redirect, render_template, request, url_for
 from werkzeug.wrappers import Response as BaseResponse
@@ -22,17 +21,12 @@ from werkzeug.wrappers import Response as BaseResponse
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES
 from cartoonface.web.draft_store import PHOTO_FILE, Draft, create_draft, load_draft, save_edit, sweep_drafts
-from cartoonface.web.inputs import MAX_PHOTO_BYTES, megabytes, read_upload, shown_name, sniff_image
+from cartoonface.web.inputs import DETECT_WAIT, DETECTING, MAX_PHOTO_BYTES, PHOTO_BUSY, megabytes, read_upload, shown_name, sniff_image
 from cartoonface.web.point_editor import MAX_POINTS_CHARS, edited_face, parse_points, preview_svg
 from cartoonface.web.point_labels import POINT_LABELS
 from cartoonface.web.security import CSRF_FIELD, csrf_ok, csrf_token
 from cartoonface.web.store import new_id
 from cartoonface.web.views import state
-
-# One photo is read at a time (the face mesh is one model behind a lock, ~0.5 s a photo);
-# a request that cannot start within this many seconds is told the server is busy.
-DETECT_WAIT = 20.0
-_detecting = threading.Lock()
 
 # The editor's point dots: this share of the photo's long side, at least MIN_POINT_RADIUS px.
 POINT_RADIUS_SHARE = 0.008
@@ -79,7 +73,7 @@ def upload_form() -> tuple[str, int]:
 @bp.post("/photos")
 def upload() -> BaseResponse | tuple[str, int]:
     """Read the uploaded photo and find the face: 303 to the new draft's editor, or the
-    upload form with the reason (400; 503 when another photo is being read too long)."""
+    upload form with the reason (400; 429 when another photo is being read too long)."""
     if not csrf_ok(request.form.get(CSRF_FIELD)):
         return render_upload(EXPIRED, 400)
     upload_file = request.files.get("photo")
@@ -93,14 +87,14 @@ def upload() -> BaseResponse | tuple[str, int]:
     if ext is None:
         return render_upload(f"{name}: not a photo this app reads (by its content); expected JPEG, PNG or WebP.", 400)
     instance = state().settings.instance
-    if not _detecting.acquire(timeout=DETECT_WAIT):
-        return render_upload("The server is busy reading other photos; please try again in a minute.", 503)
+    if not DETECTING.acquire(timeout=DETECT_WAIT):
+        return render_upload(PHOTO_BUSY, 429)
     try:
         draft = create_draft(instance, data, ext, name, new_id())
     except InputError as exc:
         return render_upload(str(exc), 400)
     finally:
-        _detecting.release()
+        DETECTING.release()
     sweep_drafts(instance)
     return redirect(url_for(".editor", draft_id=draft.id), code=303)
 

@@ -40,7 +40,7 @@ def parse_points(text: str, size: tuple[int, int]) -> np.ndarray:
         raise InputError(f"points: {len(text)} characters; expected at most {MAX_POINTS_CHARS}")
     try:
         obj = json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:  # not JSON, nested too deeply, an integer of 4300+ digits
         raise InputError(f"points: not JSON ({exc}); expected an object of point name -> [x, y]") from None
     if not isinstance(obj, dict):
         raise InputError(f"points: a JSON {type(obj).__name__}; expected an object of point name -> [x, y]")

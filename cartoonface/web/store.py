@@ -31,6 +31,9 @@ ID_PATTERN = re.compile(r"[A-Za-z0-9_-]{32}")
 QUEUED, RUNNING, DONE, FAILED = "queued", "running", "done", "failed"
 FINAL_STATES = (DONE, FAILED)
 
+# A job folder and its files are the server user's alone (its inputs are someone's recording).
+FOLDER_MODE, FILE_MODE = 0o700, 0o600
+
 INTERRUPTED = "Interrupted: the server stopped before this job finished. Please submit it again."
 
 
@@ -124,10 +127,12 @@ def create_job(instance: Path, spec: Mapping[str, object], files: Mapping[str, b
     status = Status(state=QUEUED, updated=created)
     target = job_folder(instance, job_id)
     with atomic_directory(target) as tmp:
-        for name, data in files.items():
-            (tmp / name).write_bytes(data)
-        (tmp / "job.json").write_text(json.dumps(full_spec, ensure_ascii=False), encoding="utf-8")
-        (tmp / "status.json").write_text(json.dumps(status.to_dict()), encoding="utf-8")
+        tmp.chmod(FOLDER_MODE)
+        contents = {**files, "job.json": json.dumps(full_spec, ensure_ascii=False).encode("utf-8"),
+                    "status.json": json.dumps(status.to_dict()).encode("utf-8")}
+        for name, data in contents.items():
+            with os.fdopen(os.open(tmp / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, FILE_MODE), "wb") as out:
+                out.write(data)
     return Job(job_id, target, full_spec, status)
 
 
@@ -199,28 +204,29 @@ def delete_job(folder: Path) -> None:
     shutil.rmtree(trash, ignore_errors=True)
 
 
-def apply_retention(instance: Path, max_age_days: float, max_total_mb: float,
-                    now: float | None = None) -> list[str]:
-    """Delete finished jobs older than `max_age_days`, then the oldest finished jobs
-    while all jobs together take more than `max_total_mb` megabytes (2**20 bytes).
-    Queued and running jobs are never deleted. Return the deleted ids."""
+def apply_retention(instance: Path, max_age_days: float, now: float | None = None) -> list[str]:
+    """Delete finished jobs older than `max_age_days`; return the deleted ids. Queued and
+    running jobs are never deleted, nor is a finished job before that age (when the disk
+    limits are reached, new submissions are refused instead: see space_problem)."""
     now = time.time() if now is None else now
-    jobs = sorted(list_jobs(instance), key=lambda job: job.created)
     deleted = []
-    kept = []
-    for job in jobs:
+    for job in list_jobs(instance):
         if job.status.state in FINAL_STATES and now - job.created > max_age_days * 86400:
             delete_job(job.folder)
             deleted.append(job.id)
-        else:
-            kept.append((job, folder_size(job.folder)))
-    total = sum(size for _job, size in kept)
-    limit = max_total_mb * 2**20
-    for job, size in kept:
-        if total <= limit:
-            break
-        if job.status.state in FINAL_STATES:
-            delete_job(job.folder)
-            deleted.append(job.id)
-            total -= size
     return deleted
+
+
+def space_problem(instance: Path, own_ids: list[str], incoming: int, quota: int, total_limit: int) -> str:
+    """Why a new job of `incoming` bytes cannot be stored, or "" when it can: the jobs of this
+    user (`own_ids`) would take more than `quota` bytes, or all jobs more than `total_limit`."""
+    own = sum(folder_size(job_folder(instance, job_id)) for job_id in own_ids if valid_id(job_id))
+    if own + incoming > quota:
+        return (f"Your jobs take {own / 2**20:.3g} MB of the {quota / 2**20:.3g} MB kept for each user, "
+                f"too little for this one ({incoming / 2**20:.1f} MB). They are deleted "
+                "after the retention age; please try again then, or with a shorter recording.")
+    total = folder_size(jobs_root(instance)) if jobs_root(instance).is_dir() else 0
+    if total + incoming > total_limit:
+        return ("The server's storage for jobs is full. Finished jobs are deleted after the retention age; "
+                "please try again later.")
+    return ""

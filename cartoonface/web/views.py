@@ -27,9 +27,9 @@ from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.draft_store import draft_choice, load_draft
 from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, STYLE_CHOICES, Limits, check_submission, form_values,
                                     megabytes)
-from cartoonface.web.runner import Runner
+from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
-from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job
+from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, delete_job, load_job, space_problem
 from cartoonface.web.worker import SITE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
@@ -96,11 +96,26 @@ def state() -> WebState:
     return current_app.extensions["cartoonface"]
 
 
-def stage_label(status: Status) -> str:
-    """What the job is doing, for people: waiting, or the pipeline stage it is in."""
+def stage_label(status: Status, ahead: int | None = None) -> str:
+    """What the job is doing, for people: waiting (with the number of jobs `ahead` of it in
+    the queue, when known), or the pipeline stage it is in."""
     if status.state == QUEUED:
-        return QUEUED_LABEL
+        if ahead is None:
+            return QUEUED_LABEL
+        return f"{QUEUED_LABEL}: {ahead} job{'' if ahead == 1 else 's'} ahead of you"
     return STAGES.get(status.stage, status.stage)
+
+
+def job_label(job: Job) -> str:
+    """stage_label of the stored `job`, with its place in the queue when it is waiting."""
+    ahead = state().runner.ahead_of(job.folder) if job.status.state == QUEUED else None
+    return stage_label(job.status, ahead)
+
+
+def busy_message() -> str:
+    """The form error when the queue is full."""
+    return (f"The server is busy: {state().settings.queue_max} jobs are waiting for a worker. "
+            "Please try again in a few minutes.")
 
 
 def stored_job(job_id: str) -> Job:
@@ -157,6 +172,8 @@ def submit() -> BaseResponse | tuple[str, int]:
     if not csrf_ok(request.form.get(CSRF_FIELD)):
         return render_form(values, {"form": "This form has expired or did not come from this page. "
                                             "Please check the fields and press Generate again."}, 400)
+    if not state().runner.has_room():
+        return render_form(values, {"form": busy_message()}, 429)
     draft_id = values["face_draft"]
     chosen = draft_choice(state().settings.instance, draft_id) if draft_id else None
     checked = check_submission(request.form, request.files, state().limits, chosen)
@@ -165,8 +182,18 @@ def submit() -> BaseResponse | tuple[str, int]:
         return render_form(values, {**(checked if isinstance(checked, dict) else {}), "face_sample": DRAFT_GONE}, 400)
     if isinstance(checked, dict):
         return render_form(values, checked, 400)
-    job = create_job(state().settings.instance, checked.spec, checked.files)
-    state().runner.submit(job.folder)
+    settings = state().settings
+    problem = space_problem(settings.instance, [i for i in session.get("jobs", []) if isinstance(i, str)],
+                            sum(len(data) for data in checked.files.values()), settings.user_quota_bytes,
+                            int(settings.retention_mb * 2**20))
+    if problem:
+        return render_form(values, {"form": problem}, 429)
+    job = create_job(settings.instance, checked.spec, checked.files)
+    try:
+        state().runner.submit(job.folder)
+    except QueueFull:  # filled up while this form was checked
+        delete_job(job.folder)
+        return render_form(values, {"form": busy_message()}, 429)
     session["jobs"] = [job.id, *[i for i in session.get("jobs", []) if isinstance(i, str)]][:RECENT]
     return redirect(url_for(".job_page", job_id=job.id), code=303)
 
@@ -175,15 +202,16 @@ def submit() -> BaseResponse | tuple[str, int]:
 def job_page(job_id: str) -> str:
     """The job's progress, its error, or its player and download link."""
     job = stored_job(job_id)
-    return render_template("web/job.html", job=job, status=job.status, stage=stage_label(job.status),
+    return render_template("web/job.html", job=job, status=job.status, stage=job_label(job),
                            pages=PAGES, done=job.status.state == DONE)
 
 
 @bp.get("/jobs/<jobid:job_id>/status")
 def job_status(job_id: str) -> Response:
     """The job's progress as JSON (state, stage, stage_label, percent, error), not cached."""
-    status = stored_job(job_id).status
-    response = jsonify(state=status.state, stage=status.stage, stage_label=stage_label(status),
+    job = stored_job(job_id)
+    status = job.status
+    response = jsonify(state=status.state, stage=status.stage, stage_label=job_label(job),
                        percent=status.percent, error=status.error)
     response.headers["Cache-Control"] = "no-store"
     return response

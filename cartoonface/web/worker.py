@@ -12,15 +12,19 @@ stops at the next progress report; the restarted server marks the job failed.
 
 from __future__ import annotations
 
+import filecmp
 import io
 import json
 import multiprocessing
 import os
+import resource
+import signal
 import sys
 import time
 import traceback
 import zipfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.errors import InputError
@@ -35,8 +39,51 @@ SITE = "site"
 ZIP_NAME = "site.zip"
 
 
+# The CPU-time limit is a soft limit (SIGXCPU, answered with OverCpu); the process is
+# killed at the hard limit this many seconds later, should the handler not get to run.
+CPU_GRACE = 5
+
+
 class Orphaned(Exception):
     """The server process that started this worker has gone away."""
+
+
+class OverCpu(BaseException):
+    """The job used up its CPU time (SIGXCPU at the soft RLIMIT_CPU); a BaseException, so
+    no `except Exception` on the way up can swallow it."""
+
+
+@dataclass(frozen=True)
+class JobLimits:
+    """What one job's process may use: `memory_bytes` of address space (RLIMIT_AS) and
+    `cpu_seconds` of CPU time (RLIMIT_CPU)."""
+
+    memory_bytes: int
+    cpu_seconds: int
+
+    def memory_message(self) -> str:
+        """The user message for a job stopped by the memory limit."""
+        return (f"The job used more than {self.memory_bytes / 2**30:.3g} GB of memory and was stopped. "
+                "A shorter recording needs less.")
+
+    def cpu_message(self) -> str:
+        """The user message for a job stopped by the CPU-time limit."""
+        return (f"The job used more than {self.cpu_seconds} s of processor time and was stopped. "
+                "A shorter recording needs less.")
+
+
+def _over_cpu(signum: int, frame: object) -> None:
+    raise OverCpu
+
+
+def apply_limits(limits: JobLimits) -> None:
+    """Limit this process (and what it forks) to `limits`: RLIMIT_AS (an allocation beyond it
+    raises MemoryError) and RLIMIT_CPU (SIGXCPU raises OverCpu; killed CPU_GRACE s later)."""
+    used = int(resource.getrusage(resource.RUSAGE_SELF).ru_utime + resource.getrusage(resource.RUSAGE_SELF).ru_stime)
+    resource.setrlimit(resource.RLIMIT_AS, (limits.memory_bytes, limits.memory_bytes))
+    soft = used + limits.cpu_seconds
+    resource.setrlimit(resource.RLIMIT_CPU, (soft, soft + CPU_GRACE))
+    signal.signal(signal.SIGXCPU, _over_cpu)
 
 
 def zip_folder(folder: Path, top: str) -> bytes:
@@ -69,6 +116,17 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
     return message
 
 
+def share_recording(recording: Path, site: Path) -> None:
+    """Store the job's `recording` once: when the generated folder `site` holds a byte-identical
+    copy of it (render/pages.py copy_audio), the job's input becomes a hard link to that copy."""
+    copy = site / recording.name
+    if not copy.is_file() or not filecmp.cmp(recording, copy, shallow=False):
+        return
+    linked = recording.with_name(f".{recording.name}.link")
+    os.link(copy, linked)
+    os.replace(linked, recording)
+
+
 def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     """Generate the job stored in `folder`, writing status.json as it goes; stop
     (Orphaned) at a progress report when `server_alive()` is False."""
@@ -93,6 +151,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
+        share_recording(folder / str(spec["audio_file"]), folder / SITE)
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
                                     updated=time.time()))
@@ -107,17 +166,29 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     write_status(folder, Status(state=DONE, stage="pages", fraction=1.0, updated=time.time(), result=summary))
 
 
-def main(folder: Path, server_alive: Callable[[], bool]) -> int:
-    """Run the job in `folder`; return the exit code: 0 once the status is final,
-    3 when the server went away, 1 after an internal error (traceback on stderr)."""
+def _stage(folder: Path) -> str:
+    return str(json.loads((folder / "status.json").read_text(encoding="utf-8")).get("stage", ""))
+
+
+def main(folder: Path, server_alive: Callable[[], bool], limits: JobLimits | None = None) -> int:
+    """Run the job in `folder` (under `limits`, for the messages, when given); return the exit
+    code: 0 once the status is final, 3 when the server went away, 4 when the job hit a limit
+    of `limits`, 1 after an internal error (traceback on stderr)."""
     try:
         run_job(folder, server_alive)
     except Orphaned:
         print("worker: the server went away; stopping", file=sys.stderr)
         return 3
+    except (MemoryError, OverCpu) as exc:
+        if limits is None:
+            raise
+        message = limits.memory_message() if isinstance(exc, MemoryError) else limits.cpu_message()
+        print(f"worker: {message}", file=sys.stderr)
+        write_status(folder, Status(state=FAILED, stage=_stage(folder), updated=time.time(), error=message))
+        return 4
     except Exception:  # a bug: keep the details for the log, tell the user briefly
         traceback.print_exc()
-        stage = json.loads((folder / "status.json").read_text(encoding="utf-8")).get("stage", "")
+        stage = _stage(folder)
         write_status(folder, Status(state=FAILED, stage=stage, updated=time.time(),
                                     error=f"Internal error while generating (stage {stage or 'start'}); "
                                           "the job's worker.log on the server has the details."))
@@ -125,10 +196,11 @@ def main(folder: Path, server_alive: Callable[[], bool]) -> int:
     return 0
 
 
-def forked_main(folder: str) -> None:
-    """Entry point in a process the runner started through the forkserver: output goes to
-    the job's worker.log; the server is alive while multiprocessing's parent sentinel is
-    open (the forkserver itself outlives a killed server while its children run)."""
+def forked_main(folder: str, limits: JobLimits | None = None) -> None:
+    """Entry point in a process the runner started through the forkserver: the process is
+    held to `limits` (None: not limited), output goes to the job's worker.log; the server is alive while
+    multiprocessing's parent sentinel is open (the forkserver itself outlives a killed
+    server while its children run)."""
     log = os.open(Path(folder) / "worker.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     os.dup2(log, 1)
     os.dup2(log, 2)
@@ -137,7 +209,9 @@ def forked_main(folder: str) -> None:
     if server is None:
         sys.exit("worker: forked_main runs only in a process the runner started; by hand: "
                  "python -m cartoonface.web.worker JOB_FOLDER PARENT_PID")
-    sys.exit(main(Path(folder), server.is_alive))
+    if limits is not None:
+        apply_limits(limits)
+    sys.exit(main(Path(folder), server.is_alive, limits))
 
 
 if __name__ == "__main__":
