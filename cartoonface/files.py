@@ -16,6 +16,21 @@ from pathlib import Path
 from cartoonface.errors import InputError
 
 
+TRASH_PREFIX = ".deleted-"  # a folder being removed is renamed to this prefix + its name first
+
+
+def remove_folder(folder: Path) -> None:
+    """Remove `folder` (a job or a draft): renamed to TRASH_PREFIX + its name first, so readers
+    never see half of it and a sweep can finish a removal that was cut short. A folder that is
+    already gone is no error."""
+    trash = folder.with_name(f"{TRASH_PREFIX}{folder.name}")
+    try:
+        os.replace(folder, trash)
+    except FileNotFoundError:
+        return
+    shutil.rmtree(trash, ignore_errors=True)
+
+
 def _umask() -> int:
     """Return the process umask without changing it for longer than a moment."""
     mask = os.umask(0)

@@ -18,8 +18,9 @@ from PIL import Image
 
 from cartoonface.face.model import POINT_NAMES, face_from_dict
 from cartoonface.web import inputs, photo_views
-from cartoonface.web.draft_store import (DELETED_PREFIX, DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, delete_draft,
-                                         drafts_root, linear_map, load_draft, sweep_drafts)
+from cartoonface.files import TRASH_PREFIX, remove_folder
+from cartoonface.web.draft_store import (DRAFT_SECONDS, EDIT_FILE, MAX_DRAFTS, drafts_root, linear_map, load_draft,
+                                         sweep_drafts)
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.store import load_job, new_id
 from tests.conftest import SPOKEN, TRANSCRIPT, csrf, form, png_bytes, post, speak
@@ -301,10 +302,10 @@ def test_a_deleted_draft_is_gone_and_a_half_deleted_one_is_cleared_by_the_next_s
     for draft_id in (kept, gone):
         (root / draft_id).mkdir(parents=True)
         (root / draft_id / EDIT_FILE).write_text("{}", encoding="utf-8")
-    delete_draft(root / gone)
-    delete_draft(root / gone)  # a second delete finds nothing and says nothing
+    remove_folder(root / gone)
+    remove_folder(root / gone)  # a second delete finds nothing and says nothing
     assert [p.name for p in root.iterdir()] == [kept]
-    leftover = root / f"{DELETED_PREFIX}{new_id()}"
+    leftover = root / f"{TRASH_PREFIX}{new_id()}"
     leftover.mkdir()
     (leftover / EDIT_FILE).write_text("{}", encoding="utf-8")
     assert sweep_drafts(tmp_path) == []

@@ -13,7 +13,6 @@ them and the model they give, rewritten atomically on every change).
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import tempfile
 import time
@@ -26,7 +25,7 @@ import numpy as np
 
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES, face_to_dict
-from cartoonface.files import atomic_directory, write_text_atomic
+from cartoonface.files import TRASH_PREFIX, atomic_directory, remove_folder, write_text_atomic
 from cartoonface.photo.model_from_photo import PhotoFace, face_from_photo, load_photo
 from cartoonface.photo.pictures import display_jpeg
 from cartoonface.web.store import valid_id
@@ -43,7 +42,6 @@ PHOTO_FILE = "photo.jpg"
 DRAFT_FILE = "draft.json"
 EDIT_FILE = "edit.json"
 # A draft folder being deleted is first renamed to this prefix + its id.
-DELETED_PREFIX = ".deleted-"
 
 
 @dataclass(frozen=True)
@@ -196,17 +194,6 @@ def draft_choice(instance: Path, draft_id: str) -> tuple[bytes, str, tuple[str, 
             tuple(f"{draft.label}: {warning}" for warning in draft.warnings))
 
 
-def delete_draft(folder: Path) -> None:
-    """Remove a draft folder: renamed away first (to a name sweep_drafts clears if the
-    removal is cut short), so readers never see half of it."""
-    trash = folder.with_name(f"{DELETED_PREFIX}{folder.name}")
-    try:
-        os.replace(folder, trash)
-    except FileNotFoundError:
-        return
-    shutil.rmtree(trash, ignore_errors=True)
-
-
 def sweep_drafts(instance: Path, now: float | None = None) -> list[str]:
     """Delete drafts last changed more than DRAFT_SECONDS ago, then the oldest while
     more than MAX_DRAFTS are left, and leftovers of unfinished writes. Returns the deleted ids."""
@@ -217,7 +204,7 @@ def sweep_drafts(instance: Path, now: float | None = None) -> list[str]:
     aged = []
     for entry in root.iterdir():
         if not valid_id(entry.name):
-            if entry.name.startswith(DELETED_PREFIX) and entry.is_dir():
+            if entry.name.startswith(TRASH_PREFIX) and entry.is_dir():
                 shutil.rmtree(entry, ignore_errors=True)
             continue
         try:
@@ -228,6 +215,6 @@ def sweep_drafts(instance: Path, now: float | None = None) -> list[str]:
     deleted = []
     for i, (changed, folder) in enumerate(aged):
         if now - changed > DRAFT_SECONDS or len(aged) - i > MAX_DRAFTS:
-            delete_draft(folder)
+            remove_folder(folder)
             deleted.append(folder.name)
     return deleted

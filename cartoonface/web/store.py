@@ -16,13 +16,12 @@ import json
 import os
 import re
 import secrets
-import shutil
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from cartoonface.files import atomic_directory, folder_size, write_text_atomic
+from cartoonface.files import atomic_directory, folder_size, remove_folder, write_text_atomic
 
 # secrets.token_urlsafe(24) gives 32 characters of this alphabet (24 random bytes, 192 bits).
 ID_BYTES = 24
@@ -194,16 +193,6 @@ def fail_interrupted(instance: Path) -> list[str]:
     return marked
 
 
-def delete_job(folder: Path) -> None:
-    """Remove a job folder: renamed away first, so readers never see half of it."""
-    trash = folder.with_name(f".deleted-{folder.name}")
-    try:
-        os.replace(folder, trash)
-    except FileNotFoundError:
-        return
-    shutil.rmtree(trash, ignore_errors=True)
-
-
 def apply_retention(instance: Path, max_age_days: float, now: float | None = None) -> list[str]:
     """Delete finished jobs older than `max_age_days`; return the deleted ids. Queued and
     running jobs are never deleted, nor is a finished job before that age (when the disk
@@ -212,7 +201,7 @@ def apply_retention(instance: Path, max_age_days: float, now: float | None = Non
     deleted = []
     for job in list_jobs(instance):
         if job.status.state in FINAL_STATES and now - job.created > max_age_days * 86400:
-            delete_job(job.folder)
+            remove_folder(job.folder)
             deleted.append(job.id)
     return deleted
 

@@ -23,13 +23,14 @@ from werkzeug.exceptions import HTTPException, RequestEntityTooLarge
 from werkzeug.routing import BaseConverter
 from werkzeug.wrappers import Response as BaseResponse
 
+from cartoonface.files import remove_folder
 from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.draft_store import draft_choice, load_draft
 from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, STYLE_CHOICES, Limits, check_submission, form_values,
                                     megabytes)
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
-from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, delete_job, load_job, space_problem
+from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
 from cartoonface.web.worker import SITE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
@@ -192,7 +193,7 @@ def submit() -> BaseResponse | tuple[str, int]:
     try:
         state().runner.submit(job.folder)
     except QueueFull:  # filled up while this form was checked
-        delete_job(job.folder)
+        remove_folder(job.folder)
         return render_form(values, {"form": busy_message()}, 429)
     session["jobs"] = [job.id, *[i for i in session.get("jobs", []) if isinstance(i, str)]][:RECENT]
     return redirect(url_for(".job_page", job_id=job.id), code=303)
