@@ -312,14 +312,24 @@ def _check_canvas(points: np.ndarray, hair: np.ndarray, width: float, height: fl
     low = -CANVAS_MARGIN * np.array([width, height])
     high = (1 + CANVAS_MARGIN) * np.array([width, height])
     area = f"[{low[0]:g}..{high[0]:g}] x [{low[1]:g}..{high[1]:g}]"
+    outside = _first_outside(points, hair, low, high)
+    if outside:
+        where, x, y = outside
+        raise FaceModelError(f"{source}: {where} = [{x:g}, {y:g}] is off the {width:g} x {height:g} canvas; "
+                             f"expected within {area}")
+
+
+def _first_outside(points: np.ndarray, hair: np.ndarray, low: np.ndarray,
+                   high: np.ndarray) -> tuple[str, float, float] | None:
+    """The first of `points` (P, 2) then `hair` (H, 2) outside the box `low`..`high` (2,) pixels,
+    as (its field name, x, y), or None when all lie inside."""
     for label, array in (("points", points), ("hair", hair)):
         outside = np.nonzero(np.any((array < low) | (array > high), axis=1))[0]
         if outside.size:
             i = int(outside[0])
             where = f"points[{POINT_NAMES[i]!r}]" if label == "points" else f"hair[{i}]"
-            x, y = array[i]
-            raise FaceModelError(f"{source}: {where} = [{x:g}, {y:g}] is off the {width:g} x {height:g} canvas; "
-                                 f"expected within {area}")
+            return where, float(array[i][0]), float(array[i][1])
+    return None
 
 
 def _check_box(points: np.ndarray, hair: np.ndarray, source: str) -> None:
@@ -333,15 +343,10 @@ def _check_box(points: np.ndarray, hair: np.ndarray, source: str) -> None:
     spread = np.maximum(np.median(np.abs(points - centre), axis=0), 1.0)
     low, high = centre - FACE_BOX_SPREADS * spread, centre + FACE_BOX_SPREADS * spread
     box = f"[{low[0]:.0f}..{high[0]:.0f}] x [{low[1]:.0f}..{high[1]:.0f}]"
-    for label, array in (("points", points), ("hair", hair)):
-        outside = np.nonzero(np.any((array < low) | (array > high), axis=1))[0]
-        if outside.size:
-            i = int(outside[0])
-            where = f"points[{POINT_NAMES[i]!r}]" if label == "points" else f"hair[{i}]"
-            x, y = array[i]
-            raise FaceModelError(
-                f"{source}: {where} = [{x:g}, {y:g}] is far outside the face box; expected within {box}"
-            )
+    outside = _first_outside(points, hair, low, high)
+    if outside:
+        where, x, y = outside
+        raise FaceModelError(f"{source}: {where} = [{x:g}, {y:g}] is far outside the face box; expected within {box}")
 
 
 def load_face(path: str | os.PathLike[str]) -> FaceModel:
