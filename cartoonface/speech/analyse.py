@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from collections.abc import Callable, Sequence
 
+import numpy as np
 from pypinyin.seg.mmseg import seg
 
 from cartoonface.errors import TranscriptError
@@ -28,6 +30,7 @@ from cartoonface.speech.audio import Audio
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
+from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
@@ -102,6 +105,8 @@ def analyse(
         syllables = tuple(s for piece, owner in zip(aligned, owners) if owner == number for s in piece.syllables)
         sentences.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
     notes += _merge_notes(sentences, parts) + _split_notes(aligned, owners, spans, parts)
+    sentences, fallback_notes = _fall_back(audio, sentences)
+    notes += fallback_notes
     low = [s for sentence in sentences for s in sentence.syllables if s.confidence < LOW_CONFIDENCE]
     if low:
         notes.append(
@@ -193,6 +198,38 @@ def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[Senten
         )
         sentences.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
     return sentences
+
+
+def _fall_back(audio: Audio, sentences: list[Sentence]) -> tuple[list[Sentence], list[str]]:
+    """Sentences with each stretch (run of syllables between pauses, stretches.py) whose timing is
+    unfit timed again over its loudness peaks; and a note naming each such sentence and time range."""
+    timed = [s for sentence in sentences for s in sentence.syllables]
+    firsts: set[int] = set()
+    owner: list[int] = []
+    for number, sentence in enumerate(sentences):
+        firsts.add(len(owner))
+        owner += [number] * len(sentence.syllables)
+    starts = np.array([s.start for s in timed])
+    ends = np.array([s.end for s in timed])
+    confidence = np.array([s.confidence for s in timed])
+    notes = []
+    for a, b in stretches(starts, ends, firsts):
+        if not unfit(starts[a:b], ends[a:b], confidence[a:b]):
+            continue
+        start, end = float(starts[a]), float(ends[b - 1])
+        for k, (onset, offset) in zip(range(a, b), spread_over_peaks(audio, start, end, b - a)):
+            timed[k] = replace(timed[k], start=onset, end=offset,
+                               confidence=min(timed[k].confidence, FALLBACK_CONFIDENCE))
+        number = owner[a]
+        notes.append(f"sentence {number + 1} {_quote(sentences[number].text)} {start:.2f}-{end:.2f} s: "
+                     "timing uncertain, syllables spread over loudness peaks")
+    if not notes:
+        return sentences, []
+    result = []
+    for number, sentence in enumerate(sentences):
+        syllables = tuple(s for s, o in zip(timed, owner) if o == number)
+        result.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
+    return result, notes
 
 
 def _merge_notes(sentences: list[Sentence], parts: tuple[Span, ...]) -> list[str]:
