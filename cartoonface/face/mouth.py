@@ -63,9 +63,10 @@ class MouthShape:
 #   FAPU terms (0.1 x MNS0, UpperLipH/2), which we take as they stand.
 # - a: the text says lf.x = 8.4.x + 0.8 x MW0, which would carry each corner
 #   past the other; 5.2.1 has MW0/8. We take MW0/24 and open it further
-#   (up 0.35, dn 1.1 MNS0 for the thesis's 0.3, 0.8; corners 0.25 MNS0 above
-#   the middle for UpperLipH/3): a wide-open mouth with a real jaw drop,
-#   clearly bigger than o, its upper edge flatter than its lower.
+#   (up 0.45, dn 1.5 MNS0 for the thesis's 0.3, 0.8; corners 0.25 MNS0 above
+#   the middle for UpperLipH/3): a wide-open mouth with a real jaw drop (the
+#   chin follows dn), clearly bigger than o, its upper edge flatter than its
+#   lower; 'a' then changes >= 5 % of the figure from 'm' (issue 10, bench/mouth.py).
 # - i: dn MNS0/6 -> 0.22 MNS0, so both rows of teeth show; o: inward 0.2 ->
 #   0.14 MW0 and dn 0.65 -> 0.6 MNS0, round rather than a tall slot; u: up and
 #   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered.
@@ -88,7 +89,7 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "z": MouthShape(up=(-0.15, "mns0"), dn=(0.15, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
     # a: wide open and round, the jaw dropped, teeth and tongue showing
     "a": MouthShape(
-        up=(-0.35, "mns0"), dn=(1.1, "mns0"), inward=(1 / 24, "mw0"),
+        up=(-0.45, "mns0"), dn=(1.5, "mns0"), inward=(1 / 24, "mw0"),
         corner_dy=(-0.25, "mns0"), corner_at_mid=True, upper_teeth=1.0, lower_teeth=0.5,
     ),
     # i: spread lips, thinned, both rows of teeth nearly together
