@@ -69,7 +69,8 @@ class MouthShape:
 #   lower; 'a' then changes >= 5 % of the figure from 'm' (issue 10, bench/mouth.py).
 # - i: dn MNS0/6 -> 0.22 MNS0, so both rows of teeth show; o: inward 0.2 ->
 #   0.14 MW0 and dn 0.65 -> 0.6 MNS0, round rather than a tall slot; u: up and
-#   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered.
+#   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered; h: up -0.25 -> -0.3
+#   MNS0, the upper lip raised, so it stays apart from the spread e (issue 10).
 # - the lip thicknesses, teeth, tongue and bite are ours (MouthShape).
 MOUTH_SHAPES: dict[str, MouthShape] = {
     # m (b p m): the neutral (rest) shape, lips shut
@@ -80,7 +81,7 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "h'": MouthShape(up=(-0.25, "mns0"), dn=(0.3, "mns0"), corner_dy=(-0.1, "mns0"),
                      upper_teeth=1.0, lower_teeth=0.4, tongue=0.7),
     # h (g k h, e eng er): a medium oval, jaw further down than h', teeth apart
-    "h": MouthShape(up=(-0.25, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0"),
+    "h": MouthShape(up=(-0.3, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0"),
                     upper_teeth=0.5, tongue=0.45),
     # r (zh ch sh r): slightly rounded, protruded lips, teeth close together
     "r": MouthShape(up=(-0.25, "mns0"), dn=(0.25, "mns0"), inward=(0.15, "mw0"),
@@ -112,9 +113,10 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
 # Our addition to 5.2.2 (the thesis moves only the chin 2.1 with 8.2): a real
 # jaw opens by rotating about the ear, so the jaw corners 2.13 / 2.14, about
 # half as far from the hinge as the chin, drop by this share of the chin's
-# drop. Without it an open mouth pulls the chin (depth 1.33 d, Table 2.1) down
+# drop (0.6, a little over half, so the jaw contour visibly follows an open
+# mouth: issue 10). Without it an open mouth pulls the chin (depth 1.33 d, Table 2.1) down
 # alone and, with the head tilted down, the chin turns into a point.
-JAW_CORNER_SHARE = 0.5
+JAW_CORNER_SHARE = 0.6
 
 # Outer mouth contour in drawing order (Alg. 2.2 step 13) and the inner lips.
 OUTER_LIP = ("8.4", "8.9", "8.1", "8.10", "8.3", "8.2")
