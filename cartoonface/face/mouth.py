@@ -63,12 +63,14 @@ class MouthShape:
 #   FAPU terms (0.1 x MNS0, UpperLipH/2), which we take as they stand.
 # - a: the text says lf.x = 8.4.x + 0.8 x MW0, which would carry each corner
 #   past the other; 5.2.1 has MW0/8. We take MW0/24 and open it further
-#   (up 0.35, dn 1.1 MNS0 for the thesis's 0.3, 0.8; corners 0.25 MNS0 above
-#   the middle for UpperLipH/3): a wide-open mouth with a real jaw drop,
-#   clearly bigger than o, its upper edge flatter than its lower.
+#   (up 0.45, dn 1.5 MNS0 for the thesis's 0.3, 0.8; corners 0.25 MNS0 above
+#   the middle for UpperLipH/3): a wide-open mouth with a real jaw drop (the
+#   chin follows dn), clearly bigger than o, its upper edge flatter than its
+#   lower; 'a' then changes >= 5 % of the figure from 'm' (issue 10, bench/mouth.py).
 # - i: dn MNS0/6 -> 0.22 MNS0, so both rows of teeth show; o: inward 0.2 ->
 #   0.14 MW0 and dn 0.65 -> 0.6 MNS0, round rather than a tall slot; u: up and
-#   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered.
+#   dn 0.3 -> 0.35 MNS0 with thicker lips, puckered; h: up -0.25 -> -0.3
+#   MNS0, the upper lip raised, so it stays apart from the spread e (issue 10).
 # - the lip thicknesses, teeth, tongue and bite are ours (MouthShape).
 MOUTH_SHAPES: dict[str, MouthShape] = {
     # m (b p m): the neutral (rest) shape, lips shut
@@ -79,7 +81,7 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "h'": MouthShape(up=(-0.25, "mns0"), dn=(0.3, "mns0"), corner_dy=(-0.1, "mns0"),
                      upper_teeth=1.0, lower_teeth=0.4, tongue=0.7),
     # h (g k h, e eng er): a medium oval, jaw further down than h', teeth apart
-    "h": MouthShape(up=(-0.25, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0"),
+    "h": MouthShape(up=(-0.3, "mns0"), dn=(0.5, "mns0"), inward=(1 / 12, "mw0"), corner_dy=(0.1, "mns0"),
                     upper_teeth=0.5, tongue=0.45),
     # r (zh ch sh r): slightly rounded, protruded lips, teeth close together
     "r": MouthShape(up=(-0.25, "mns0"), dn=(0.25, "mns0"), inward=(0.15, "mw0"),
@@ -88,7 +90,7 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
     "z": MouthShape(up=(-0.15, "mns0"), dn=(0.15, "mns0"), upper_teeth=1.0, lower_teeth=1.0),
     # a: wide open and round, the jaw dropped, teeth and tongue showing
     "a": MouthShape(
-        up=(-0.35, "mns0"), dn=(1.1, "mns0"), inward=(1 / 24, "mw0"),
+        up=(-0.45, "mns0"), dn=(1.5, "mns0"), inward=(1 / 24, "mw0"),
         corner_dy=(-0.25, "mns0"), corner_at_mid=True, upper_teeth=1.0, lower_teeth=0.5,
     ),
     # i: spread lips, thinned, both rows of teeth nearly together
@@ -111,9 +113,10 @@ MOUTH_SHAPES: dict[str, MouthShape] = {
 # Our addition to 5.2.2 (the thesis moves only the chin 2.1 with 8.2): a real
 # jaw opens by rotating about the ear, so the jaw corners 2.13 / 2.14, about
 # half as far from the hinge as the chin, drop by this share of the chin's
-# drop. Without it an open mouth pulls the chin (depth 1.33 d, Table 2.1) down
+# drop (0.6, a little over half, so the jaw contour visibly follows an open
+# mouth: issue 10). Without it an open mouth pulls the chin (depth 1.33 d, Table 2.1) down
 # alone and, with the head tilted down, the chin turns into a point.
-JAW_CORNER_SHARE = 0.5
+JAW_CORNER_SHARE = 0.6
 
 # Outer mouth contour in drawing order (Alg. 2.2 step 13) and the inner lips.
 OUTER_LIP = ("8.4", "8.9", "8.1", "8.10", "8.3", "8.2")
