@@ -45,6 +45,11 @@ from cartoonface.render.png import svg_to_png
 from cartoonface.render.svg import face_svg
 
 FACES = SAMPLE_FACES
+# The mouth chart's cells, in FAPU d: half width about the mouth centre, top above the nose tip
+# 9.15, height (tall enough to show the chin dropped in 'a').
+CELL_HALF_WIDTH = 0.6
+CELL_ABOVE_NOSE = 0.12
+CELL_HEIGHT = 1.4
 CHANGED = 24  # face measure: a channel difference above this (of 255) counts as a changed pixel
 ISSUE_CHANGED = 25  # figure measure (issue 10's): a channel difference above this counts
 # Goals of issue 10, as shares of the figure's pixels.
@@ -142,7 +147,7 @@ def _cell(face: FaceModel, state: FaceState, zoom: float) -> Image.Image:
     drawn `zoom` times the model size: an RGB image."""
     d = face.fapu.d
     centre = (face.point("8.4") + face.point("8.3")) / 2
-    x0, y0, w, h = centre[0] - 0.55 * d, face.point("9.15")[1] - 0.12 * d, 1.1 * d, 1.15 * d
+    x0, y0, w, h = centre[0] - CELL_HALF_WIDTH * d, face.point("9.15")[1] - CELL_ABOVE_NOSE * d, 2 * CELL_HALF_WIDTH * d, CELL_HEIGHT * d
     root = face_svg(face, state)
     root.set("viewBox", f"{x0:.2f} {y0:.2f} {w:.2f} {h:.2f}")
     root.set("width", f"{w * zoom:.0f}")
