@@ -15,7 +15,7 @@ from cartoonface.animate.frames import sample_frames
 from cartoonface.animate.timeline import REST, build_timeline
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import Audio, digital_silence, load_audio
+from cartoonface.speech.audio import Audio, digital_silence, load_audio, quantum
 from tests.conftest import speak
 
 pytestmark = pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency (scripts/setup.sh)")
@@ -144,3 +144,23 @@ def test_digital_silence_is_told_from_quiet_recorded_sound():
     flicker = rng.integers(-1, 2, 1600) / 32768  # the last bit of a 16-bit file flickering
     samples = np.concatenate([np.zeros(1600), np.full(1600, 0.1), quiet, flicker, 0.3 * np.sin(np.arange(1600))])
     assert digital_silence(samples, 16000, 0.1).tolist() == [True, True, False, True, False]
+
+
+def test_flicker_of_an_8_bit_grid_is_digital_silence_but_the_same_level_in_float_audio_is_sound():
+    rng = np.random.default_rng(2)
+    lsb = 2 / 256  # one step of 8-bit audio
+    flicker = rng.integers(-1, 2, 1600) * lsb
+    speech = np.round(0.3 * np.sin(np.arange(1600)) / lsb) * lsb
+    on_grid = np.concatenate([np.zeros(1600), flicker, speech]) - 0.01  # a removed DC offset shifts the grid
+    assert quantum(on_grid) == lsb
+    assert digital_silence(on_grid, 16000, 0.1).tolist() == [True, True, False]
+    off_grid = on_grid + rng.normal(0, 1e-4, on_grid.size)  # the same levels recorded as float
+    assert quantum(off_grid) == 0.0
+    assert digital_silence(off_grid, 16000, 0.1).tolist() == [False, False, False]
+
+
+def test_quantum_names_the_coarsest_integer_grid_the_samples_lie_on():
+    rng = np.random.default_rng(3)
+    for bits in (8, 12, 16):
+        samples = rng.integers(-(2 ** (bits - 1)), 2 ** (bits - 1), 4000) * (2 / 2**bits) + 0.003
+        assert quantum(samples) == 2 / 2**bits

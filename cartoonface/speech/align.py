@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING, Protocol, Sequence
 
 import numpy as np
 
-from cartoonface.speech.audio import digital_silence
+from cartoonface.speech.audio import digital_silence, quantum
 from cartoonface.speech.features import HOP, WINDOW_SECONDS, frames
 from cartoonface.speech.pinyin import split_initial
 
@@ -411,9 +411,10 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     first = int(round(span.start * audio.rate)) - MARGIN * int(round(HOP * audio.rate))
     last = int(round(span.end * audio.rate)) + MARGIN * int(round(HOP * audio.rate))
     clip = np.asarray(audio.samples[max(first, 0):max(last, 0)], dtype=np.float64)
+    step = quantum(clip)  # of the recorded samples: the zeros padded on below lie off a DC-offset grid
     clip = np.concatenate([np.zeros(max(-first, 0)), clip, np.zeros(max(last - max(first, 0) - clip.size - max(-first, 0), 0))])
     feats = frames(clip, audio.rate)
-    recorded = ~_dead_frames(clip, audio.rate, feats.low.size)
+    recorded = ~_dead_frames(clip, audio.rate, feats.low.size, step)
     low = _smooth(_lift_digital_silence(feats.low, recorded, LOW_NOISE_RANGE_DB))
     mid = _smooth(_lift_digital_silence(feats.mid, recorded, MID_NOISE_RANGE_DB))
     high = _smooth(_lift_digital_silence(feats.high, recorded, HIGH_NOISE_RANGE_DB))
@@ -460,10 +461,11 @@ def _lift_digital_silence(band: np.ndarray, recorded: np.ndarray, most_below: fl
     return np.where(recorded, band, floor)
 
 
-def _dead_frames(clip: np.ndarray, rate: int, count: int) -> np.ndarray:
-    """(count,) bool: feature frame i (25 ms from i * HOP s of the (n,) `clip` at `rate` Hz) holds
-    only digital silence (audio.DIGITAL_SILENCE); frames past the clip's end count as silent."""
-    blocks = digital_silence(clip, rate, HOP)
+def _dead_frames(clip: np.ndarray, rate: int, count: int, step: float) -> np.ndarray:
+    """(count,) bool: feature frame i (25 ms from i * HOP s of the (n,) `clip` at `rate` Hz, whose
+    samples lie on an integer grid of `step`, 0 for none) holds only digital silence
+    (audio.digital_silence); frames past the clip's end count as silent."""
+    blocks = digital_silence(clip, rate, HOP, step)
     covered = int(np.ceil(WINDOW_SECONDS / HOP))
     padded = np.concatenate([blocks, np.ones(count + covered, dtype=bool)])
     return np.all(np.lib.stride_tricks.sliding_window_view(padded, covered)[:count], axis=1)

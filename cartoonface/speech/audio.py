@@ -33,6 +33,15 @@ SILENT_PEAK = 10 ** (-70 / 20)
 # joined files, noise gates and TTS put such stretches between sentences; they are no noise
 # floor (thesis 002, 3.2.1: silence is normally *not* zero, because of environment noise).
 DIGITAL_SILENCE = 2 * 2 / 65536
+# Integer sample formats of 8 to 16 bits: a recording whose samples all lie on the grid of one
+# of them (steps of 2 / 2**bits, offset by a removed DC) flickers over QUANTUM_STEPS steps of that
+# grid where it is digital silence; 8-bit audio turns the quietest sounds and noise into such
+# flicker (1 step = -42 dBFS). Chosen on Biaobei 000001-000035 stored as 8-bit (bench/silence.py:
+# 1, 2, 3 steps tried; 2 best).
+GRID_BITS = range(8, 17)
+QUANTUM_STEPS = 2
+GRID_TOLERANCE = 0.01  # share of a step a sample may lie off the grid (float32 rounding)
+GRID_CHUNK = 1 << 16   # samples checked at a time
 # A mean (DC offset) larger than this (-60 dBFS) is subtracted from the samples when reading:
 # a faulty converter or sound card adds it; smaller means are what speech itself averages to.
 DC_OFFSET = 1e-3
@@ -56,15 +65,39 @@ class Audio:
         return len(self.samples) / self.rate
 
 
-def digital_silence(samples: np.ndarray, rate: int, hop: float) -> np.ndarray:
+def digital_silence(samples: np.ndarray, rate: int, hop: float, step: float | None = None) -> np.ndarray:
     """(n,) samples at `rate` Hz -> (n // block,) bool per block of `hop` seconds (at least one
-    sample): True where the block's samples span at most DIGITAL_SILENCE (no recorded sound)."""
+    sample): True where the block's samples span at most DIGITAL_SILENCE, or QUANTUM_STEPS times
+    `step` (their integer grid's step; None: `quantum(samples)`) when that is more (no recorded sound)."""
     block = max(1, round(rate * hop))
     count = len(samples) // block
     if count == 0:
         return np.zeros(0, dtype=bool)
     blocks = np.asarray(samples[: count * block]).reshape(count, block)
-    return (blocks.max(axis=1) - blocks.min(axis=1)) <= DIGITAL_SILENCE
+    limit = max(DIGITAL_SILENCE, QUANTUM_STEPS * (quantum(samples) if step is None else step))
+    return (blocks.max(axis=1) - blocks.min(axis=1)) <= limit
+
+
+def quantum(samples: np.ndarray) -> float:
+    """(n,) samples in [-1, 1] -> the step 2 / 2**bits of the integer format (GRID_BITS) whose
+    grid all of them lie on, up to a common offset (a removed DC), the coarsest that fits;
+    0.0 when none fits (float audio, or a format finer than 16 bits)."""
+    x = np.asarray(samples)
+    if x.size < 2:
+        return 0.0
+    origin = float(x[0])
+    for bits in GRID_BITS:
+        step = 2.0 / 2**bits
+        # chunk by chunk: float audio fails on its first chunk, and no copy of a long file is made
+        if all(_on_grid(x[k : k + GRID_CHUNK], origin, step) for k in range(0, x.size, GRID_CHUNK)):
+            return step
+    return 0.0
+
+
+def _on_grid(chunk: np.ndarray, origin: float, step: float) -> bool:
+    """Whether every sample of (m,) `chunk` lies within GRID_TOLERANCE of origin + j * step."""
+    position = (np.asarray(chunk, dtype=np.float64) - origin) / step
+    return bool(np.all(np.abs(position - np.round(position)) <= GRID_TOLERANCE))
 
 
 def ffmpeg_exe() -> str:
