@@ -24,9 +24,12 @@ of an eyebrow meet at pointed tips. Every new point is a convex combination of o
 the curve stays inside the control polygon's convex hull.
 
 All of this is linear in the points. `face_shapes` therefore compiles, once per face layout,
-one matrix that maps the posed points to every control point of every part, and a format
-template; drawing a state is then one matrix product, a rounding to 0.1 px (what a screen
-shows), a table look-up of the number strings and one string format.
+the maps from the posed points to every control point of every part, and a format
+template; drawing a state is then matrix products, a rounding to 0.1 px (what a screen
+shows), a table look-up of the number strings and one string format. The hair's map is a
+sparse banded (8 H, H) matrix (each corner-cut point mixes at most three neighbouring hair
+points), so memory and time grow linearly with the hair point count H; the other parts'
+map is a small dense matrix over the named points only.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+import scipy.sparse
 
 from cartoonface.render.numbers import number_texts
 
@@ -161,10 +165,13 @@ NOSE_SIDE_OTHER = 1
 
 @dataclass(frozen=True)
 class _Plan:
-    """A compiled drawing: `matrix` (K, P) maps the P points (posed xy then hair) to the K
-    coordinates written; `template` %-formats K*2 number strings into every part's path
-    data, parts separated by "|"; `names` lists the parts in that order."""
+    """A compiled drawing: `hair` (8 H, H) sparse maps the H hair points to the hair's
+    coordinates, written first; `matrix` (K, N) maps the N posed points (xy) to the K
+    coordinates of the other parts, written next; `template` %-formats (8 H + K) * 2 number
+    strings into every part's path data, parts separated by "|"; `names` lists the parts in
+    that order."""
 
+    hair: scipy.sparse.csr_array
     matrix: np.ndarray
     template: str
     names: tuple[str, ...]
@@ -183,19 +190,38 @@ def _polygon(rows: list[np.ndarray], points: np.ndarray) -> str:
     return "M%s %s" + "L%s %s" * (len(points) - 1) + "Z"
 
 
+def chaikin_closed_operator(count: int, rounds: int = CHAIKIN_ROUNDS) -> scipy.sparse.csr_array:
+    """The sparse matrix of `chaikin(points, rounds, closed=True)` for `count` points.
+
+    Returns a (2**rounds * count, count) CSR matrix M with M @ points equal to the corner
+    cut polygon: every row holds at most rounds + 1 non-zeros (neighbouring points), so its
+    size is linear in `count`. The weights are the same dyadic fractions `chaikin` uses.
+    """
+    operator = scipy.sparse.identity(count, format="csr")
+    for _ in range(rounds):
+        size = operator.shape[0]
+        here = np.arange(size)
+        after = (here + 1) % size
+        rows = np.repeat(np.arange(2 * size), 2)
+        columns = np.column_stack([here, after, here, after]).ravel()
+        weights = np.tile([0.75, 0.25, 0.25, 0.75], size)
+        step = scipy.sparse.csr_array((weights, (rows, columns)), shape=(2 * size, size))
+        operator = step @ operator
+    return scipy.sparse.csr_array(operator)
+
+
 @functools.lru_cache(maxsize=32)
 def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
-    """Compile the linear map and template for points named `names` plus `hair_count` hair
+    """Compile the linear maps and template for points named `names` plus `hair_count` hair
     points, with the nose drawn for `nose_side`."""
-    basis = np.eye(len(names) + hair_count)
+    basis = np.eye(len(names))
     rows_of = {name: basis[i] for i, name in enumerate(names)}
     for name, terms in DERIVED.items():
         rows_of[name] = sum(coefficient * rows_of[point] for coefficient, point in terms)
     rows: list[np.ndarray] = []
-    texts = []
+    hair = chaikin_closed_operator(hair_count)
+    texts = ["M%s %s" + "L%s %s" * (hair.shape[0] - 1) + "Z"]
     part_names = ["hair"]
-    hair = basis[len(names):]
-    texts.append(_polygon(rows, chaikin(hair, closed=True)))
     parts = [_NOSE_OTHER_SIDE if p[0] == "nose" and nose_side == NOSE_SIDE_OTHER else p for p in PARTS]
     for name, kind, arc_names in parts:
         arcs = [np.array([rows_of[n] for n in arc_]) for arc_ in arc_names]
@@ -207,7 +233,7 @@ def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
             outline = np.concatenate([chaikin(a)[:-1] for a in arcs])
             texts.append(_polygon(rows, outline))
         part_names.append(name)
-    return _Plan(np.array(rows), "|".join(texts), tuple(part_names))
+    return _Plan(hair, np.array(rows), "|".join(texts), tuple(part_names))
 
 
 def face_shapes(posed: Posed) -> dict[str, str]:
@@ -222,9 +248,11 @@ def face_shapes(posed: Posed) -> dict[str, str]:
     from cartoonface.face.lift import LIFTED_NAMES
 
     plan = _plan(tuple(LIFTED_NAMES), len(posed.hair), int(posed.nose_side))
-    points = np.concatenate([posed.xy, np.asarray(posed.hair, dtype=float).reshape(-1, 2)])
-    coordinates = np.empty((len(plan.matrix), 2))
-    for axis in (0, 1):  # two matrix-vector products: 4x faster than one product with (P, 2)
-        coordinates[:, axis] = plan.matrix @ points[:, axis]
+    hair = np.asarray(posed.hair, dtype=float).reshape(-1, 2)
+    written = plan.hair.shape[0]
+    coordinates = np.empty((written + len(plan.matrix), 2))
+    coordinates[:written] = plan.hair @ hair
+    for axis in (0, 1):  # two matrix-vector products: 4x faster than one product with (N, 2)
+        coordinates[written:, axis] = plan.matrix @ posed.xy[:, axis]
     text = plan.template % number_texts(coordinates)
     return dict(zip(plan.names, text.replace(" -", "-").split("|")))
