@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial import Delaunay
 
-from cartoonface.render.geometry import arc, chaikin, contour
+from cartoonface.render.geometry import arc, chaikin, chaikin_closed_operator, contour
 from cartoonface.render.numbers import number_text, number_texts
 
 
@@ -16,6 +16,11 @@ def bezier(start: np.ndarray, pieces: np.ndarray, t: np.ndarray) -> np.ndarray:
     c1, c2, p3 = (pieces[:, i][:, None] for i in range(3))
     t = t[None, :, None]
     return (1 - t) ** 3 * p0 + 3 * (1 - t) ** 2 * t * c1 + 3 * (1 - t) * t**2 * c2 + t**3 * p3
+
+
+# Drawing a 5,000-point hair outline (compiling the map, the number strings and the path
+# text included) peaks under this: 9 MiB measured; the old dense map took 1.5 GiB.
+LONG_HAIR_PEAK_BYTES = 32 * 2**20
 
 
 @pytest.fixture
@@ -97,6 +102,17 @@ def test_chaikin_cuts_corners_and_shortens_the_polygon(rng: np.random.Generator)
     assert all(a > b for a, b in zip(lengths, lengths[1:]))
 
 
+@pytest.mark.parametrize("count", [3, 4, 23, 101])
+@pytest.mark.parametrize("rounds", [1, 2, 3])
+def test_closed_chaikin_operator_is_the_corner_cutting(rng: np.random.Generator, count: int, rounds: int) -> None:
+    points = rng.uniform(-50, 50, (count, 2))
+    operator = chaikin_closed_operator(count, rounds)
+    np.testing.assert_allclose(operator @ points, chaikin(points, rounds, closed=True), rtol=0, atol=1e-12)
+    # banded: each cut point mixes at most three neighbouring points, so the size is linear in count
+    assert np.diff(operator.indptr).max() <= 3
+    assert operator.nnz <= 3 * len(operator @ points)
+
+
 @pytest.mark.parametrize("value", [0.0, 3.0, -3.0, 0.04, 0.26, -0.5, 12.349, -1234.56, 9999.9, -4000.25])
 def test_number_text_rounds_to_a_tenth_with_fewest_characters(value: float) -> None:
     text = number_text(value)
@@ -121,7 +137,7 @@ def anchors(d: str) -> np.ndarray:
     """The on-curve points of an absolute M/C path: (n, 2)."""
     import re
 
-    points = []
+    points: list[np.ndarray] = []
     for command, args in re.findall(r"([MCLZ])([^MCLZ]*)", d):
         values = np.array([float(v) for v in re.findall(r"-?(?:\d+\.?\d*|\.\d+)", args)]).reshape(-1, 2)
         points.extend(values[2::3] if command == "C" else values)
@@ -162,6 +178,28 @@ def test_hair_of_any_size_is_corner_cut(posed_sample, count: int) -> None:
     outline = anchors(face_shapes(posed)["hair"])
     assert len(outline) == count * 2**CHAIKIN_ROUNDS
     assert (Delaunay(hair).find_simplex(outline, tol=0.06) >= 0).all()
+
+
+def test_long_hair_outline_is_drawn_in_memory_linear_in_its_points(posed_sample) -> None:
+    import dataclasses
+    import tracemalloc
+
+    from cartoonface.render.geometry import CHAIKIN_ROUNDS, _plan, face_shapes
+
+    count = 5000  # a dense map over all points would hold 8 * 5000 x 5049 numbers: 1.5 GiB
+    angles = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    hair = np.column_stack([200 + 120 * np.cos(angles), 200 + 150 * np.sin(angles)])
+    posed = dataclasses.replace(posed_sample[12], hair=hair)
+    _plan.cache_clear()  # measure compiling the drawing too, not only using it
+    tracemalloc.start()
+    try:
+        shapes = face_shapes(posed)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    outline = anchors(shapes["hair"])
+    assert len(outline) == count * 2**CHAIKIN_ROUNDS
+    assert peak < LONG_HAIR_PEAK_BYTES
 
 
 def test_neutral_pose_draws_the_model_points() -> None:

@@ -194,8 +194,9 @@ def chaikin_closed_operator(count: int, rounds: int = CHAIKIN_ROUNDS) -> scipy.s
     """The sparse matrix of `chaikin(points, rounds, closed=True)` for `count` points.
 
     Returns a (2**rounds * count, count) CSR matrix M with M @ points equal to the corner
-    cut polygon: every row holds at most rounds + 1 non-zeros (neighbouring points), so its
-    size is linear in `count`. The weights are the same dyadic fractions `chaikin` uses.
+    cut polygon: every row holds at most three non-zeros (neighbouring points; two after one
+    round), so its size is linear in `count`. The weights are the same dyadic fractions
+    `chaikin` uses, multiplied exactly.
     """
     operator = scipy.sparse.identity(count, format="csr")
     for _ in range(rounds):
