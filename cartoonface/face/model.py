@@ -54,10 +54,14 @@ POINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(POINT_NAMES)}
 # other sources may use more or fewer; at least a triangle is required.
 HAIR_POINTS = 23
 MIN_HAIR_POINTS = 3
-# At most this many hair points: 17 x the thesis's 23, room for a finely traced outline,
-# while the drawing stays small (render/geometry.py compiles the hair into a matrix of
-# (8 H) x (49 + H) numbers, which grows with the square of H: 400 points take 12 MB,
-# 30,000 points would take 57 GB).
+# At most this many hair points: 17 x the thesis's 23, room for a finely traced outline
+# (2.7 px apart on the sample's outline). Drawing one state is now linear in H
+# (render/geometry.py: a banded (8 H, H) corner-cutting matrix; 30,000 points peak at
+# 39 MiB), but `generate` keeps every distinct frame's drawing while it compacts the
+# animation (render/compact.py), about 110 bytes per hair point per frame. Extrapolated
+# from a 25 s recording at 12-60 fps, a 30-minute recording at 30 fps then takes about
+# 2 GB with 400 points and 12 GB with 2,000, over a web job's 6 GiB
+# (docs/BENCHMARKS.md "Face drawing").
 MAX_HAIR_POINTS = 400
 
 # Every point and hair point lies on the canvas or within this share of its size
