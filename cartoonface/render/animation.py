@@ -60,10 +60,11 @@ from cartoonface.render.svg import face_defs, face_group
 
 # The track of each part of render/svg.py's face_group (by its class), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
-# The mouth moves with the jaw, so it shares the track of the face outline: it is then drawn
-# before the nose, brows and eyes rather than after them, which changes nothing on screen
+# The mouth and the jaw's shadow on the neck move with the jaw, so they share the track of the
+# face outline; the mouth is then drawn before the nose, brows and eyes rather than after them,
+# which changes nothing on screen
 # (they never overlap; where a nodding nose tip comes near the upper lip, the nose in front is right).
-TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "cheeks": "face",
+TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "face", "face": "face", "cheeks": "face",
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
@@ -251,9 +252,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")
-    dressed = clothes_layer(clothes, figure, defs)
-    if dressed is not None:
-        root.append(dressed)
+    root.append(clothes_layer(clothes, figure, defs))
     layer = element(root, "g", id="face")
     for name, track in tracks.items():
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)

@@ -71,6 +71,7 @@ SHOULDER = 1.25  # half the shoulders' width
 SHOULDER_SLOPE = 0.25  # the arms' top below the shoulder line
 SHOULDER_START = 2.2  # where the shoulders leave the collar, in half neck widths
 JAW_SHADOW, JAW_SHADOW_OPACITY = 0.07, "0.12"  # the jaw's shadow on the neck: vertical radius
+SHADOW_POINTS = 16  # corners of the polygon drawing the jaw's shadow (an ellipse, within 1 px at our sizes)
 
 
 @dataclass(frozen=True)
@@ -153,13 +154,34 @@ def background_layer(name: str, figure: Figure, defs: etree._Element) -> etree._
     return layer
 
 
-def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Element | None:
-    """The clothes `name` (one of CLOTHES) with neck and shoulders under the chin as a `<g>`, or None for "none".
-    Sizes are fractions of the face width fw (the body constants above, and the clothes' own)."""
+def chin_shadow(figure: Figure, chin: np.ndarray) -> np.ndarray:
+    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels: an ellipse
+    centred on the chin, as wide as the neck and JAW_SHADOW fw high, cut to the neck's sides
+    (the face drawn over it hides its top half). Returns its polygon, (SHADOW_POINTS, 2) pixels.
+    A chin beyond a side of the neck puts the centre on that side."""
+    half = figure.face_width * NECK
+    left, right = figure.chin_x - half, figure.chin_x + half
+    cx = float(np.clip(chin[0], left, right))
+    angles = np.linspace(0, 2 * np.pi, SHADOW_POINTS, endpoint=False)
+    # clamping x cuts an upright ellipse exactly at the sides: beyond a side it is no taller than there
+    xs = np.clip(cx + half * np.cos(angles), left, right)
+    ys = float(chin[1]) + figure.face_width * JAW_SHADOW * np.sin(angles)
+    return np.column_stack([xs, ys])
+
+
+def shadow_path(polygon: np.ndarray) -> str:
+    """Path data of the closed `polygon` (n, 2) pixels, as `_points` writes it."""
+    return _points(*((float(x), float(y)) for x, y in polygon))
+
+
+def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Element:
+    """The clothes `name` (one of CLOTHES) with neck and shoulders under the chin as a `<g id="clothes">`;
+    "none" is the neck alone, down past the picture's bottom, so the head never floats. The neck
+    is the layer's first child, a path of class "neck". The jaw's shadow is the face's
+    (render/svg.py, `chin_shadow`): it moves with the chin. Sizes are fractions of the face
+    width fw (the body constants above, and the clothes' own)."""
     if name not in CLOTHES:
         raise OptionError(f"clothes {name!r}: expected one of {', '.join(CLOTHES)}")
-    if name == "none":
-        return None
     x, y, w, h = figure.box
     cx, chin, fw = figure.chin_x, figure.chin_y, figure.face_width
     bottom = y + h + fw  # past the bottom edge: the body leaves the picture
@@ -167,12 +189,12 @@ def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Ele
     shoulder_y = chin + fw * SHOULDER_DROP
     spread = fw * SHOULDER
     layer = element(None, "g", id="clothes")
-    element(layer, "path", d=_points((cx - neck, chin - fw * NECK_TOP), (cx + neck, chin - fw * NECK_TOP),
-                                     (cx + neck, shoulder_y + fw * NECK_FOOT), (cx - neck, shoulder_y + fw * NECK_FOOT)),
+    foot = bottom if name == "none" else shoulder_y + fw * NECK_FOOT
+    element(layer, "path", {"class": "neck"}, d=_points((cx - neck, chin - fw * NECK_TOP), (cx + neck, chin - fw * NECK_TOP),
+                                                        (cx + neck, foot), (cx - neck, foot)),
             fill=figure.skin)
-    # The jaw's shadow on the neck: the face covers the top half of this ellipse.
-    element(layer, "ellipse", cx=cx, cy=chin, rx=neck, ry=fw * JAW_SHADOW, fill=COLOURS["jaw shadow"],
-            opacity=JAW_SHADOW_OPACITY)
+    if name == "none":
+        return layer
     arms = shoulder_y + fw * SHOULDER_SLOPE
     body = ((cx - spread, bottom), (cx - spread, arms), (cx - neck * SHOULDER_START, shoulder_y),
             (cx + neck * SHOULDER_START, shoulder_y), (cx + spread, arms), (cx + spread, bottom))

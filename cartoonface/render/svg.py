@@ -36,7 +36,8 @@ from cartoonface.render.geometry import face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
-from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
+from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
+                                        figure_of, shadow_path)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -159,7 +160,8 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`.
 
     Children, in drawing order: a `<defs>` with this state's clip paths (ids end in
-    "-{uid}"), then the parts "hair", "ear-l", "ear-r", "face", "cheeks", "nose",
+    "-{uid}"), then the parts "hair", "ear-l", "ear-r", "chin-shadow" (the jaw's shadow on
+    the neck, under the posed chin: render/scenery.py's chin_shadow), "face", "cheeks", "nose",
     "brow-l", "brow-r", "eye-l", "eye-r", "mouth". Fills use face_defs' gradients.
     """
     style = _styles(face)
@@ -170,6 +172,9 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     element(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
     for side in "lr":
         element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
+    shadow = chin_shadow(figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1"))
+    element(group, "path", {"class": "chin-shadow", "d": shadow_path(shadow), "fill": COLOURS["jaw shadow"],
+                            "opacity": JAW_SHADOW_OPACITY})
     element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
     _cheeks(group, points, face.fapu.d, style)
     element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
@@ -271,8 +276,7 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     group = face_group(face, pose_face(lift(face), state), "0")
     hair = element(root, "g", {"id": "hair"})
     hair.extend(group.findall(f"{{{SVG}}}path[@class='hair']"))
-    dressed = clothes_layer(clothes, figure, defs)
-    root.append(dressed if dressed is not None else element(None, "g", {"id": "clothes"}))
+    root.append(clothes_layer(clothes, figure, defs))
     group.set("id", "face")
     root.append(group)
     return root
