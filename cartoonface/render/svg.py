@@ -37,7 +37,7 @@ from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
-                                        figure_of, shadow_path)
+                                        figure_of, lean, lean_transform, neck_middle, shadow_path)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -156,8 +156,9 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
 _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 
 
-def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
-    """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`.
+def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> etree._Element:
+    """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`, over a neck
+    leaned by `neck_lean` degrees (render/scenery.py's lean; 0 for an upright one).
 
     Children, in drawing order: a `<defs>` with this state's clip paths (ids end in
     "-{uid}"), then the parts "hair", "ear-l", "ear-r", "chin-shadow" (the jaw's shadow on
@@ -172,7 +173,8 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     element(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
     for side in "lr":
         element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
-    shadow = chin_shadow(figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1"))
+    figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
+    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])))
     element(group, "path", {"class": "chin-shadow", "d": shadow_path(shadow), "fill": COLOURS["jaw shadow"],
                             "opacity": JAW_SHADOW_OPACITY})
     element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
@@ -263,7 +265,8 @@ def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: s
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
     """`face` in `state` as a whole SVG document root, canvas-sized, with the layers
-    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order.
+    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order;
+    the clothes layer's neck leans to stay under the posed chin (render/scenery.py's lean).
 
     `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
     """
@@ -273,10 +276,14 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     defs.extend(face_defs(face))
     figure = figure_of(face, (0.0, 0.0, width, height))
     root.append(background_layer(background, figure, defs))
-    group = face_group(face, pose_face(lift(face), state), "0")
+    lifted = lift(face)
+    leaning = lean(figure, lifted.origin, state.pose.roll)
+    group = face_group(face, pose_face(lifted, state), "0", leaning)
     hair = element(root, "g", {"id": "hair"})
     hair.extend(group.findall(f"{{{SVG}}}path[@class='hair']"))
-    root.append(clothes_layer(clothes, figure, defs))
+    dressed = clothes_layer(clothes, figure, defs)
+    dressed[0].set("transform", lean_transform(figure, leaning))  # the neck leans with the head
+    root.append(dressed)
     group.set("id", "face")
     root.append(group)
     return root
