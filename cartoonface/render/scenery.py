@@ -73,7 +73,8 @@ SHOULDER = 1.25  # half the shoulders' width
 SHOULDER_SLOPE = 0.25  # the arms' top below the shoulder line
 SHOULDER_START = 2.2  # where the shoulders leave the collar, in half neck widths
 JAW_SHADOW, JAW_SHADOW_OPACITY = 0.07, "0.12"  # the jaw's shadow on the neck: vertical radius
-SHADOW_POINTS = 16  # corners of the polygon drawing the jaw's shadow (an ellipse, within 1 px at our sizes)
+SHADOW_WIDTH = 0.85  # the shadow's horizontal radius / half the neck's width: room for the chin to move
+SHADOW_POINTS = 16  # corners of the jaw's shadow cut at a side of the neck (an ellipse, within 1 px at our sizes)
 LEAN_DECIMALS = 1  # the neck's lean is written to 0.1 degree: 0.1 px at the chin for a lever of 60 px
 
 
@@ -186,25 +187,24 @@ def lean_transform(figure: Figure, degrees: float) -> str:
     return f"translate(0 {pivot}) skewX({decimal_text(degrees, LEAN_DECIMALS)}) translate(0 -{pivot})"
 
 
-def chin_shadow(figure: Figure, chin: np.ndarray, middle: float) -> np.ndarray:
-    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels: an ellipse centred
-    on the chin, as wide as the neck and JAW_SHADOW fw high, cut to the neck's sides around its
-    `middle` x (neck_middle at the chin's height); the face drawn over it hides its top half.
-    Returns its polygon, (SHADOW_POINTS, 2) pixels; corner SHADOW_POINTS // 4 is its lowest
-    point, right under the chin while the chin is over the neck."""
+def chin_shadow(figure: Figure, chin: np.ndarray, middle: float) -> etree._Element:
+    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels, without class or
+    paint: an ellipse centred on the chin, SHADOW_WIDTH of the neck wide and JAW_SHADOW fw high
+    (the face drawn over it hides its top half). Where it would pass a side of the neck (whose
+    middle at the chin's height is `middle`, neck_middle), a polygon of SHADOW_POINTS corners
+    cut at that side instead; corner SHADOW_POINTS // 4 is its lowest point, right under the
+    chin while the chin is over the neck."""
     half = figure.face_width * NECK
     left, right = middle - half, middle + half
-    cx = float(np.clip(chin[0], left, right))  # a chin beyond a side of the neck: on that side
+    cx, cy = float(chin[0]), float(chin[1])
+    rx, ry = half * SHADOW_WIDTH, figure.face_width * JAW_SHADOW
+    if left <= cx - rx and cx + rx <= right:
+        return element(None, "ellipse", cx=cx, cy=cy, rx=rx, ry=ry)
+    cx = float(np.clip(cx, left, right))  # a chin beyond a side of the neck: on that side
     angles = np.linspace(0, 2 * np.pi, SHADOW_POINTS, endpoint=False)
     # clamping x cuts an upright ellipse exactly at the sides: beyond a side it is no taller than there
-    xs = np.clip(cx + half * np.cos(angles), left, right)
-    ys = float(chin[1]) + figure.face_width * JAW_SHADOW * np.sin(angles)
-    return np.column_stack([xs, ys])
-
-
-def shadow_path(polygon: np.ndarray) -> str:
-    """Path data of the closed `polygon` (n, 2) pixels, as `_points` writes it."""
-    return _points(*((float(x), float(y)) for x, y in polygon))
+    xs = np.clip(cx + rx * np.cos(angles), left, right)
+    return element(None, "path", d=_points(*zip(xs.tolist(), (cy + ry * np.sin(angles)).tolist(), strict=True)))
 
 
 def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Element:

@@ -37,7 +37,7 @@ from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
-                                        figure_of, lean, lean_transform, neck_middle, shadow_path)
+                                        figure_of, lean, lean_transform, neck_middle)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -175,8 +175,8 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
         element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
     figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
     shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])))
-    element(group, "path", {"class": "chin-shadow", "d": shadow_path(shadow), "fill": COLOURS["jaw shadow"],
-                            "opacity": JAW_SHADOW_OPACITY})
+    shadow.attrib.update({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
+    group.append(shadow)
     element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
     _cheeks(group, points, face.fapu.d, style)
     element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
