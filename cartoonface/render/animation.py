@@ -22,7 +22,8 @@ We keep that form and make it small:
 - a track whose drawing never changes is written once, outside any frame;
 - every frame's state is drawn (no pose held over frames); the head's roll is
   not drawn into the parts but is a rotation of the hair and face layers (one
-  discrete `<animateTransform>` each), so a sideways lean redraws nothing;
+  discrete `<animateTransform>` each, and a skew of the neck about the collar),
+  so a sideways lean redraws nothing;
 - the part drawings are written by the compactor of render/compact.py:
   coordinates are whole pixels in relative path commands (render/pathdata.py);
 - a part shown in several drawings of its track (the face outline under
@@ -42,7 +43,7 @@ own plays silently; the pages drive its clock from the audio (static/cartoonface
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,17 +54,18 @@ from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll, unrolled
 from cartoonface.face.state import FaceState
 from cartoonface.render.compact import Writer, share
-from cartoonface.render.elements import element, svg_root
+from cartoonface.render.elements import DECIMALS, element, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
+from cartoonface.render.scenery import LEAN_DECIMALS, background_layer, clothes_layer, figure_of, lean, neck_pivot
 from cartoonface.render.svg import face_defs, face_group
 
 # The track of each part of render/svg.py's face_group (by its class), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
-# The mouth moves with the jaw, so it shares the track of the face outline: it is then drawn
-# before the nose, brows and eyes rather than after them, which changes nothing on screen
+# The mouth and the jaw's shadow on the neck move with the jaw, so they share the track of the
+# face outline; the mouth is then drawn before the nose, brows and eyes rather than after them,
+# which changes nothing on screen
 # (they never overlap; where a nodding nose tip comes near the upper lip, the nose in front is right).
-TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "face": "face", "cheeks": "face",
+TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "face", "face": "face", "cheeks": "face",
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
@@ -183,22 +185,42 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
         frame.extend(drawings[number])
 
 
-def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, centre: str) -> None:
-    """Turn each of `layers` by the head's roll: `rolls` (one per frame, hundredths of a degree,
-    positive counter-clockwise) as one discrete `<animateTransform>` whose key times are the
-    frame boundaries of the runs of equal rolls; `centre` "x y" is the rotation origin.
-    Nothing is added when the head never rolls."""
-    if not any(rolls):
-        return
-    all_runs = runs(rolls)
-    total = frame_ms(len(rolls), fps)
-    values = ";".join(f"{-rolls[run.first] / 10 ** ROLL_DECIMALS:g} {centre}" for run in all_runs)
+def _steps(keys: Sequence[int], fps: int, kind: str, value: Callable[[int], str]) -> etree._Element:
+    """A discrete `<animateTransform>` of `kind` ("rotate", "skewX") holding `value(key)` over each
+    run of equal `keys` (one per frame): its key times are the runs' frame boundaries."""
+    all_runs = runs(keys)
+    total = frame_ms(len(keys), fps)
     # fractions of the whole, 9 decimals (never an exponent): within 0.01 ms for up to 10^4 s
     times = ";".join(decimal_text(frame_ms(run.first, fps) / total, 9) for run in all_runs)
+    return element(None, "animateTransform", {
+        "attributeName": "transform", "type": kind, "calcMode": "discrete",
+        "values": ";".join(value(keys[run.first]) for run in all_runs), "keyTimes": times, "dur": clock(total),
+        "fill": "freeze"})
+
+
+def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, centre: str) -> None:
+    """Turn each of `layers` by the head's roll: `rolls` (one per frame, hundredths of a degree,
+    positive counter-clockwise) as one discrete `<animateTransform>` (_steps); `centre` "x y" is
+    the rotation origin. Nothing is added when the head never rolls."""
+    if not any(rolls):
+        return
     for layer in layers:
-        layer.insert(0, element(None, "animateTransform", {
-            "attributeName": "transform", "type": "rotate", "calcMode": "discrete", "values": values,
-            "keyTimes": times, "dur": clock(total), "fill": "freeze"}))
+        layer.insert(0, _steps(rolls, fps, "rotate", lambda roll: f"{-roll / 10 ** ROLL_DECIMALS:g} {centre}"))
+
+
+def _lean(neck: etree._Element, leans: Sequence[int], fps: int, pivot: float) -> None:
+    """Lean the clothes layer's `neck` path with the head: `leans` (one per frame, tenths of a degree of
+    skewX about the height `pivot`, render/scenery.py's lean) as a discrete `<animateTransform>`
+    (_steps) of a group around it, moved to the pivot. Nothing changes when the neck never leans."""
+    if not any(leans):
+        return
+    at = decimal_text(pivot, DECIMALS)
+    holder = element(None, "g", transform=f"translate(0 {at})")
+    neck.addprevious(holder)
+    leaning = element(holder, "g")
+    leaning.append(_steps(leans, fps, "skewX", lambda step: decimal_text(step / 10 ** LEAN_DECIMALS, LEAN_DECIMALS)))
+    leaning.append(neck)
+    neck.set("transform", f"translate(0 -{at})")
 
 
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
@@ -232,6 +254,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     drawn: dict[tuple[FaceState, tuple[float, ...]], tuple[int, ...]] = {}
     frames = []
     rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
+    # the neck's lean in each frame, in steps of LEAN_DECIMALS: it follows the roll as written
+    leans = [round(lean(figure, origin, roll / 10 ** ROLL_DECIMALS) * 10 ** LEAN_DECIMALS) for roll in rolls]
     for state, roll in zip(states, rolls, strict=True):
         parts = by_state.get(state)
         if parts is None:
@@ -252,8 +276,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
-    if dressed is not None:
-        root.append(dressed)
+    _lean(dressed[0], leans, fps, neck_pivot(figure))
+    root.append(dressed)
     layer = element(root, "g", id="face")
     for name, track in tracks.items():
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)

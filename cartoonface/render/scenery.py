@@ -3,8 +3,9 @@
 The thesis draws four layers, background, hair, clothes and face (its Figs. 6.7,
 6.8, 7.2 and 7.3 show a studio backdrop and a suit; the figures themselves are
 lost in the text). These are our own drawings: three backgrounds and three
-clothes, plus "plain" and "none", each a few SVG shapes with gradients. They do
-not move: the body stays still while the head tilts, turns and nods.
+clothes, plus "plain" and "none", each a few SVG shapes with gradients. The body
+stays still while the head tilts, turns and nods; the neck (drawn with every clothes
+option, "none" included) leans about the collar to stay under the chin.
 
 Geometry comes from a `Figure`: where the chin is and how wide the face is, so
 the neck and shoulders fit any face model.
@@ -12,6 +13,7 @@ the neck and shoulders fit any face model.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,6 +73,9 @@ SHOULDER = 1.25  # half the shoulders' width
 SHOULDER_SLOPE = 0.25  # the arms' top below the shoulder line
 SHOULDER_START = 2.2  # where the shoulders leave the collar, in half neck widths
 JAW_SHADOW, JAW_SHADOW_OPACITY = 0.07, "0.12"  # the jaw's shadow on the neck: vertical radius
+SHADOW_WIDTH = 0.85  # the shadow's horizontal radius / half the neck's width: room for the chin to move
+SHADOW_POINTS = 16  # corners of the jaw's shadow cut at a side of the neck (an ellipse, within 1 px at our sizes)
+LEAN_DECIMALS = 1  # the neck's lean is written to 0.1 degree: 0.1 px at the chin for a lever of 60 px
 
 
 @dataclass(frozen=True)
@@ -153,13 +158,64 @@ def background_layer(name: str, figure: Figure, defs: etree._Element) -> etree._
     return layer
 
 
-def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Element | None:
-    """The clothes `name` (one of CLOTHES) with neck and shoulders under the chin as a `<g>`, or None for "none".
-    Sizes are fractions of the face width fw (the body constants above, and the clothes' own)."""
+def neck_pivot(figure: Figure) -> float:
+    """The height (pixels) about which the neck leans: the shoulder line, where it leaves the collar."""
+    return figure.chin_y + figure.face_width * SHOULDER_DROP
+
+
+def lean(figure: Figure, origin: np.ndarray, roll: float) -> float:
+    """Degrees of skewX about neck_pivot that lean the neck with the head's `roll` (degrees,
+    positive leans the head's top to the image left) about the rotation `origin` (2,) pixels:
+    the neck's middle passes through the rolled chin while its foot stays in the collar. The
+    head's tilt and turn move the chin over the neck, not the neck. Positive leans the neck's
+    top to the image left (SVG skewX)."""
+    angle = math.radians(roll)
+    x, y = figure.chin_x - float(origin[0]), figure.chin_y - float(origin[1])
+    rolled_x = float(origin[0]) + x * math.cos(angle) + y * math.sin(angle)
+    rolled_y = float(origin[1]) - x * math.sin(angle) + y * math.cos(angle)
+    return math.degrees(math.atan((rolled_x - figure.chin_x) / (rolled_y - neck_pivot(figure))))
+
+
+def neck_middle(figure: Figure, degrees: float, height: float) -> float:
+    """The x (pixels) of the middle of the neck leaned by `degrees` (lean) at `height` pixels."""
+    return figure.chin_x + math.tan(math.radians(degrees)) * (height - neck_pivot(figure))
+
+
+def lean_transform(figure: Figure, degrees: float) -> str:
+    """An SVG transform leaning the neck by `degrees` (lean) about neck_pivot."""
+    pivot = _num(neck_pivot(figure))
+    return f"translate(0 {pivot}) skewX({decimal_text(degrees, LEAN_DECIMALS)}) translate(0 -{pivot})"
+
+
+def chin_shadow(figure: Figure, chin: np.ndarray, middle: float) -> etree._Element:
+    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels, without class or
+    paint: an ellipse centred on the chin, SHADOW_WIDTH of the neck wide and JAW_SHADOW fw high
+    (the face drawn over it hides its top half). Where it would pass a side of the neck (whose
+    middle at the chin's height is `middle`, neck_middle), a polygon of SHADOW_POINTS corners
+    cut at that side instead; corner SHADOW_POINTS // 4 is its lowest point, right under the
+    chin while the chin is over the neck."""
+    half = figure.face_width * NECK
+    left, right = middle - half, middle + half
+    cx, cy = float(chin[0]), float(chin[1])
+    rx, ry = half * SHADOW_WIDTH, figure.face_width * JAW_SHADOW
+    if left <= cx - rx and cx + rx <= right:
+        return element(None, "ellipse", cx=cx, cy=cy, rx=rx, ry=ry)
+    cx = float(np.clip(cx, left, right))  # a chin beyond a side of the neck: on that side
+    angles = np.linspace(0, 2 * np.pi, SHADOW_POINTS, endpoint=False)
+    # clamping x cuts an upright ellipse exactly at the sides: beyond a side it is no taller than there
+    xs = np.clip(cx + rx * np.cos(angles), left, right)
+    return element(None, "path", d=_points(*zip(xs.tolist(), (cy + ry * np.sin(angles)).tolist(), strict=True)))
+
+
+def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Element:
+    """The clothes `name` (one of CLOTHES) with neck and shoulders under the chin as a `<g id="clothes">`;
+    "none" is the neck alone, down past the picture's bottom, so the head never floats. The neck
+    is the layer's first child, an upright path of class "neck" that the caller leans with the
+    head (lean, lean_transform). The jaw's shadow is the face's (render/svg.py, chin_shadow):
+    it moves with the chin. Sizes are fractions of the face
+    width fw (the body constants above, and the clothes' own)."""
     if name not in CLOTHES:
         raise OptionError(f"clothes {name!r}: expected one of {', '.join(CLOTHES)}")
-    if name == "none":
-        return None
     x, y, w, h = figure.box
     cx, chin, fw = figure.chin_x, figure.chin_y, figure.face_width
     bottom = y + h + fw  # past the bottom edge: the body leaves the picture
@@ -167,12 +223,12 @@ def clothes_layer(name: str, figure: Figure, defs: etree._Element) -> etree._Ele
     shoulder_y = chin + fw * SHOULDER_DROP
     spread = fw * SHOULDER
     layer = element(None, "g", id="clothes")
-    element(layer, "path", d=_points((cx - neck, chin - fw * NECK_TOP), (cx + neck, chin - fw * NECK_TOP),
-                                     (cx + neck, shoulder_y + fw * NECK_FOOT), (cx - neck, shoulder_y + fw * NECK_FOOT)),
+    foot = bottom if name == "none" else shoulder_y + fw * NECK_FOOT
+    element(layer, "path", {"class": "neck"}, d=_points((cx - neck, chin - fw * NECK_TOP), (cx + neck, chin - fw * NECK_TOP),
+                                                        (cx + neck, foot), (cx - neck, foot)),
             fill=figure.skin)
-    # The jaw's shadow on the neck: the face covers the top half of this ellipse.
-    element(layer, "ellipse", cx=cx, cy=chin, rx=neck, ry=fw * JAW_SHADOW, fill=COLOURS["jaw shadow"],
-            opacity=JAW_SHADOW_OPACITY)
+    if name == "none":
+        return layer
     arms = shoulder_y + fw * SHOULDER_SLOPE
     body = ((cx - spread, bottom), (cx - spread, arms), (cx - neck * SHOULDER_START, shoulder_y),
             (cx + neck * SHOULDER_START, shoulder_y), (cx + spread, arms), (cx + spread, bottom))

@@ -12,7 +12,7 @@ from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.render.elements import element, svg_root
 from cartoonface.render.numbers import number_text
-from cartoonface.render.scenery import NECK
+from cartoonface.render.scenery import LEAN_DECIMALS, NECK, figure_of, lean, lean_transform
 from cartoonface.render.svg import OUTLINE, face_defs, face_group
 
 
@@ -27,7 +27,8 @@ def head_box(face: FaceModel) -> tuple[float, float, float, float]:
 
 def _neck(face: FaceModel, bottom: float) -> etree._Element:
     """A plain neck under the chin down to `bottom` (the sheet's heads have no body): the
-    width of render/scenery.py's neck, its top hidden behind the jaw in every pose."""
+    width of render/scenery.py's neck, its top hidden behind the jaw in every pose; each head
+    leans it to stay under its chin (scenery's lean)."""
     chin = face.point("2.1")
     half = NECK * float(np.ptp(face.points[:, 0]))
     top = float(chin[1]) - 0.6 * face.fapu.d
@@ -62,6 +63,7 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
                                "y": number_text(font * 1.4), "text-anchor": "middle", **text_style}).text = label
     lifted = lift(face)
     neck = _neck(face, y0 + h)
+    figure = figure_of(face, (x0, y0, w, h))
     for i, (label, states) in enumerate(rows):
         top = top_margin + i * pitch_y
         lines = label.split("\n")
@@ -75,8 +77,11 @@ def sheet_svg(face: FaceModel, rows: list[tuple[str, list[FaceState]]], columns:
             element(root, "rect", {"x": number_text(left), "y": number_text(top), "width": number_text(cell_width),
                                    "height": number_text(cell_height), "rx": number_text(cell_width * 0.04),
                                    "fill": "#f1ede6"})
-            head = face_group(face, pose_face(lifted, state), f"s{i}-{j}")
-            head.insert(2, etree.fromstring(etree.tostring(neck)))  # after the <defs> and the hair
+            leaning = round(lean(figure, lifted.origin, state.pose.roll), LEAN_DECIMALS)
+            head = face_group(face, pose_face(lifted, state), f"s{i}-{j}", leaning)
+            leaned = etree.fromstring(etree.tostring(neck))
+            leaned.set("transform", lean_transform(figure, leaning))
+            head.insert(2, leaned)  # after the <defs> and the hair
             head.set("transform", f"translate({number_text(left - x0 * scale)} {number_text(top - y0 * scale)}) "
                                   f"scale({scale:.5g})")
             root.append(head)

@@ -36,7 +36,8 @@ from cartoonface.render.geometry import face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
-from cartoonface.render.scenery import background_layer, clothes_layer, figure_of
+from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
+                                        figure_of, lean, lean_transform, neck_middle)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -155,11 +156,13 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
 _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 
 
-def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
-    """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`.
+def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> etree._Element:
+    """One state's drawing of `face` posed as `posed`, as a `<g class="cf-face">`, over a neck
+    leaned by `neck_lean` degrees (render/scenery.py's lean; 0 for an upright one).
 
     Children, in drawing order: a `<defs>` with this state's clip paths (ids end in
-    "-{uid}"), then the parts "hair", "ear-l", "ear-r", "face", "cheeks", "nose",
+    "-{uid}"), then the parts "hair", "ear-l", "ear-r", "chin-shadow" (the jaw's shadow on
+    the neck, under the posed chin: render/scenery.py's chin_shadow), "face", "cheeks", "nose",
     "brow-l", "brow-r", "eye-l", "eye-r", "mouth". Fills use face_defs' gradients.
     """
     style = _styles(face)
@@ -170,6 +173,10 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str) -> etree._Element:
     element(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
     for side in "lr":
         element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
+    figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
+    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])))
+    shadow.attrib.update({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
+    group.append(shadow)
     element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
     _cheeks(group, points, face.fapu.d, style)
     element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
@@ -258,7 +265,8 @@ def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: s
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
     """`face` in `state` as a whole SVG document root, canvas-sized, with the layers
-    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order.
+    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order;
+    the clothes layer's neck leans to stay under the posed chin (render/scenery.py's lean).
 
     `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
     """
@@ -268,11 +276,14 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     defs.extend(face_defs(face))
     figure = figure_of(face, (0.0, 0.0, width, height))
     root.append(background_layer(background, figure, defs))
-    group = face_group(face, pose_face(lift(face), state), "0")
+    lifted = lift(face)
+    leaning = lean(figure, lifted.origin, state.pose.roll)
+    group = face_group(face, pose_face(lifted, state), "0", leaning)
     hair = element(root, "g", {"id": "hair"})
     hair.extend(group.findall(f"{{{SVG}}}path[@class='hair']"))
     dressed = clothes_layer(clothes, figure, defs)
-    root.append(dressed if dressed is not None else element(None, "g", {"id": "clothes"}))
+    dressed[0].set("transform", lean_transform(figure, leaning))  # the neck leans with the head
+    root.append(dressed)
     group.set("id", "face")
     root.append(group)
     return root
