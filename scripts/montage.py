@@ -1,12 +1,16 @@
-"""A screenshot montage of a real sentence: the generated page in Chromium, paused at each mouth shape.
+"""Screenshot montages of generated pages, seen in headless Debian chromium (Playwright).
 
-Usage: .venv/bin/python scripts/montage.py WAV TRANSCRIPT OUT.png [--shapes N] [--start SECONDS]
+    .venv/bin/python scripts/montage.py sentence WAV TRANSCRIPT OUT.png [--shapes N] [--start SECONDS]
+    .venv/bin/python scripts/montage.py frames SITE_FOLDER OUT.png LABEL T1 T2 ...
 
-Generates an audio-book page for each sample face from the recording and its transcript, opens it
-in headless Debian chromium (Playwright), seeks the page's audio to the middle of each of the first
-N mouth-shape intervals of the alignment (from `--start` seconds on), screenshots the face, and lays
-the shots out as a grid: one row per face, one column per time, labelled with the time, the
-syllable and the shape. Used for the README's montage (docs/sentence-montage.png).
+`sentence`: generates an audio-book page for each sample face from the recording and its
+transcript, seeks the page's audio to the middle of each of the first N mouth-shape intervals
+of the alignment (from `--start` seconds on) and lays the face shots out one row per face, each
+labelled with the time, the syllable and the shape (docs/sentence-montage.png, in the README).
+
+`frames`: SITE_FOLDER is a `cartoonface generate` output; its animation.svg is paused at each
+time Ti (seconds) and the head cropped, in rows under LABEL (docs/performer-*.png were made with
+the times 0.5 2 5.2 7 9.8 12 14 16.5 18 20 21.5 24 on samples/speech/story.wav).
 """
 
 from __future__ import annotations
@@ -14,8 +18,11 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from io import BytesIO
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw, ImageFont
 
@@ -23,17 +30,65 @@ from cartoonface.data import SAMPLE_FACES
 from cartoonface.pipeline import Options, generate
 from cartoonface.speech.textgrid import read_tiers
 
+if TYPE_CHECKING:
+    from playwright.sync_api import Page
+
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--mute-audio", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync", "--no-first-run"]
 TILE = 190  # px: width and height of one face tile in the montage
-LABEL = 24  # px: label band above each tile
+LABEL = 24  # px: label band above each tile (and the title band above a frames montage)
 FONT = "/usr/share/fonts/opentype/noto/NotoSansCJK-Regular.ttc"  # fonts-noto-cjk (scripts/setup.sh)
 FONT_SIZE = 15  # px
-FACE_CROP = (0.18, 0.22, 0.82, 0.86)  # share of the face element (left, top, right, bottom) kept in a tile
+FACE_CROP = (0.18, 0.22, 0.82, 0.86)  # share of the page's face element (left, top, right, bottom) kept
+CANVAS = (400, 480)  # px: the face model's canvas, the viewport for animation.svg alone
+HEAD = (60, 60, 340, 400)  # crop box of the head on that canvas, pixels
+COLUMNS = 6  # tiles per row of a frames montage
+SETTLE_MS = 60  # wait after setting the SVG clock before the screenshot
 SEEK = """t => new Promise(done => { const a = document.getElementById('cf-audio');
     a.addEventListener('seeked', () => requestAnimationFrame(() => requestAnimationFrame(() => done())),
                        {once: true}); a.currentTime = t; })"""
+SET_SVG_TIME = "t => { const s = document.documentElement; s.pauseAnimations(); s.setCurrentTime(t); }"
+
+
+@contextmanager
+def opened(url: str, size: tuple[int, int], scale: float) -> Iterator[Page]:
+    """A headless chromium page of `size` (w, h) CSS px at device scale `scale`, loaded from `url`."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as play:
+        browser = play.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": size[0], "height": size[1]}, device_scale_factor=scale)
+        page.goto(url, wait_until="load")
+        yield page
+        browser.close()
+
+
+def shots(page: Page, times: list[float], seek: Callable[[Page, float], bytes],
+          crop: tuple[float, float, float, float]) -> list[Image.Image]:
+    """One screenshot per time (seconds) taken by `seek`, cropped to the shares `crop` of the image."""
+    images = []
+    for seconds in times:
+        image = Image.open(BytesIO(seek(page, seconds))).convert("RGB")
+        w, h = image.size
+        images.append(image.crop((int(crop[0] * w), int(crop[1] * h), int(crop[2] * w), int(crop[3] * h))))
+    return images
+
+
+def grid(tiles: list[Image.Image], labels: list[str], columns: int, title: str = "") -> Image.Image:
+    """`tiles` as TILE-square cells, `columns` a row, each under its label; `title` on top when given."""
+    font = ImageFont.truetype(FONT, FONT_SIZE)
+    rows = -(-len(tiles) // columns)
+    top = LABEL if title else 0
+    sheet = Image.new("RGB", (columns * TILE, top + rows * (TILE + LABEL)), "white")
+    draw = ImageDraw.Draw(sheet)
+    if title:
+        draw.text((4, 2), title, fill="black", font=font)
+    for i, (tile, label) in enumerate(zip(tiles, labels, strict=True)):
+        x, y = (i % columns) * TILE, top + (i // columns) * (TILE + LABEL)
+        sheet.paste(tile.resize((TILE, TILE), Image.Resampling.LANCZOS), (x, y + LABEL))
+        draw.text((x + 4, y + 2), label, fill="black", font=font)
+    return sheet
 
 
 def shape_times(textgrid: str, count: int, start: float) -> list[tuple[float, str, str]]:
@@ -52,60 +107,65 @@ def shape_times(textgrid: str, count: int, start: float) -> list[tuple[float, st
     return chosen
 
 
-def shots(site: Path, times: list[float]) -> list[Image.Image]:
-    """Screenshots of the page's face at each time (seconds), cropped to the head."""
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as play:
-        browser = play.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 900, "height": 900}, device_scale_factor=2)
-        page.goto((site / "index.html").as_uri(), wait_until="load")
-        page.wait_for_function("document.getElementById('cf-audio').readyState >= 1")
-        face = page.locator("#cf-face")
-        images = []
-        for seconds in times:
-            page.evaluate(SEEK, seconds)
-            image = Image.open(BytesIO(face.screenshot())).convert("RGB")
-            w, h = image.size
-            left, top, right, bottom = FACE_CROP
-            images.append(image.crop((int(left * w), int(top * h), int(right * w), int(bottom * h))))
-        browser.close()
-    return images
+def seek_page(page: Page, seconds: float) -> bytes:
+    """Seek a generated page's audio to `seconds`; the face element's screenshot."""
+    page.evaluate(SEEK, seconds)
+    return page.locator("#cf-face").screenshot()
 
 
-def montage(rows: list[tuple[str, list[Image.Image], list[str]]]) -> Image.Image:
-    """A grid image: per row a name and its tiles with one label each."""
-    columns = max(len(tiles) for _, tiles, _ in rows)
-    sheet = Image.new("RGB", (columns * TILE, len(rows) * (TILE + LABEL)), "white")
-    draw = ImageDraw.Draw(sheet)
-    font = ImageFont.truetype(FONT, FONT_SIZE)
-    for r, (name, tiles, labels) in enumerate(rows):
-        y = r * (TILE + LABEL)
-        for c, (tile, label) in enumerate(zip(tiles, labels)):
-            sheet.paste(tile.resize((TILE, TILE), Image.Resampling.LANCZOS), (c * TILE, y + LABEL))
-            draw.text((c * TILE + 4, y + 2), f"{name} {label}", fill="black", font=font)
-    return sheet
+def seek_svg(page: Page, seconds: float) -> bytes:
+    """Pause an opened animation.svg at `seconds`; the screenshot."""
+    page.evaluate(SET_SVG_TIME, seconds)
+    page.wait_for_timeout(SETTLE_MS)
+    return page.screenshot()
+
+
+def sentence(wav: Path, transcript: Path, count: int, start: float) -> Image.Image:
+    """The montage of the `sentence` mode: one row per sample face."""
+    tiles: list[Image.Image] = []
+    labels: list[str] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in ("female", "male"):
+            site = Path(tmp) / name
+            generate(SAMPLE_FACES / f"{name}.json", wav, transcript, site, Options(seed=1))
+            chosen = shape_times((site / "alignment.TextGrid").read_text(encoding="utf-8"), count, start)
+            with opened((site / "index.html").as_uri(), (900, 900), 2) as page:
+                page.wait_for_function("document.getElementById('cf-audio').readyState >= 1")
+                tiles += shots(page, [t for t, _, _ in chosen], seek_page, FACE_CROP)
+            labels += [f"{name[0].upper()} {t:.2f}s {syllable} [{shape}]" for t, syllable, shape in chosen]
+    return grid(tiles, labels, count)
+
+
+def frames(site: Path, label: str, times: list[float]) -> Image.Image:
+    """The montage of the `frames` mode: animation.svg of `site` at `times`, under `label`."""
+    crop = (HEAD[0] / CANVAS[0], HEAD[1] / CANVAS[1], HEAD[2] / CANVAS[0], HEAD[3] / CANVAS[1])
+    with opened((site / "animation.svg").as_uri(), CANVAS, 1) as page:
+        tiles = shots(page, times, seek_svg, crop)
+    return grid(tiles, [f"{t:.2f} s" for t in times], COLUMNS, label)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("wav", type=Path)
-    parser.add_argument("transcript", type=Path)
-    parser.add_argument("out", type=Path)
-    parser.add_argument("--shapes", type=int, default=8, help="how many mouth shapes (columns)")
-    parser.add_argument("--start", type=float, default=0.0, help="first shape at or after this time (s)")
+    modes = parser.add_subparsers(dest="mode", required=True)
+    one = modes.add_parser("sentence", help="a real sentence at its mouth shapes, both sample faces")
+    one.add_argument("wav", type=Path)
+    one.add_argument("transcript", type=Path)
+    one.add_argument("out", type=Path)
+    one.add_argument("--shapes", type=int, default=8, help="how many mouth shapes (columns)")
+    one.add_argument("--start", type=float, default=0.0, help="first shape at or after this time (s)")
+    many = modes.add_parser("frames", help="a generated folder's animation.svg at given times")
+    many.add_argument("site", type=Path)
+    many.add_argument("out", type=Path)
+    many.add_argument("label")
+    many.add_argument("times", type=float, nargs="+")
     args = parser.parse_args(argv)
-    rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for name in ("female", "male"):
-            site = Path(tmp) / name
-            generate(SAMPLE_FACES / f"{name}.json", args.wav, args.transcript, site, Options(seed=1))
-            chosen = shape_times((site / "alignment.TextGrid").read_text(encoding="utf-8"), args.shapes, args.start)
-            labels = [f"{t:.2f}s {syllable} [{shape}]" for t, syllable, shape in chosen]
-            rows.append((name[0].upper(), shots(site, [t for t, _, _ in chosen]), labels))
+    if args.mode == "sentence":
+        picture = sentence(args.wav, args.transcript, args.shapes, args.start)
+    else:
+        picture = frames(args.site, args.label, args.times)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     partial = args.out.with_suffix(".part.png")
-    montage(rows).save(partial)
+    picture.save(partial, optimize=True)
     partial.replace(args.out)
     print(args.out)
     return 0
