@@ -45,6 +45,7 @@ CANVAS = (400, 480)  # px: the face model's canvas, the viewport for animation.s
 HEAD = (60, 60, 340, 400)  # crop box of the head on that canvas, pixels
 COLUMNS = 6  # tiles per row of a frames montage
 SETTLE_MS = 60  # wait after setting the SVG clock before the screenshot
+COLOURS = 256  # palette size of the saved PNG (keeps the docs' pictures small)
 SEEK = """t => new Promise(done => { const a = document.getElementById('cf-audio');
     a.addEventListener('seeked', () => requestAnimationFrame(() => requestAnimationFrame(() => done())),
                        {once: true}); a.currentTime = t; })"""
@@ -165,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         picture = frames(args.site, args.label, args.times)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     partial = args.out.with_suffix(".part.png")
-    picture.save(partial, optimize=True)
+    picture.quantize(colors=COLOURS, method=Image.Quantize.MEDIANCUT).save(partial, optimize=True)
     partial.replace(args.out)
     print(args.out)
     return 0
