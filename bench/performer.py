@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.generate import build_input
-from cartoonface.animate.behaviour import schedule, speech_pauses
+from cartoonface.animate.behaviour import schedule, speech_pauses, speech_spans
 from cartoonface.animate.frames import sample_frames
 from cartoonface.animate.gaze import DART_RADIUS
 from cartoonface.animate.idle import with_sway
@@ -62,10 +62,10 @@ def measure(name: str, alignment, peaks: tuple[float, ...], face) -> None:
     duration = alignment.duration
     minutes = duration / 60
     pauses = speech_pauses(alignment)
-    speech = tuple((s.start, s.end) for s in alignment.sentences)
+    speech = speech_spans(alignment)
     plan = schedule(duration, pauses, SEED, style=style, peaks=peaks, speech=speech)
     chance = schedule(duration, pauses, SEED, style=style, peaks=(), speech=speech)
-    states = with_sway(sample_frames(build_timeline(alignment, plan), FPS), FPS, SEED, style.sway * style.head)
+    states = with_sway(sample_frames(build_timeline(alignment, plan), FPS), FPS, SEED, style.sway_peak)
     kinds = [a.kind for a in plan]
     saccades = {a.start for a in plan if a.kind in ("gaze_h", "gaze_v")}
     gaze = np.array([(s.gaze_h, s.gaze_v) for s in states])

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.animate.actions import actions_to_json, load_actions
-from cartoonface.animate.behaviour import schedule, speech_pauses
+from cartoonface.animate.behaviour import schedule, speech_pauses, speech_spans
 from cartoonface.animate.frames import FPS_RANGE, sample_frames
 from cartoonface.animate.idle import with_sway
 from cartoonface.animate.prosody import pitch_peaks
@@ -179,12 +179,11 @@ def generate(
     if options.actions is not None:
         actions = load_actions(options.actions, duration)
     else:
-        speech = tuple((sentence.start, sentence.end) for sentence in alignment.sentences)
         actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
-                           peaks=pitch_peaks(recording, alignment), speech=speech)
+                           peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment))
     report("frames")
     states = sample_frames(build_timeline(alignment, actions), options.fps)
-    states = with_sway(states, options.fps, options.seed, style.sway * style.head)
+    states = with_sway(states, options.fps, options.seed, style.sway_peak)
     report("svg")
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                         wide=options.page == "announcer", title=options.title)

@@ -152,8 +152,8 @@ def test_storyteller_moves_more_than_announcer(talk):
         assert _motion(lively) > 1.3 * _motion(calm)
         assert len(_saccades(lively)) > len(_saccades(calm))
         assert sum(a.kind == "brow" for a in lively) > sum(a.kind == "brow" for a in calm)
-    assert np.ptp(sway(np.arange(300) / FPS, 0, STORYTELLER.sway * STORYTELLER.head)) > \
-        np.ptp(sway(np.arange(300) / FPS, 0, ANNOUNCER.sway * ANNOUNCER.head))
+    assert np.ptp(sway(np.arange(300) / FPS, 0, STORYTELLER.sway_peak)) > \
+        np.ptp(sway(np.arange(300) / FPS, 0, ANNOUNCER.sway_peak))
 
 
 def test_same_seed_same_schedule_and_round_trip(talk):

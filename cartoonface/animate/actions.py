@@ -19,7 +19,7 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, Action
+from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, TIME_SLACK, Action
 from cartoonface.errors import ActionsError
 from cartoonface.face.state import MAX_ANGLE
 from cartoonface.files import read_user_text, write_text_atomic
@@ -31,7 +31,6 @@ OPTIONAL = ("attack", "release")
 # An envelope action written without attack/release rises over a third of its
 # duration and falls over a third (our default, documented in docs/actions.md).
 DEFAULT_RAMP = 1 / 3
-TOLERANCE = 0.0005  # seconds: times are kept to the millisecond
 
 
 def actions_to_json(actions: Sequence[Action]) -> str:
@@ -108,9 +107,9 @@ def _action(row: object, where: str, duration: float) -> Action:
         raise ActionsError(f"{where}.start: {start} is negative; expected seconds from 0")
     if length <= 0:
         raise ActionsError(f"{where}.duration: {length} must be more than 0 seconds")
-    if start > duration + TOLERANCE:
+    if start > duration + TIME_SLACK:
         raise ActionsError(f"{where}.start: {start} s is past the end of the audio ({duration:.3f} s)")
-    if start + length > duration + TOLERANCE:
+    if start + length > duration + TIME_SLACK:
         raise ActionsError(
             f"{where}.duration: the action ends at {start + length:.3f} s, past the end of the audio ({duration:.3f} s)"
         )
@@ -127,7 +126,7 @@ def _action(row: object, where: str, duration: float) -> Action:
     for key, value in zip(OPTIONAL, ramps, strict=True):
         if value < 0:
             raise ActionsError(f"{where}.{key}: {value} is negative; expected seconds from 0")
-    if ramps[0] + ramps[1] > length + TOLERANCE:
+    if ramps[0] + ramps[1] > length + TIME_SLACK:
         raise ActionsError(
             f"{where}.release: attack + release ({ramps[0] + ramps[1]:g} s) exceed the duration ({length:g} s)"
         )
@@ -156,7 +155,7 @@ def _check_overlaps(actions: Sequence[Action], source: str) -> None:
     for kind in KINDS:
         same = sorted((a.start, i, a) for i, a in enumerate(actions) if a.kind == kind)
         for (_, i, first), (_, j, second) in zip(same, same[1:]):
-            if second.start < first.end - TOLERANCE:
+            if second.start < first.end - TIME_SLACK:
                 raise ActionsError(
                     f"{source}: actions[{j}].start: this {kind} at {second.start:g} s starts before "
                     f"actions[{i}] (a {kind} until {first.end:g} s) ends; actions of one kind must not overlap"

@@ -104,7 +104,7 @@ SMILE_RELEASE = (0.4, 0.7)  # seconds
 SMILE_GAP = 4.0  # seconds: at least this long between two smiles
 
 
-RAMP_SLACK = 0.0005  # seconds: attack + release may pass the duration by this much (times kept to the ms)
+TIME_SLACK = 0.0005  # seconds: times are kept to the ms, so limits (attack + release <= duration, ...) allow this
 
 
 @dataclass(frozen=True)
@@ -138,7 +138,7 @@ class Action:
             raise ValueError(f"{self.kind} duration {self.duration:g} s; expected more than 0")
         if self.attack < 0 or self.release < 0:
             raise ValueError(f"{self.kind} attack {self.attack:g} s, release {self.release:g} s; expected 0 or more")
-        if self.kind in ENVELOPE_KINDS and self.attack + self.release > self.duration + RAMP_SLACK:
+        if self.kind in ENVELOPE_KINDS and self.attack + self.release > self.duration + TIME_SLACK:
             raise ValueError(f"{self.kind} attack + release {self.attack + self.release:g} s exceed the duration "
                              f"{self.duration:g} s")
         if self.kind not in ENVELOPE_KINDS and (self.attack or self.release):
@@ -219,6 +219,11 @@ def _speech_spans(duration: float, pauses: Sequence[tuple[float, float]]) -> tup
     """(start, end) seconds of the stretches of [0, duration] between `pauses`."""
     edges = [0.0, *(t for pause in sorted(pauses) for t in pause), duration]
     return tuple((a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b > a)
+
+
+def speech_spans(alignment) -> tuple[tuple[float, float], ...]:
+    """(start, end) seconds of each sentence of an Alignment: where the speaker talks."""
+    return tuple((sentence.start, sentence.end) for sentence in alignment.sentences)
 
 
 def speech_pauses(alignment) -> tuple[tuple[float, float], ...]:

@@ -42,6 +42,11 @@ class Style:
     pause_look: float
     smile_share: float
 
+    @property
+    def sway_peak(self) -> float:
+        """Peak idle sway in degrees with the style's head factor applied (idle.with_sway's `peak`)."""
+        return self.sway * self.head
+
 
 # A news announcer reads to the camera: Argyle and Cook (1976) find that a speaker
 # looks at the listener about 40 % of the time in conversation, but an announcer

@@ -47,8 +47,8 @@ from typing import TYPE_CHECKING, Protocol, Sequence
 
 import numpy as np
 
-from cartoonface.speech.audio import digital_silence, quantum
-from cartoonface.speech.features import HOP, WINDOW_SECONDS, frames
+from cartoonface.speech.audio import MIN_RECORDED, digital_silence, quantum
+from cartoonface.speech.features import HOP, WINDOW_SECONDS, frames, smooth
 from cartoonface.speech.pinyin import split_initial
 
 if TYPE_CHECKING:
@@ -171,7 +171,6 @@ FLOOR_PERCENTILE = 5.0
 LOW_NOISE_RANGE_DB = 70.0
 MID_NOISE_RANGE_DB = 60.0
 HIGH_NOISE_RANGE_DB = 50.0
-MIN_RECORDED = 0.05        # share of recorded frames below which the floor is taken over all frames
 SILENCE_SHARE = 0.3        # frames below floor + this share of the range are silent
 MIN_RANGE_DB = 10.0        # a part with a smaller range is noise or silence: duration-prior split
 QUALITY_RANGE_DB = 20.0    # dB of range above MIN_RANGE_DB at which the signal quality reaches 1
@@ -208,11 +207,6 @@ ONSET_LEAD = {"closure": -1, "aspirated": -1, "frication": 0, "sonorant": 2, "gl
 FRICATION_RANGE = 0.4      # share of the 3-8 kHz range above its floor that is no silence
 FRICATION_FLOOR = 10.0     # dB above the 3-8 kHz floor that is always tolerated in a silence
                            # (no effect on Biaobei; checked on Chao 1922, whose high band is noise)
-
-
-def _smooth(x: np.ndarray, width: int = SMOOTH_FRAMES) -> np.ndarray:
-    """(T,) values -> (T,) their moving mean over `width` frames (edges repeated)."""
-    return np.convolve(np.pad(x, width // 2, mode="edge"), np.ones(width) / width, mode="valid")
 
 
 def edge_evidence(low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -415,9 +409,9 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     clip = np.concatenate([np.zeros(max(-first, 0)), clip, np.zeros(max(last - max(first, 0) - clip.size - max(-first, 0), 0))])
     feats = frames(clip, audio.rate)
     recorded = ~_dead_frames(clip, audio.rate, feats.low.size, step)
-    low = _smooth(_lift_digital_silence(feats.low, recorded, LOW_NOISE_RANGE_DB))
-    mid = _smooth(_lift_digital_silence(feats.mid, recorded, MID_NOISE_RANGE_DB))
-    high = _smooth(_lift_digital_silence(feats.high, recorded, HIGH_NOISE_RANGE_DB))
+    low = smooth(_lift_digital_silence(feats.low, recorded, LOW_NOISE_RANGE_DB), SMOOTH_FRAMES)
+    mid = smooth(_lift_digital_silence(feats.mid, recorded, MID_NOISE_RANGE_DB), SMOOTH_FRAMES)
+    high = smooth(_lift_digital_silence(feats.high, recorded, HIGH_NOISE_RANGE_DB), SMOOTH_FRAMES)
     # boundary k (time span.start + k * HOP) sits at the centre of feature frame MARGIN + k - 1.
     index = np.clip(MARGIN + np.arange(total + 1) - 1, 0, low.size - 1)
     inner = low[index[:-1]]

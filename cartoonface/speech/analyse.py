@@ -22,11 +22,13 @@ from dataclasses import replace
 from collections.abc import Callable, Sequence
 
 import numpy as np
+
 from pypinyin.seg.mmseg import seg
 
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import align_syllables
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
@@ -169,9 +171,9 @@ def _blocks(spans: tuple[Span, ...], owners: list[int]) -> list[list[int]]:
 def word_lengths(texts: Sequence[str]) -> list[int]:
     """The characters each syllable speaks, in order ("" for the later syllables of a word
     read out as one token) -> syllables per word, by pypinyin's word segmentation (maximum
-    matching over its phrase dictionary); the lengths sum to len(texts)."""
+    matching over its phrase dictionary, on the Simplified text); the lengths sum to len(texts)."""
     ends, position = {0}, 0
-    for word in seg.cut("".join(texts)):
+    for word in seg.cut(to_simplified("".join(texts))):
         position += len(word)
         ends.add(position)
     lengths: list[int] = []

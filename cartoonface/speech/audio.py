@@ -33,6 +33,9 @@ SILENT_PEAK = 10 ** (-70 / 20)
 # joined files, noise gates and TTS put such stretches between sentences; they are no noise
 # floor (thesis 002, 3.2.1: silence is normally *not* zero, because of environment noise).
 DIGITAL_SILENCE = 2 * 2 / 65536
+# When fewer than this share of a recording's frames hold recorded (non-digital-silence) sound, the
+# segmenter and the aligner take their floor over all frames (a recording nearly all digital silence).
+MIN_RECORDED = 0.05
 # Integer sample formats of 8 to 16 bits: a recording whose samples all lie on the grid of one
 # of them (steps of 2 / 2**bits, offset by a removed DC) flickers over QUANTUM_STEPS steps of that
 # grid where it is digital silence; 8-bit audio turns the quietest sounds and noise into such

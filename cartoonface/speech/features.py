@@ -109,3 +109,8 @@ def frames(samples: np.ndarray, rate: int) -> Frames:
         mid=band_db(power, *MID_BAND),
         high=band_db(power, *HIGH_BAND),
     )
+
+
+def smooth(x: np.ndarray, width: int) -> np.ndarray:
+    """(T,) values -> (T,) their moving mean over `width` frames (edges repeated)."""
+    return np.convolve(np.pad(x, width // 2, mode="edge"), np.ones(width) / width, mode="valid")

@@ -54,6 +54,15 @@ def _t2s() -> OpenCC:
     return OpenCC("t2s")
 
 
+def to_simplified(hans: str) -> str:
+    """Hanzi `hans` in Simplified characters, one for one (pypinyin's phrases are keyed on
+    Simplified: 銀行 would read yin2 xing2 and not be found as a word)."""
+    simplified = _t2s().convert(hans) if hans else ""
+    if len(simplified) != len(hans):
+        simplified = "".join(_t2s().convert(c) or c for c in hans)
+    return simplified
+
+
 def look_up(domain: list[Unit], notes: list[str]) -> list[Unit]:
     """Give every unit its dictionary reading and word index (pypinyin, phrase aware).
 
@@ -61,9 +70,7 @@ def look_up(domain: list[Unit], notes: list[str]) -> list[Unit]:
     銀行 would read yin2 xing2); the shown text keeps the original characters.
     """
     hans = "".join(u.han for u in domain if u.han)
-    simplified = _t2s().convert(hans) if hans else ""
-    if len(simplified) != len(hans):
-        simplified = "".join(_t2s().convert(c) or c for c in hans)
+    simplified = to_simplified(hans)
     words = seg(simplified) if simplified else []
     spans: list[tuple[int, str, str]] = []
     for index, word in enumerate(words):

@@ -24,7 +24,7 @@ import numpy as np
 from scipy import signal
 
 from cartoonface.errors import OptionError
-from cartoonface.speech.audio import Audio, digital_silence
+from cartoonface.speech.audio import MIN_RECORDED, Audio, digital_silence
 
 # thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
 C1 = 0.95
@@ -70,9 +70,6 @@ PAD = 0.05
 # (99th percentile of frame RMS) holds speech, not silence, and is refused.
 LOUD_PAUSE = 0.5
 PEAK_PERCENTILE = 99.0
-# Frames with less sound than this share of recorded (non-digital-silence) frames: the floor is
-# taken over all frames (a recording that is nearly all digital silence).
-MIN_RECORDED = 0.05
 POWER_EPSILON = 1e-12  # added to a frame's mean square before taking dB (-120 dB: digital silence)
 # Parts shorter than this are clicks, not speech (both modes).
 MIN_PART = 0.06

@@ -18,12 +18,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cartoonface.speech.features import HOP, frames
+from cartoonface.speech.align import MIN_PAUSE
+from cartoonface.speech.features import HOP, frames, smooth
 
 if TYPE_CHECKING:
     from cartoonface.speech.audio import Audio
 
-MIN_GAP = 0.1              # s: a shorter gap between syllables is no pause (align.MIN_PAUSE frames)
+MIN_GAP = MIN_PAUSE * HOP  # s: a shorter gap between syllables is no pause (the aligner's)
 # Tuned on the tuning half only (bench/align.py, `analyse` sets; docs/BENCHMARKS.md): within 50 ms
 # was the same for a sure-unfit mean of 0.2 / 0.3 / 0.4 / 0.5 and a gate of 0.4 / 0.6.
 UNFIT_CONFIDENCE = 0.6     # mean confidence below which a stretch's durations are checked
@@ -58,9 +59,7 @@ def _low_band(audio: Audio, start: float, end: float) -> np.ndarray:
     clip = np.asarray(audio.samples[max(int(start * audio.rate), 0):max(int(end * audio.rate), 0)], dtype=np.float64)
     if clip.size == 0:
         return np.zeros(0)
-    low = frames(clip, audio.rate).low
-    kernel = np.ones(SMOOTH_FRAMES) / SMOOTH_FRAMES
-    return np.convolve(np.pad(low, SMOOTH_FRAMES // 2, mode="edge"), kernel, mode="valid")[:low.size]
+    return smooth(frames(clip, audio.rate).low, SMOOTH_FRAMES)
 
 
 def _choose(candidates: np.ndarray, low: np.ndarray, targets: np.ndarray, scale: float) -> np.ndarray | None:
