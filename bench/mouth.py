@@ -40,8 +40,8 @@ from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.render.geometry import face_shapes
-from cartoonface.render.elements import NSMAP, SVG, svg_bytes
-from cartoonface.render.png import svg_to_png
+from cartoonface.render.elements import SVG, element, svg_bytes, svg_root
+from cartoonface.render.png import PALETTE_COLOURS, svg_to_png
 from cartoonface.render.svg import face_svg
 
 FACES = SAMPLE_FACES
@@ -73,20 +73,22 @@ def render(face: FaceModel, state: FaceState, mouth: bool = True) -> np.ndarray:
     if not mouth:
         drawn = root.find(f".//{{{SVG}}}g[@class='mouth']")
         drawn.getparent().remove(drawn)
-    png = svg_to_png(svg_bytes(root))
-    with Image.open(io.BytesIO(png)) as image:
-        return np.asarray(image.convert("RGB"))
+    return np.asarray(picture(root))
 
 
 def face_mask(face: FaceModel) -> np.ndarray:
     """(height, width) bool: the pixels inside the face outline of the closed 'm' drawing."""
-    root = etree.Element(f"{{{SVG}}}svg", {"width": f"{face.width:g}", "height": f"{face.height:g}",
-                                            "viewBox": f"0 0 {face.width:g} {face.height:g}"}, nsmap=NSMAP)
-    etree.SubElement(root, f"{{{SVG}}}rect", {"width": "100%", "height": "100%", "fill": "#000000"})
-    etree.SubElement(root, f"{{{SVG}}}path", {"d": face_shapes(pose_face(lift(face), FaceState()))["face"],
-                                              "fill": "#ffffff"})
+    root = svg_root({"width": f"{face.width:g}", "height": f"{face.height:g}",
+                     "viewBox": f"0 0 {face.width:g} {face.height:g}"})
+    element(root, "rect", {"width": "100%", "height": "100%", "fill": "#000000"})
+    element(root, "path", {"d": face_shapes(pose_face(lift(face), FaceState()))["face"], "fill": "#ffffff"})
+    return np.asarray(picture(root).convert("L")) > 127
+
+
+def picture(root: etree._Element) -> Image.Image:
+    """The SVG document `root` rasterised with resvg, as an RGB image."""
     with Image.open(io.BytesIO(svg_to_png(svg_bytes(root)))) as image:
-        return np.asarray(image.convert("L")) > 127
+        return image.convert("RGB")
 
 
 def figure_mask(rest: np.ndarray) -> np.ndarray:
@@ -152,8 +154,7 @@ def _cell(face: FaceModel, state: FaceState, zoom: float) -> Image.Image:
     root.set("viewBox", f"{x0:.2f} {y0:.2f} {w:.2f} {h:.2f}")
     root.set("width", f"{w * zoom:.0f}")
     root.set("height", f"{h * zoom:.0f}")
-    with Image.open(io.BytesIO(svg_to_png(svg_bytes(root)))) as image:
-        return image.convert("RGB")
+    return picture(root)
 
 
 def _grid(cells: list[list[tuple[str, Image.Image]]], title: str) -> Image.Image:
@@ -180,7 +181,7 @@ def pictures(folder: Path) -> None:
         for half in (MOUTH_SYMBOLS[:6], MOUTH_SYMBOLS[6:]):
             rows.append([(f"{s}: {SYLLABLES[s]}", _cell(face, FaceState().with_mouth(s), ZOOM / 1.6)) for s in half])
     _grid(rows, "The 12 basic mouth shapes (thesis 002, 5.2.2), female (rows 1-2) and male (rows 3-4) "
-                "sample faces, with pinyin that use them").quantize(256).save(folder / "mouth-chart.png", optimize=True)
+                "sample faces, with pinyin that use them").quantize(PALETTE_COLOURS).save(folder / "mouth-chart.png", optimize=True)
     blend = []
     for face in faces:
         row = []
@@ -192,7 +193,7 @@ def pictures(folder: Path) -> None:
         middle = len(row) // 2
         blend.extend([row[:middle], row[middle:]])
     _grid(blend, "Blends " + " > ".join(BLEND) + f" in steps of 1/{BLEND_STEPS} (female: rows 1-2, male: rows 3-4)"
-          ).quantize(256).save(folder / "mouth-blend.png", optimize=True)
+          ).quantize(PALETTE_COLOURS).save(folder / "mouth-blend.png", optimize=True)
 
 
 if __name__ == "__main__":
