@@ -124,11 +124,11 @@ def test_several_faces_are_warned_about_and_the_largest_is_used(app, client):
 
 def test_a_busy_server_says_so(app, client, photo, monkeypatch):
     monkeypatch.setattr(photo_views, "DETECT_WAIT", 0.05)
-    assert photo_views.DETECTING.acquire(timeout=5)
+    assert inputs.DETECTING.acquire(timeout=5)
     try:
         answer = upload(client, photo)
     finally:
-        photo_views.DETECTING.release()
+        inputs.DETECTING.release()
     assert answer.status_code == 429
     assert "busy" in answer.get_data(as_text=True)
     assert upload(client, photo).status_code == 303

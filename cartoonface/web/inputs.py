@@ -15,7 +15,8 @@ import json
 import re
 import tempfile
 import threading
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +45,18 @@ CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 DETECT_WAIT = 20.0
 DETECTING = threading.Lock()
 PHOTO_BUSY = "The server is busy reading other photos; please try again in a minute."
+
+
+@contextmanager
+def photo_slot(wait: float) -> Iterator[bool]:
+    """Whether this request may read a photo now: True when the one-photo-at-a-time lock was
+    taken within `wait` seconds (then released when the block ends), False when it was not."""
+    taken = DETECTING.acquire(timeout=wait)
+    try:
+        yield taken
+    finally:
+        if taken:
+            DETECTING.release()
 
 
 @dataclass(frozen=True)
@@ -137,19 +150,18 @@ def check_photo(name: str, data: bytes, too_big: bool,
     if ext is None:
         errors["photo"] = f"{name}: not a photo this app reads (by its content); expected JPEG, PNG or WebP."
         return None, name, ()
-    if not DETECTING.acquire(timeout=DETECT_WAIT):
-        errors["photo"] = PHOTO_BUSY
-        return None, name, ()
-    try:
-        with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
-            path = Path(tmp) / f"photo.{ext}"
-            path.write_bytes(data)
-            made = face_from_photo(load_photo(path), "photo")
-    except InputError as exc:
-        errors["photo"] = str(exc).replace(str(path), name)
-        return None, name, ()
-    finally:
-        DETECTING.release()
+    with photo_slot(DETECT_WAIT) as free:
+        if not free:
+            errors["photo"] = PHOTO_BUSY
+            return None, name, ()
+        try:
+            with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
+                path = Path(tmp) / f"photo.{ext}"
+                path.write_bytes(data)
+                made = face_from_photo(load_photo(path), "photo")
+        except InputError as exc:
+            errors["photo"] = str(exc).replace(str(path), name)
+            return None, name, ()
     face = json.dumps(face_to_dict(made.face), ensure_ascii=False).encode("utf-8")
     return face, name, tuple(f"{name}: {warning}" for warning in made.warnings)
 

@@ -21,7 +21,8 @@ from werkzeug.wrappers import Response as BaseResponse
 from cartoonface.errors import InputError
 from cartoonface.face.model import POINT_NAMES
 from cartoonface.web.draft_store import PHOTO_FILE, Draft, create_draft, load_draft, save_edit, sweep_drafts
-from cartoonface.web.inputs import DETECT_WAIT, DETECTING, MAX_PHOTO_BYTES, PHOTO_BUSY, megabytes, read_upload, shown_name, sniff_image
+from cartoonface.web.inputs import (DETECT_WAIT, MAX_PHOTO_BYTES, PHOTO_BUSY, megabytes, photo_slot, read_upload, shown_name,
+                                    sniff_image)
 from cartoonface.web.point_editor import MAX_POINTS_CHARS, edited_face, parse_points, preview_svg
 from cartoonface.web.point_labels import POINT_LABELS
 from cartoonface.web.security import CSRF_FIELD, csrf_ok, csrf_token
@@ -87,14 +88,13 @@ def upload() -> BaseResponse | tuple[str, int]:
     if ext is None:
         return render_upload(f"{name}: not a photo this app reads (by its content); expected JPEG, PNG or WebP.", 400)
     instance = state().settings.instance
-    if not DETECTING.acquire(timeout=DETECT_WAIT):
-        return render_upload(PHOTO_BUSY, 429)
-    try:
-        draft = create_draft(instance, data, ext, name, new_id())
-    except InputError as exc:
-        return render_upload(str(exc), 400)
-    finally:
-        DETECTING.release()
+    with photo_slot(DETECT_WAIT) as free:
+        if not free:
+            return render_upload(PHOTO_BUSY, 429)
+        try:
+            draft = create_draft(instance, data, ext, name, new_id())
+        except InputError as exc:
+            return render_upload(str(exc), 400)
     sweep_drafts(instance)
     return redirect(url_for(".editor", draft_id=draft.id), code=303)
 
