@@ -8,8 +8,12 @@ import pytest
 from cartoonface.face.lift import (
     ADDITIONAL_NAMES,
     DEPTH,
+    FRONT_NAMES,
     HAIR_DEPTH,
+    HAIR_FADE,
     LIFTED_INDEX,
+    ON_SURFACE,
+    SILHOUETTES,
     LIFTED_NAMES,
     lift,
     lifted_image_points,
@@ -50,11 +54,23 @@ def test_local_frame_round_trips_to_the_model_points(face):
 
 
 def test_depths_follow_table_2_1(face):
+    """Every depth is Table 2.1's, except the outer eye corners and eyebrow ends, which
+    are set back onto the rounder head (never forward, and still in front of the temples)."""
     lifted = lift(face)
     d = face.fapu.d
     for name in LIFTED_NAMES:
-        assert lifted.local[LIFTED_INDEX[name], 2] == pytest.approx(DEPTH[name] * d)
-    assert np.allclose(lifted.hair[:, 2], HAIR_DEPTH * d)
+        z = lifted.local[LIFTED_INDEX[name], 2]
+        if name in ON_SURFACE:
+            assert DEPTH[ON_SURFACE[name]] * d < z <= DEPTH[name] * d
+        else:
+            assert z == pytest.approx(DEPTH[name] * d)
+    # the hair: beside the temples at and above the eyes, in Table 2.1's hair plane lower down
+    eyes = lifted.local[LIFTED_INDEX["3.5"], 1]
+    z, y = lifted.hair[:, 2], lifted.hair[:, 1]
+    assert np.allclose(z[y >= eyes], DEPTH["11.2"] * d)
+    assert np.allclose(z[y <= eyes - HAIR_FADE * d], HAIR_DEPTH * d)
+    assert np.all((HAIR_DEPTH * d - 1e-9 <= z) & (z <= DEPTH["11.2"] * d + 1e-9))
+    assert np.any(y >= eyes)
     # the nose tip is the frontmost point, the ear tops the furthest back
     z = lifted.local[:, 2]
     assert LIFTED_NAMES[int(np.argmax(z))] == "9.15"
@@ -99,4 +115,41 @@ def test_lift_scales_with_d(face):
     a, b = lift(face), lift(scale_face(face, face.fapu.d * k))
     assert np.allclose(b.local, a.local * k)
     assert np.allclose(b.hair, a.hair * k)
+    assert np.allclose(b.front, a.front * k)
     assert np.allclose(b.origin, a.origin * k)
+
+
+def test_outer_features_lie_on_the_temples_cross_section(face):
+    """An outer eye corner or eyebrow end is no further forward than the front half of its
+    temple's cross-section at its distance from the face's middle: turned away, it stays
+    inside the far silhouette."""
+    lifted = lift(face)
+    names = tuple(SILHOUETTES)
+    middle = (lifted.local[LIFTED_INDEX["11.2"], 0] + lifted.local[LIFTED_INDEX["11.3"], 0]) / 2
+    for name, temple in ON_SURFACE.items():
+        x, _, z = lifted.local[LIFTED_INDEX[name]]
+        k = names.index(temple)
+        reach, front = lifted.silhouette.reach[k], lifted.silhouette.front[k]
+        base = lifted.local[LIFTED_INDEX[temple], 2]
+        out = abs(x - middle) / reach
+        assert out < 1
+        assert (z - base) / front <= np.sqrt(1 - out**2) + 1e-9
+
+
+def test_front_layer_is_the_hair_top_and_a_hairline_over_the_forehead(face):
+    """The crown runs left to right along the top of the hair outline, above the temples;
+    the hairline lies just below the forehead contour, at its depths."""
+    lifted = lift(face)
+    crown = lifted.front[[FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("crown")]]
+    hairline = lifted.front[[FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("hairline")]]
+    temples = max(lifted.local[LIFTED_INDEX["11.2"], 1], lifted.local[LIFTED_INDEX["11.3"], 1])
+    assert np.all(np.diff(crown[:, 0]) > 0) and np.all(crown[:, 1] > temples)
+    assert crown[:, 1].max() == pytest.approx(lifted.hair[:, 1].max())
+    outline = lifted.hair[:, :2]
+    for point in crown[:, :2]:  # on the outline: within a hair's breadth of one of its edges
+        a, b = outline, np.roll(outline, -1, axis=0)
+        t = np.clip(np.einsum("ij,ij->i", point - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0, 1)
+        assert np.min(np.linalg.norm(a + t[:, None] * (b - a) - point, axis=1)) < 1e-6 * face.fapu.d
+    top = lifted.local[LIFTED_INDEX["11.1"]]
+    assert hairline[1, 0] == pytest.approx(top[0]) and hairline[1, 2] == pytest.approx(top[2])
+    assert 0 < top[1] - hairline[1, 1] < top[1] - lifted.local[LIFTED_INDEX["4.1"], 1]

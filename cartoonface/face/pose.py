@@ -1,9 +1,11 @@
 """Turned faces (thesis 002, 2.4.3, Alg. 2.3): the posed 2D points of one FaceState.
 
 pose_face applies the expressions and the mouth to the model points, moves
-the additional points with them (Alg. 2.1), shifts the hair depth (Alg. 2.3
-steps 1-2), rotates (2.4.3.1), projects to the image, replaces the hidden
-contour points (steps 5-6), picks the nose side (step 8) and turns the
+the additional points with them (Alg. 2.1), moves every outline point (face
+contour and hair) to where the view grazes its cross-section (face/lift.py's
+Silhouette: our continuous form of the hair depth shift and the contour
+replacement of Alg. 2.3 steps 1-2 and 5-6), rotates (2.4.3.1),
+projects to the image, picks the nose side (step 8) and turns the
 eyeballs to the fixed focus (2.4.3.2), moved by the state's gaze. Everything per call is a handful of
 numpy operations on arrays precomputed once per lifted face (the Rig).
 """
@@ -21,37 +23,11 @@ from cartoonface.face.expression import EXPRESSIONS, LOWER_LIDS, UPPER_LIDS, exp
 from cartoonface.face.lift import LIFTED_INDEX, LIFTED_NAMES, LiftedFace
 from cartoonface.face.model import POINT_NAMES
 from cartoonface.face.mouth import MOUTH_INDEX, MOUTH_SYMBOLS, shape_displacements
-from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
+from cartoonface.face.state import FaceState, Pose
 
 # Thesis 002, 2.4.3.2: eyeball radius 0.3 d; focus at (EyeMid.x, EyeMid.y, 15 d).
 EYEBALL_RADIUS = 0.3
 FOCUS_DEPTH = 15.0
-# Thesis 002, Alg. 2.3 steps 1-2: at turn +-15 degrees the outermost hair point
-# on the far side, at or above EyeMid, moves HAIR_SHIFT d towards the viewer;
-# the shift is proportional to |turn| and to the point's x over the largest
-# hair x on that side. 1.43 d brings the hair plane (-0.58 d) to the depth of
-# N / Q (0.85 d), the points that form the far temple once the contour is
-# replaced (steps 5-6), so the far hair edge stays outside the face instead of
-# sliding behind it. Below EyeMid the shift fades out over HAIR_FADE d (our
-# addition: the text stops it at EyeMid, which would kink long hair there).
-HAIR_SHIFT = 1.43
-HAIR_FADE = 1.0
-# Thesis 002, Alg. 2.3 steps 5-6: beyond +-10 degrees the far contour points
-# are replaced. To avoid a jump while a head turns through 10 degrees, the
-# replacement blends in linearly from SWAP_START to SWAP_END degrees (half
-# way at 10).
-SWAP_START = 8.0
-SWAP_END = 12.0
-SWAP_POSITIVE = (("11.3", "Q"), ("10.9", "M"), ("2.13", "K"))
-SWAP_NEGATIVE = (("11.2", "N"), ("10.10", "L"), ("2.14", "J"))
-# Our addition, in the spirit of Alg. 2.3 steps 5-6: Table 2.1 puts the jaw
-# corners 2.13 / 2.14 (0.36 d) far behind the chin (1.33 d), so a head tilted
-# down drops the chin about 0.25 d below them and the chin turns into a point.
-# Seen from above, the jaw's silhouette is its forward part: for tilt > 0 the
-# jaw corners blend towards K / J (1.18 d, Alg. 2.1) in proportion to the tilt,
-# all the way at +15 degrees.
-TILT_JAW = (("2.13", "K"), ("2.14", "J"))
-
 # Eyes in PosedFace.pupils order: image-left eye (3.6, radius r1), image-right (3.5, r2).
 EYEBALLS = ("3.6", "3.5")
 # Upper and lower lid of each eye, same order.
@@ -68,9 +44,10 @@ IRIS_KEEP = 0.35
 class PosedFace:
     """The 2D drawing points of one face state.
 
-    xy: (N, 2) image pixels in LIFTED_NAMES order, contour replacement of
-        Alg. 2.3 steps 5-6 applied, rows 3.6 / 3.5 the gazing pupils.
-    hair: (H, 2) image pixels.
+    xy: (N, 2) image pixels in LIFTED_NAMES order, the outline points (temples,
+        cheeks, jaw corners) on their silhouettes, rows 3.6 / 3.5 the gazing pupils.
+    hair: (H, 2) image pixels: the hair's back layer.
+    front: (F, 2) image pixels: the hair's front layer (face/lift.py FRONT_NAMES).
     pupils: (2, 2) iris centres of the image-left eye (3.6) and image-right
         eye (3.5); the drawing clips each iris circle by its eye outline
         (3.12, 3.2, 3.8, 3.4 / 3.7, 3.1, 3.11, 3.3).
@@ -83,6 +60,7 @@ class PosedFace:
 
     xy: np.ndarray
     hair: np.ndarray
+    front: np.ndarray
     pupils: np.ndarray
     iris_r: np.ndarray
     nose_side: int
@@ -123,8 +101,8 @@ class Rig:
 
     neutral: np.ndarray  # (N*2,) lifted image points minus origin, flattened
     basis: np.ndarray  # (12 + 3, N*2) mouth shapes then expressions, flattened displacements
-    template: np.ndarray  # (N + H, 3) column 2 filled: depths, hair depths
-    hair_shift: tuple[np.ndarray, np.ndarray]  # (H,) z shift per degree for turn > 0, turn < 0
+    template: np.ndarray  # (N + H + F, 3) column 2 filled: depths, hair and front layer points
+    outline: tuple[np.ndarray, ...]  # silhouette rows of the template, normals (k, 2), reach, front, back (k,)
     centres: np.ndarray  # (2, 3) eyeball centres
     focus: np.ndarray  # (3,)
     radius: float  # eyeball radius, pixels
@@ -133,26 +111,10 @@ class Rig:
     lids: tuple[np.ndarray, np.ndarray]  # flat indices of upper / lower lid y
     pupil_rows: np.ndarray  # rows of 3.6, 3.5 in xy
     lid_rows: tuple[np.ndarray, np.ndarray]  # rows of the upper / lower lid of each eye in xy
-    swap: tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]  # (replaced, by) rows
-    tilt_jaw: tuple[np.ndarray, np.ndarray]  # (replaced, by) rows for tilt > 0
 
 
 def _rows(names: tuple[str, ...]) -> np.ndarray:
     return np.array([LIFTED_INDEX[n] for n in names])
-
-
-def _hair_shift(lifted: LiftedFace) -> tuple[np.ndarray, np.ndarray]:
-    """(H,) z shift per degree of turn for turn > 0 (image-right half) and turn < 0."""
-    d = lifted.face.fapu.d
-    x, y = lifted.hair[:, 0], lifted.hair[:, 1]
-    eye_y = (lifted.local[LIFTED_INDEX["3.5"], 1] + lifted.local[LIFTED_INDEX["3.6"], 1]) / 2  # EyeMid, local
-    fade = np.clip((y - eye_y) / (HAIR_FADE * d) + 1.0, 0.0, 1.0)
-    per_degree = HAIR_SHIFT * d / MAX_ANGLE
-    out = []
-    for side in (1.0, -1.0):
-        reach = max(float(np.max(side * x)), 1e-9)
-        out.append(per_degree * np.clip(side * x / reach, 0.0, 1.0) * fade)
-    return out[0], out[1]
 
 
 @functools.lru_cache(maxsize=16)
@@ -164,9 +126,12 @@ def rig(lifted: LiftedFace) -> Rig:
     image_rel = lifted.local[:, :2] * flip[:2]  # local -> image orientation, origin-relative
     model_moves = np.concatenate([shape_displacements(face), expression_displacements(face)])
     basis = (model_moves.reshape(len(model_moves), 2 * p) @ lifted.depends.T)
-    template = np.zeros((n + len(lifted.hair), 3))
+    h = len(lifted.hair)
+    template = np.zeros((n + h + len(lifted.front), 3))
     template[:n, 2] = lifted.local[:, 2]
-    template[n:] = lifted.hair * flip
+    template[n:n + h] = lifted.hair * flip
+    template[n + h:] = lifted.front * flip
+    outline = lifted.silhouette
     d = face.fapu.d
     eyes = _rows(EYEBALLS)
     pupils = lifted.local[eyes]
@@ -182,7 +147,6 @@ def rig(lifted: LiftedFace) -> Rig:
         neutral=image_rel.ravel().copy(),
         basis=basis,
         template=template,
-        hair_shift=_hair_shift(lifted),
         centres=centres_local * flip,
         focus=focus_local * flip,
         radius=EYEBALL_RADIUS * d,
@@ -191,11 +155,7 @@ def rig(lifted: LiftedFace) -> Rig:
         lids=(upper, lower),
         pupil_rows=eyes,
         lid_rows=(_rows(tuple(u for u, _ in EYE_LIDS)), _rows(tuple(lo for _, lo in EYE_LIDS))),
-        swap=(
-            (_rows(tuple(a for a, _ in SWAP_POSITIVE)), _rows(tuple(b for _, b in SWAP_POSITIVE))),
-            (_rows(tuple(a for a, _ in SWAP_NEGATIVE)), _rows(tuple(b for _, b in SWAP_NEGATIVE))),
-        ),
-        tilt_jaw=(_rows(tuple(a for a, _ in TILT_JAW)), _rows(tuple(b for _, b in TILT_JAW))),
+        outline=(outline.rows, outline.normals * flip[:2], outline.reach, outline.front, outline.back),
     )
 
 
@@ -208,6 +168,26 @@ def _keep_in_lids(pupils: np.ndarray, upper: np.ndarray, lower: np.ndarray, iris
     t = ((pupils - upper) * axis).sum(axis=1) / length2
     margin = np.minimum(0.5, IRIS_KEEP * iris_r / np.sqrt(length2))
     return pupils + (np.clip(t, margin, 1.0 - margin) - t)[:, None] * axis
+
+
+def _graze(q: np.ndarray, outline: tuple[np.ndarray, ...], view: np.ndarray) -> None:
+    """Move the outline points of `q` (M, 3, image orientation, before the rotation) in place
+    to the points of their cross-sections (face/lift.py's Silhouette) that the view grazes.
+
+    `outline`: the rig's rows (k,), normals (k, 2) in image orientation, reach, front and
+    back depths (k,) in pixels; `view` (3,): the direction to the viewer in the same frame
+    (the third row of the rotation). A cross-section is a half ellipse from the point
+    inwards, semi-axes reach (along -normal) and front (forwards), and one backwards
+    (depth `back`); the view grazes it where the ellipse's normal is perpendicular to the
+    view: at angle t from the front with tan t = reach * view_z / (depth * -(normal . view)).
+    Seen from the front (normal . view = 0) every point stays where it is."""
+    rows, normals, reach, front, back = outline
+    along = normals @ view[:2]  # < 0: the point's side turns away (the far side)
+    depth = np.where(along < 0, front, back)
+    sine, cosine = reach * view[2], -depth * along
+    length = np.sqrt(sine * sine + cosine * cosine)
+    q[rows, :2] += ((reach * (sine / length - 1.0))[:, None]) * normals
+    q[rows, 2] += depth * cosine / length
 
 
 _N_MOUTH = len(MOUTH_SYMBOLS)
@@ -235,15 +215,12 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     pose = state.pose
     q = r.template.copy()
     q[:n, :2] = flat.reshape(n, 2)
-    turn = pose.turn
-    if turn > 0:
-        q[n:, 2] += turn * r.hair_shift[0]
-    elif turn < 0:
-        q[n:, 2] -= turn * r.hair_shift[1]
+    h = len(lifted.hair)
     # Rotation of the local frame seen in image orientation (y flipped both ways).
     m = rotation_matrix(pose)
     m[1, :] = -m[1, :]
     m[:, 1] = -m[:, 1]
+    _graze(q, r.outline, m[2])
     out = q @ m[:2].T + r.origin
 
     centres = r.centres @ m.T
@@ -258,17 +235,7 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     pupils = _keep_in_lids(pupils, xy[r.lid_rows[0]], xy[r.lid_rows[1]], r.iris_r)
     xy[r.pupil_rows] = pupils
 
-    if pose.tilt > 0:
-        replaced, by = r.tilt_jaw
-        xy[replaced] += (pose.tilt / MAX_ANGLE) * (xy[by] - xy[replaced])
-    weight = (abs(turn) - SWAP_START) / (SWAP_END - SWAP_START)
-    if weight > 0:
-        replaced, by = r.swap[0] if turn > 0 else r.swap[1]
-        if weight >= 1:
-            xy[replaced] = xy[by]
-        else:
-            xy[replaced] += weight * (xy[by] - xy[replaced])
-    return PosedFace(xy=xy, hair=out[n:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if turn > 0 else -1,
+    return PosedFace(xy=xy, hair=out[n:n + h], front=out[n + h:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if pose.turn > 0 else -1,
                      mouth=coef[:_N_MOUTH])
 
 
@@ -294,4 +261,5 @@ def unroll(posed: PosedFace, roll: float, origin: np.ndarray) -> PosedFace:
     def turn(points: np.ndarray) -> np.ndarray:
         return (points - origin) @ back + origin
 
-    return dataclasses.replace(posed, xy=turn(posed.xy), hair=turn(posed.hair), pupils=turn(posed.pupils))
+    return dataclasses.replace(posed, xy=turn(posed.xy), hair=turn(posed.hair), front=turn(posed.front),
+                               pupils=turn(posed.pupils))

@@ -65,7 +65,8 @@ from cartoonface.render.svg import face_defs, face_group
 # face outline; the mouth is then drawn before the nose, brows and eyes rather than after them,
 # which changes nothing on screen
 # (they never overlap; where a nodding nose tip comes near the upper lip, the nose in front is right).
-TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "face", "face": "face", "cheeks": "face",
+TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "face", "face": "face", "fringe": "fringe",
+            "cheeks": "face",
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape

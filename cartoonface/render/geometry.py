@@ -41,6 +41,7 @@ from typing import Protocol
 import numpy as np
 import scipy.sparse
 
+from cartoonface.face.lift import FRONT_NAMES, LIFTED_NAMES
 from cartoonface.render.numbers import number_texts
 
 # Eyebrows and hair: rounds of corner cutting. Three rounds turn each polygon edge into
@@ -54,6 +55,8 @@ class Posed(Protocol):
     def xy(self) -> np.ndarray: ...
     @property
     def hair(self) -> np.ndarray: ...
+    @property
+    def front(self) -> np.ndarray: ...
     @property
     def nose_side(self) -> int: ...
 
@@ -136,11 +139,17 @@ def chaikin(points: np.ndarray, rounds: int = CHAIKIN_ROUNDS, closed: bool = Fal
 # face, the top is round, and the loop closes from A to 10.8 behind the face.
 # Kinds: "smooth"/"corner" closed Bezier contours, "open" separate Bezier arcs (one sub-path
 # each), "cut" a closed shape of open corner-cut arcs (eyebrows).
+FRONT_CROWN = tuple(name for name in FRONT_NAMES if name.startswith("crown"))
+FRONT_HAIRLINE = tuple(name for name in FRONT_NAMES if name.startswith("hairline"))
 FACE_CONTOUR = (("11.2", "11.2a", "11.1", "11.3a", "11.3"), ("11.3", "10.9", "2.13"),
          ("2.13", "2.1", "2.14"), ("2.14", "10.10", "11.2"))        # step 3
 _NOSE_TAIL = (("9.14", "9.2", "9.4"), ("9.13", "9.1", "9.5"), ("D", "9.15", "E"))  # step 6
 PARTS: tuple[tuple[str, str, tuple[tuple[str, ...], ...]], ...] = (
     ("face", "smooth", FACE_CONTOUR),
+    # the hair's front layer (face/lift.py): the crown, down to the right temple, the
+    # hairline over the forehead, up from the left temple; corners at the temples
+    ("fringe", "corner", (FRONT_CROWN, (FRONT_CROWN[-1], "11.3"), ("11.3", *FRONT_HAIRLINE, "11.2"),
+                          ("11.2", FRONT_CROWN[0]))),
     ("ear_l", "smooth", (("10.8", "ear_l", "10.2", "A"), ("A", "10.8"))),  # step 4, closed
     ("ear_r", "smooth", (("10.7", "ear_r", "10.1", "B"), ("B", "10.7"))),  # step 5
     ("nose", "open", (("9.6", "C", "9.14"), *_NOSE_TAIL)),               # step 6
@@ -241,19 +250,18 @@ def face_shapes(posed: Posed) -> dict[str, str]:
     """SVG path data of every drawn part of a posed face (thesis 002, Alg. 2.2 steps 2-13).
 
     Takes a `cartoonface.face.pose.PosedFace` (`xy` (N, 2) image pixels in LIFTED_NAMES
-    order with the contour replacement of Alg. 2.3 already applied, `hair` (H, 2),
-    `nose_side`). Returns {part: path d} for "hair",
-    "face", "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
+    order with the outline points on their silhouettes, `hair` (H, 2), `front` (F, 2) in
+    FRONT_NAMES order, `nose_side`). Returns {part: path d} for "hair" (the back layer),
+    "face", "fringe" (the hair's front layer), "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
     "lid_r" (the mouth: render/mouth.py); coordinates in pixels rounded to 0.1.
     """
-    from cartoonface.face.lift import LIFTED_NAMES
-
-    plan = _plan(tuple(LIFTED_NAMES), len(posed.hair), int(posed.nose_side))
+    plan = _plan(LIFTED_NAMES + FRONT_NAMES, len(posed.hair), int(posed.nose_side))
     hair = np.asarray(posed.hair, dtype=float).reshape(-1, 2)
     written = plan.hair.shape[0]
     coordinates = np.empty((written + len(plan.matrix), 2))
     coordinates[:written] = plan.hair @ hair
+    points = np.concatenate([posed.xy, posed.front])
     for axis in (0, 1):  # two matrix-vector products: 4x faster than one product with (N, 2)
-        coordinates[written:, axis] = plan.matrix @ posed.xy[:, axis]
+        coordinates[written:, axis] = plan.matrix @ points[:, axis]
     text = plan.template % number_texts(coordinates)
     return dict(zip(plan.names, text.replace(" -", "-").split("|")))

@@ -1,8 +1,10 @@
 """A posed cartoon face as SVG, built with lxml (thesis 002, 6.3.1).
 
 Layers, back to front (thesis 002, 6.3.1, Figs. 6.7/6.8): background, hair, clothes,
-face. The hair is one corner-cut polygon behind the body; the face layer holds, in
-order, the ears, the face, the cheeks, the nose, the eyebrows, the eyes and the mouth.
+face. The hair layer is the hair's back layer, one corner-cut polygon behind the body;
+the face layer holds, in order, the ears, the face, the hair's front layer (the crown
+and a fringe over the forehead, face/lift.py), the cheeks, the nose, the eyebrows, the
+eyes and the mouth.
 
 Each eye is its white, then the iris (radial gradient), pupil and highlight clipped by
 the eye outline (thesis 002, 6.3.1, Fig. 6.5: "during eye blinks, the eyeball will be
@@ -97,7 +99,7 @@ def _gradient(kind: str, gid: str, stops: tuple[tuple[float, str, float], ...], 
 
 def face_defs(face: FaceModel) -> tuple[etree._Element, ...]:
     """The gradients every drawing of `face` uses, once per document: skin "cf-skin", hair
-    "cf-hair", iris "cf-iris", lips "cf-lip", blush "cf-cheek", nose line "cf-nose" (each in the element's own
+    "cf-hair", the hair's front layer "cf-fringe", iris "cf-iris", lips "cf-lip", blush "cf-cheek", nose line "cf-nose" (each in the element's own
     bounding box, so they fit any pose). Returns the elements, to go into `<defs>`."""
     p = face.palette
     nose = _mix(p.skin_shadow, p.outline, 0.4)
@@ -109,6 +111,11 @@ def face_defs(face: FaceModel) -> tuple[etree._Element, ...]:
         _gradient("radial", "cf-hair", ((0, _mix(p.hair, "#ffffff", 0.22), 1), (0.4, p.hair, 1),
                                         (1, _mix(p.hair, "#000000", 0.3), 1)),
                   cx=".5", cy=".12", r=".9", fy=".04"),
+        # the hair's front layer: the same sheen on the crown, no darker than the hair at the
+        # hairline, so it joins the back layer around it without a seam
+        _gradient("radial", "cf-fringe", ((0, _mix(p.hair, "#ffffff", 0.22), 1), (0.55, p.hair, 1),
+                                          (1, _mix(p.hair, "#000000", 0.12), 1)),
+                  cx=".5", cy=".1", r=".95", fy=".02"),
         _gradient("radial", "cf-iris", ((0, _mix(p.iris, "#ffffff", 0.3), 1), (0.6, p.iris, 1),
                                         (1, _mix(p.iris, "#000000", 0.45), 1)), fy=".62"),
         _gradient("linear", "cf-lip", ((0, _mix(p.lip, "#000000", 0.08), 1), (0.45, p.lip, 1),
@@ -129,6 +136,8 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
     return {
         "hair": {"fill": "url(#cf-hair)", "stroke": _mix(p.hair, "#000000", HAIR_LINE_SHADE),
                  "stroke-width": number_text(HAIR_LINE * d), "stroke-linejoin": "round"},
+        # unstroked: its crown lies on the back layer's outline, its sides inside the hair
+        "fringe": {"fill": "url(#cf-fringe)"},
         "skin": skin,
         "nose": {**line, "stroke": "url(#cf-nose)", "stroke-width": number_text(FEATURE * d)},
         "brow": {"fill": p.brow, "stroke": p.brow, "stroke-width": number_text(BROW_LINE * d),
@@ -161,8 +170,9 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     leaned by `neck_lean` degrees (render/scenery.py's lean; 0 for an upright one).
 
     Children, in drawing order: a `<defs>` with this state's clip paths (ids end in
-    "-{uid}"), then the parts "hair", "ear-l", "ear-r", "chin-shadow" (the jaw's shadow on
-    the neck, under the posed chin: render/scenery.py's chin_shadow), "face", "cheeks", "nose",
+    "-{uid}"), then the parts "hair" (the back layer), "ear-l", "ear-r", "chin-shadow" (the
+    jaw's shadow on the neck, under the posed chin: render/scenery.py's chin_shadow), "face",
+    "fringe" (the hair's front layer, over the forehead), "cheeks", "nose",
     "brow-l", "brow-r", "eye-l", "eye-r", "mouth". Fills use face_defs' gradients.
     """
     style = _styles(face)
@@ -178,6 +188,7 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     shadow.attrib.update({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
     group.append(shadow)
     element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
+    element(group, "path", {"class": "fringe", "d": shapes["fringe"], **style["fringe"]})
     _cheeks(group, points, face.fapu.d, style)
     element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
     for side in "lr":
