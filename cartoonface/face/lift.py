@@ -93,13 +93,17 @@ DEPTH: dict[str, float] = {
 
 # Silhouettes (our addition, see the module text). Contour point -> the Table 2.1 point
 # whose depth is the face's front at its height (the front half of its cross-section
-# reaches that depth), and whether the back half is as deep as the front (temples and
-# cheeks: the round side of the skull) or flat (the jaw corners: the jaw's angle is the
-# widest point of the lower face, the neck behind it).
-SILHOUETTES: dict[str, tuple[str, bool]] = {
-    "11.2": ("11.1", True), "11.3": ("11.1", True),
-    "10.10": ("9.14", True), "10.9": ("9.13", True),
-    "2.14": ("8.1", False), "2.13": ("8.1", False),
+# reaches that depth: the forehead, the nose's sides, the lips), and how deep the back
+# half is, in d: None for as deep as the front (temples and cheeks: the round side of the
+# skull), 0 for flat (the jaw corners: the jaw's angle is the widest point of the lower
+# face, the neck behind it), CHIN_UNDER for the chin, whose front is itself: seen from
+# below, the underside of the chin (about 0.6 d deep, our estimate) forms its outline.
+CHIN_UNDER = 0.6
+SILHOUETTES: dict[str, tuple[str, float | None]] = {
+    "11.2": ("11.1", None), "11.3": ("11.1", None),
+    "10.10": ("9.14", None), "10.9": ("9.13", None),
+    "2.14": ("8.1", 0.0), "2.13": ("8.1", 0.0),
+    "2.1": ("2.1", CHIN_UNDER),
 }
 # A rounder head (our addition): Table 2.1 puts the outer eye corners and eyebrow ends
 # (1.19 d, 1.17 d) nearly as far forward as the pupils although they lie close to the
@@ -311,7 +315,8 @@ def _front_and_silhouette(local: np.ndarray, hair: np.ndarray, fade: np.ndarray,
     normals = np.array([ring_normals[n] for n in names])
     reach = np.array([(at[n][0] - middle_x) * normal[0] for n, normal in zip(names, normals)])
     front_depth = np.array([at[SILHOUETTES[n][0]][2] - at[n][2] for n in names])
-    back_depth = np.array([depth if SILHOUETTES[n][1] else 0.0 for n, depth in zip(names, front_depth)])
+    back_depth = np.array([depth if SILHOUETTES[n][1] is None else SILHOUETTES[n][1] * d
+                           for n, depth in zip(names, front_depth)])
 
     centre = np.array([middle_x, (at["3.5"][1] + at["3.6"][1]) / 2])  # EyeMid, local
     outline = hair[:, :2]

@@ -1,0 +1,174 @@
+"""Turns that look like turns (docs/pose.md): properties of the posed face over a grid of
+head poses within +-15 degrees, corners and combinations included, on both sample faces."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull
+
+from cartoonface.face.lift import FRONT_NAMES, lift
+from cartoonface.face.model import load_face
+from cartoonface.face.pose import PosedFace, pose_face
+from cartoonface.face.state import FaceState, Pose
+from cartoonface.render.geometry import FACE_CONTOUR, contour
+from cartoonface.render.svg import OUTLINE
+
+ANGLES = (-15.0, -7.5, 0.0, 10.0, 15.0)
+POSES = [Pose(*angles) for angles in itertools.product(ANGLES, repeat=3)]
+MOUTHS = ("m", "a", "o")
+SAMPLES_PER_PIECE = 12
+
+
+@pytest.fixture(params=("female", "male"), scope="module")
+def posed_grid(request):
+    """(face, [(pose, mouth, PosedFace)]) over POSES x MOUTHS."""
+    from tests.conftest import ROOT
+
+    face = load_face(ROOT / "samples" / "faces" / f"{request.param}.json")
+    lifted = lift(face)
+    return face, [(pose, mouth, pose_face(lifted, FaceState(pose=pose).with_mouth(mouth)))
+                  for pose in POSES for mouth in MOUTHS]
+
+
+def _axes(posed: PosedFace) -> tuple[np.ndarray, np.ndarray, float]:
+    """The face's own up axis (from the mouth corners to the eyebrows), a unit vector to its
+    image right, and the mouth-to-brow distance in pixels."""
+    brow = np.mean([posed.p(n) for n in ("4.1", "4.2", "4.3", "4.4", "4.5", "4.6")], axis=0)
+    mouth = (posed.p("8.3") + posed.p("8.4")) / 2
+    span = float(np.linalg.norm(brow - mouth))
+    up = (brow - mouth) / span
+    return up, np.array([-up[1], up[0]]), span
+
+
+def _height(posed: PosedFace, point: np.ndarray) -> float:
+    """Height of `point` along the face's up axis: 0 at the mouth corners, 1 at the eyebrows."""
+    up, _, span = _axes(posed)
+    return float((point - (posed.p("8.3") + posed.p("8.4")) / 2) @ up / span)
+
+
+def _bezier_samples(pieces: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """(k, 2) points along cubic Bezier pieces (n, 3, 2) that start at `start` (2,)."""
+    t = np.linspace(0, 1, SAMPLES_PER_PIECE, endpoint=False)[:, None]
+    out, here = [], start
+    for c1, c2, end in pieces:
+        out.append((1 - t) ** 3 * here + 3 * (1 - t) ** 2 * t * c1 + 3 * (1 - t) * t**2 * c2 + t**3 * end)
+        here = end
+    out.append(here[None])
+    return np.concatenate(out)
+
+
+def _face_outline(posed: PosedFace) -> list[np.ndarray]:
+    """The drawn face contour (render/geometry.py's FACE_CONTOUR, smooth joins) sampled, one
+    (k, 2) array per arc."""
+    arcs = [np.array([posed.p(n) for n in names]) for names in FACE_CONTOUR]
+    pieces = contour(arcs, smooth=True)
+    out, first = [], 0
+    for points in arcs:
+        count = len(points) - 1
+        out.append(_bezier_samples(pieces[first:first + count], points[0]))
+        first += count
+    return out
+
+
+def _inside(point: np.ndarray, polygon: np.ndarray) -> bool:
+    x, y = point
+    inside = False
+    for (x1, y1), (x2, y2) in zip(polygon, np.roll(polygon, -1, axis=0)):
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            inside = not inside
+    return inside
+
+
+def test_jaw_is_a_smooth_convex_curve(posed_grid):
+    """From the right temple down round the chin to the left temple the drawn contour lies
+    on its convex hull, within the width of the outline drawn over it (no dent a viewer can
+    see, no cheek bulging out and back), and never turns sharply (no corner at the chin)."""
+    face, grid = posed_grid
+    for pose, mouth, posed in grid:
+        arcs = _face_outline(posed)[1:]
+        lower = np.concatenate([arc[:-1] for arc in arcs] + [arcs[-1][-1:]])
+        hull = ConvexHull(lower)
+        dent = -np.max(lower @ hull.equations[:, :2].T + hull.equations[:, 2], axis=1)
+        assert dent.max() < OUTLINE * face.fapu.d, (pose, mouth, dent.max())
+        steps = np.diff(lower, axis=0)
+        turning = np.degrees(np.arctan2(steps[:-1, 0] * steps[1:, 1] - steps[:-1, 1] * steps[1:, 0],
+                                        np.einsum("ij,ij->i", steps[:-1], steps[1:])))
+        assert np.abs(turning).max() < 30, (pose, mouth, turning)
+
+
+def test_ears_stay_between_brow_and_mouth(posed_grid):
+    """Each ear's middle stays between the mouth corners' and the eyebrows' heights,
+    measured along the face's own up axis, at every pose."""
+    _, grid = posed_grid
+    for pose, _mouth, posed in grid:
+        for loop in (("10.2", "10.8", "A"), ("10.1", "10.7", "B")):
+            middle = np.mean([posed.p(n) for n in loop], axis=0)
+            assert 0.1 < _height(posed, middle) < 1.0, (pose, loop)
+
+
+def test_far_ear_goes_behind_the_cheek(posed_grid):
+    """Turned 15 degrees, the far ear's top and lobe lie inside the face's outline: the
+    cheek hides it, whatever the tilt and roll."""
+    _, grid = posed_grid
+    for pose, _mouth, posed in grid:
+        if abs(pose.turn) < 15:
+            continue
+        outline = np.concatenate([arc[:-1] for arc in _face_outline(posed)])
+        for name in ("10.1", "10.7") if pose.turn > 0 else ("10.2", "10.8"):
+            assert _inside(posed.p(name), outline), (pose, name)
+
+
+def test_far_half_of_the_face_is_narrower(posed_grid):
+    """Turned 10 degrees or more, the nose tip is nearer the far cheek than the near one
+    (measured across the face), and the far cheek stays beyond the nose."""
+    _, grid = posed_grid
+    for pose, _mouth, posed in grid:
+        if abs(pose.turn) < 10:
+            continue
+        _, right, _ = _axes(posed)
+        far, near = ("10.9", "10.10") if pose.turn > 0 else ("10.10", "10.9")
+        side = np.sign(pose.turn)
+        nose = posed.p("9.15") @ right
+        assert 0 < side * (posed.p(far) @ right - nose) < side * (nose - posed.p(near) @ right), pose
+
+
+def test_nose_stays_between_the_eyes_and_above_the_mouth(posed_grid):
+    """The nose tip lies across the face between the pupils, below the eyes and above the
+    mouth corners, and inside the face outline, at every pose."""
+    _, grid = posed_grid
+    for pose, _mouth, posed in grid:
+        _, right, _ = _axes(posed)
+        tip = posed.p("9.15")
+        left_eye, right_eye = sorted(posed.pupils @ right)
+        assert left_eye < tip @ right < right_eye, pose
+        eyes = _height(posed, posed.pupils.mean(axis=0))
+        assert 0 < _height(posed, tip) < eyes, pose
+        assert _inside(tip, np.concatenate([arc[:-1] for arc in _face_outline(posed)])), pose
+
+
+def test_hair_covers_the_top_of_the_head(posed_grid):
+    """The hair's front layer covers the top of the forehead contour (11.2a, 11.1, 11.3a)
+    and rises above it by at least a tenth of d at every pose: no bald crown, no strip of
+    hair when the head tilts back."""
+    face, grid = posed_grid
+    crown = [FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("crown")]
+    hairline = [FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("hairline")]
+    for pose, _mouth, posed in grid:
+        polygon = np.vstack([posed.front[crown], posed.p("11.3")[None], posed.front[hairline], posed.p("11.2")[None]])
+        for name in ("11.2a", "11.1", "11.3a"):
+            assert _inside(posed.p(name), polygon), (pose, name)
+        up, _, _ = _axes(posed)
+        above = np.max((np.vstack([posed.hair, posed.front]) - posed.p("11.1")) @ up)
+        assert above > 0.1 * face.fapu.d, pose
+
+
+def test_back_layer_stays_behind_the_crown(posed_grid):
+    """The hair's back layer never shows a second outline above the front layer's crown:
+    along the face's up axis its top is within a twentieth of d of the crown's."""
+    face, grid = posed_grid
+    for pose, _mouth, posed in grid:
+        up, _, _ = _axes(posed)
+        assert np.max(posed.hair @ up) - np.max(posed.front @ up) < 0.05 * face.fapu.d, pose
