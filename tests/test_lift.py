@@ -153,3 +153,23 @@ def test_front_layer_is_the_hair_top_and_a_hairline_over_the_forehead(face):
     top = lifted.local[LIFTED_INDEX["11.1"]]
     assert hairline[1, 0] == pytest.approx(top[0]) and hairline[1, 2] == pytest.approx(top[2])
     assert 0 < top[1] - hairline[1, 1] < top[1] - lifted.local[LIFTED_INDEX["4.1"], 1]
+
+
+def test_hair_that_does_not_reach_over_the_forehead_has_no_front_layer(face):
+    """A hair outline lying wholly below the top of the forehead (a model drawn so) gets a
+    front layer with next to no area (under 5 % of the sample's): its crown lies along the
+    hairline, so no hair is drawn over the face."""
+    import dataclasses
+
+    def area(lifted):
+        crown = lifted.front[[FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("crown")]]
+        hairline = lifted.front[[FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("hairline")]]
+        temples = lifted.local[[LIFTED_INDEX["11.3"], LIFTED_INDEX["11.2"]]]
+        polygon = np.vstack([crown, temples[:1], hairline, temples[1:]])
+        x, y = polygon[:, 0], polygon[:, 1]
+        return abs(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)) / 2
+
+    low = lift(dataclasses.replace(face, hair=face.hair + [0.0, 3 * face.fapu.d]))
+    assert area(low) < 0.05 * area(lift(face))
+    crown = low.front[[FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("crown")]]
+    assert np.all(crown[:, 1] <= low.local[LIFTED_INDEX["11.1"], 1] + 1e-9)

@@ -303,9 +303,18 @@ def _front_and_silhouette(local: np.ndarray, hair: np.ndarray, fade: np.ndarray,
     at = {name: local[LIFTED_INDEX[name]] for name in LIFTED_NAMES}
     temple_y = (at["11.2"][1] + at["11.3"][1]) / 2
     upper_y = (at["11.2a"][1] + at["11.3a"][1]) / 2
-    crown = _crown(hair[:, :2], temple_y + CROWN_CUT * (upper_y - temple_y))
-    hairline = [at[name] - np.array([0.0, FRINGE_DROP * d * weight, 0.0]) for name, weight in HAIRLINE]
-    front = np.vstack([np.column_stack([crown, np.full(len(crown), at["11.2"][2])]), hairline])
+    hairline = np.array([at[name] - np.array([0.0, FRINGE_DROP * d * weight, 0.0]) for name, weight in HAIRLINE])
+    bare = hair[:, 1].max() <= at["11.1"][1]  # hair that does not reach over the forehead: no front layer
+    if bare:  # the crown laid on the hairline, left to right: the front layer has no area
+        path = np.vstack([at["11.2"], hairline[::-1], at["11.3"]])
+        length = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1))])
+        along = np.linspace(0.0, length[-1], CROWN_POINTS)
+        crown_3d = np.column_stack([np.interp(along, length, path[:, axis]) for axis in range(3)])
+    else:
+        crown = _crown(hair[:, :2], temple_y + CROWN_CUT * (upper_y - temple_y))
+        crown_3d = np.column_stack([crown, np.full(len(crown), at["11.2"][2])])
+    crown = crown_3d[:, :2] if not bare else crown_3d[:0, :2]  # the crown points with cross-sections
+    front = np.vstack([crown_3d, hairline])
 
     # the face contour clockwise (y up): forehead left to right, down the right, the jaw, up the left
     ring = ("11.2", "11.2a", "11.1", "11.3a", "11.3", "10.9", "2.13", "2.1", "2.14", "10.10")
@@ -315,8 +324,8 @@ def _front_and_silhouette(local: np.ndarray, hair: np.ndarray, fade: np.ndarray,
     normals = np.array([ring_normals[n] for n in names])
     reach = np.array([(at[n][0] - middle_x) * normal[0] for n, normal in zip(names, normals)])
     front_depth = np.array([at[SILHOUETTES[n][0]][2] - at[n][2] for n in names])
-    back_depth = np.array([depth if SILHOUETTES[n][1] is None else SILHOUETTES[n][1] * d
-                           for n, depth in zip(names, front_depth)])
+    backs = [SILHOUETTES[n][1] for n in names]
+    back_depth = np.array([depth if back is None else back * d for back, depth in zip(backs, front_depth)])
 
     centre = np.array([middle_x, (at["3.5"][1] + at["3.6"][1]) / 2])  # EyeMid, local
     outline = hair[:, :2]
