@@ -18,9 +18,8 @@ from cartoonface.render.sheet import sheet_svg
 
 TURNS = (-15.0, -10.0, 0.0, 10.0, 15.0)
 # (tilt, roll) of each row: level, nods both ways, rolls, and the combined corners
-ROWS = ((0.0, 0.0), (15.0, 0.0), (-15.0, 0.0), (0.0, 15.0), (15.0, 15.0), (-15.0, -15.0), (15.0, -15.0),
-        (-15.0, 15.0))
-CELL = 150.0
+ROWS = ((0.0, 0.0), (15.0, 0.0), (-15.0, 0.0), (15.0, 15.0), (-15.0, -15.0), (15.0, -15.0), (-15.0, 15.0))
+CELL = 110.0
 
 
 def main(face_path: str, out_path: str) -> None:
