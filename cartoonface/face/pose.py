@@ -184,10 +184,12 @@ def _graze(q: np.ndarray, outline: tuple[np.ndarray, ...], view: np.ndarray) -> 
     rows, normals, reach, front, back = outline
     along = normals @ view[:2]  # < 0: the point's side turns away (the far side)
     depth = np.where(along < 0, front, back)
-    sine, cosine = reach * view[2], -depth * along
-    length = np.sqrt(sine * sine + cosine * cosine)
-    q[rows, :2] += ((reach * (sine / length - 1.0))[:, None]) * normals
-    q[rows, 2] += depth * cosine / length
+    sine, cosine = reach * view[2], depth * along  # cosine with its sign turned: -depth * along
+    scale = 1.0 / np.sqrt(sine * sine + cosine * cosine)
+    move = np.empty((len(rows), 3))
+    move[:, :2] = normals * (reach * (sine * scale - 1.0))[:, None]
+    move[:, 2] = depth * cosine * -scale
+    q[rows] += move
 
 
 _N_MOUTH = len(MOUTH_SYMBOLS)
