@@ -111,10 +111,9 @@ def face_defs(face: FaceModel) -> tuple[etree._Element, ...]:
         _gradient("radial", "cf-hair", ((0, _mix(p.hair, "#ffffff", 0.22), 1), (0.4, p.hair, 1),
                                         (1, _mix(p.hair, "#000000", 0.3), 1)),
                   cx=".5", cy=".12", r=".9", fy=".04"),
-        # the hair's front layer: the same sheen on the crown, no darker than the hair at the
-        # hairline, so it joins the back layer around it without a seam
-        _gradient("radial", "cf-fringe", ((0, _mix(p.hair, "#ffffff", 0.22), 1), (0.55, p.hair, 1),
-                                          (1, _mix(p.hair, "#000000", 0.12), 1)),
+        # the hair's front layer: the same sheen on the crown, the plain hair colour towards its
+        # edges, which is the back layer's colour where they meet, so no seam shows
+        _gradient("radial", "cf-fringe", ((0, _mix(p.hair, "#ffffff", 0.22), 1), (0.55, p.hair, 1), (1, p.hair, 1)),
                   cx=".5", cy=".1", r=".95", fy=".02"),
         _gradient("radial", "cf-iris", ((0, _mix(p.iris, "#ffffff", 0.3), 1), (0.6, p.iris, 1),
                                         (1, _mix(p.iris, "#000000", 0.45), 1)), fy=".62"),
