@@ -173,3 +173,21 @@ def test_hair_that_does_not_reach_over_the_forehead_has_no_front_layer(face):
     assert area(low) < 0.05 * area(lift(face))
     crown = low.front[[FRONT_NAMES.index(n) for n in FRONT_NAMES if n.startswith("crown")]]
     assert np.all(crown[:, 1] <= low.local[LIFTED_INDEX["11.1"], 1] + 1e-9)
+
+
+def test_front_layer_does_not_depend_on_the_hair_outline_direction(face):
+    """A hair outline listed the other way round (a photo may give it so) makes the same
+    front layer and the same cross-sections."""
+    import dataclasses
+
+    a, b = lift(face), lift(dataclasses.replace(face, hair=face.hair[::-1].copy()))
+    assert np.allclose(a.front, b.front)
+    h = len(face.hair)
+    n = len(a.local)
+    rows_a = {int(r) if r < n or r >= n + h else n + h - 1 - (int(r) - n): k for k, r in enumerate(a.silhouette.rows)}
+    rows_b = {int(r): k for k, r in enumerate(b.silhouette.rows)}
+    assert set(rows_a) == set(rows_b)
+    for row, k in rows_a.items():
+        j = rows_b[row]
+        assert np.allclose(a.silhouette.normals[k], b.silhouette.normals[j])
+        assert a.silhouette.reach[k] == pytest.approx(b.silhouette.reach[j])

@@ -68,7 +68,8 @@ def test_neutral_frontal_pose_reproduces_the_model(face):
     assert posed.p("9.15") == pytest.approx(face.point("9.15"))
 
 
-@pytest.mark.parametrize(("tilt", "turn", "roll"), [(0, 6, 0), (0, 15, 0), (0, 11, 0), (7, 13, -9), (-15, 9.5, 15)])
+@pytest.mark.parametrize(("tilt", "turn", "roll"), [(0, 6, 0), (0, 15, 0), (0, 11, 0), (7, 13, -9), (-15, 9.5, 15),
+                                                   (15, 15, 15), (-15, 15, -15), (15, 15, -15)])
 def test_mirrored_face_at_plus_turn_mirrors_face_at_minus_turn(face, tilt, turn, roll):
     original, mirror = mirrored(face, skew=4.0)
     state = FaceState(blink=0.3, smile=0.6, brow=0.4, mouth=(("a", 0.7), ("u", 0.3)))
