@@ -146,7 +146,11 @@ def test_rotated_photo_is_levelled(original):
     d = original.face.fapu.d
     error = np.hypot(*(rotated.face.points - original.face.points).T)
     assert np.median(error) < 0.05 * d
-    assert np.median(np.hypot(*(rotated.face.hair - original.face.hair).T)) < 0.08 * d
+    # the hair outline covers the same area (its points may slide along it)
+    from cartoonface.photo.palette import polygon_mask
+
+    before, after = (polygon_mask((480, 400), face.hair) for face in (original.face, rotated.face))
+    assert (before & after).sum() / (before | after).sum() > 0.8
     # the detected photo points follow the turned face
     a = np.radians(10)
     rel = original.points - 256
