@@ -38,15 +38,22 @@ MIN_SEGMENT_SIDE = 8
 PERSON = 0.5
 CONFIDENT = 0.8
 # The head ellipse in face widths / heights: its centre this far above the middle of
-# the face box, its half-axes. Above the eyes everything of the person inside it that is
-# not skin is hair; outside it only pixels of the hair's colour are (not a neighbour).
+# the face box, its half-axes. Above the mouth corners (mesh points 61 and 291) everything
+# of the person inside it that is not skin is hair (the colour is sampled above the eyes);
+# outside it only pixels of the hair's colour are (not a neighbour, not the clothes).
 HEAD_RAISE = 0.15
 HEAD_HALF_WIDTH, HEAD_HALF_HEIGHT = 0.8, 0.75
+MOUTH_CORNERS = (61, 291)
+# Holes in the hair (highlights of the skin's colour) up to this many pixels across are closed.
+CLOSE_SIDE = 5
 # Clothes are looked for from this many face heights below the chin.
 CLOTHES_BELOW_CHIN = 0.1
 # Lab distance (OpenCV 8-bit Lab) under which a pixel counts as skin / as the hair colour.
 SKIN_DISTANCE = 22.0
 HAIR_DISTANCE = 28.0
+# Beside the face (in the head ellipse, between the eyes and the mouth corners) hair may
+# differ from the crown's colour (in shadow) within this many face widths of the oval.
+SIDE_REACH = 0.2
 # Hair below the chin is followed down to this many face heights (long hair).
 HAIR_BELOW_CHIN = 0.6
 # A fringe stops this many d (eye distance) above the line through the brow arch tops
@@ -66,8 +73,12 @@ HAIR_BEYOND = 0.02
 MAX_HAIR = 0.6
 # Below the middle of the face, hair reaches beyond the face at most SYMMETRY times as
 # far as at the mirrored ray: long hair hangs on both sides, a dark collar or background
-# on one side only is not hair.
+# on one side only is not hair. On a head turned less than FRONTAL degrees the same holds
+# above the middle, with SYMMETRY_SLACK face widths more (a neighbour's shoulder beside
+# the crown is cut back; a parting's extra volume is kept in part).
 SYMMETRY = 1.5
+FRONTAL = 15.0
+SYMMETRY_SLACK = 0.1
 # The outline's points (HAIR_POINTS in all): INNER_SIDE on the inner edge each side of
 # the top, the rest on the outer edge; the inner points sit at these shares of the way
 # from the top of the head to the end of the hair on their side.
@@ -125,11 +136,12 @@ def _distance(lab: np.ndarray, colour: np.ndarray) -> np.ndarray:
     return np.linalg.norm(lab - colour, axis=-1)
 
 
-def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: float,
+def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: float, turn: float,
                  person_of: Callable[[np.ndarray], np.ndarray]) -> Head:
     """The head of the face whose (478, 3) mesh is given, in the photo `rgb` (H, W, 3);
     `skin` the face's (3,) RGB skin colour; `roll` the head's lean in degrees (positive
-    clockwise on screen), so the rays keep their places on the head; `person_of` the
+    clockwise on screen), so the rays keep their places on the head; `turn` its turn
+    in degrees (a frontal head's hair is taken to be symmetric-ish); `person_of` the
     segmentation: (h, w, 3) uint8 -> (h, w) confidence 0..1 of the person."""
     import cv2
 
@@ -163,14 +175,18 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     cv2.ellipse(head, (int(cx), int(cy - HEAD_RAISE * hs)), (int(HEAD_HALF_WIDTH * ws), int(HEAD_HALF_HEIGHT * hs)),
                 0, 0, 360, 1, -1)  # not turned, the whole way round, value 1, filled
     candidates = person & ~face & ~skinlike
-    crown = candidates & (rows < eyes_y) & head.astype(bool)
+    mouth_y = window_mesh[list(MOUTH_CORNERS), 1].mean()
+    sides = candidates & (rows < mouth_y) & head.astype(bool)
+    crown = sides & (rows < eyes_y)
     hair_mask = np.zeros_like(face)
     hair = None
     hairlike = np.zeros_like(face)
     if crown.sum() >= MIN_HAIR_PIXELS:
         hairlike = _distance(lab, np.median(lab[crown], axis=0)) < HAIR_DISTANCE
+        beside = cv2.distanceTransform((~face).astype(np.uint8), cv2.DIST_L2, 3) < SIDE_REACH * ws
+        sides &= (rows < eyes_y) | beside | hairlike
         fringe_px = person & face & hairlike & ~skinlike & (rows < brow_line)
-        hair_mask = crown | (candidates & hairlike & (rows < chin_y + HAIR_BELOW_CHIN * hs)) | fringe_px
+        hair_mask = sides | (candidates & hairlike & (rows < chin_y + HAIR_BELOW_CHIN * hs)) | fringe_px
         # keep the hair that hangs together with the hair on the crown
         _, labels = cv2.connectedComponents(hair_mask.astype(np.uint8), connectivity=8)
         keep = np.unique(labels[crown])
@@ -183,22 +199,25 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     clothes_px = person & ~skinlike & ~hairlike & ~face & (rows > chin_y + CLOTHES_BELOW_CHIN * hs)
     clothes = np.median(image[clothes_px], axis=0) if clothes_px.sum() >= MIN_HAIR_PIXELS else None
 
+    closed = cv2.morphologyEx(hair_mask.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((CLOSE_SIDE, CLOSE_SIDE), np.uint8))
+    hair_mask = closed.astype(bool) & ~(face & (rows >= brow_line))
     # the skin of the head beyond the oval (a high forehead, the ears) joins face and hair
     _, labels = cv2.connectedComponents((face | (person & skinlike & (rows < chin_y))).astype(np.uint8))
     head_skin = np.isin(labels, np.unique(labels[face]))
     # the rays start at the middle of the face oval (not at the nose: on a turned head
     # the nose tip can lie outside the oval)
     centre = np.array([cols[face].mean(), rows[face].mean()])
-    polygon, fringe = _outline(hair_mask, face, head_skin, centre, roll, ws)
+    polygon, fringe = _outline(hair_mask, face, head_skin, centre, roll, ws, abs(turn) < FRONTAL)
     return Head(polygon=polygon / scale + to_window, hair=hair, clothes=clothes, fringe=fringe)
 
 
 def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, centre: np.ndarray, roll: float,
-             face_width: float) -> tuple[np.ndarray, bool]:
+             face_width: float, frontal: bool = True) -> tuple[np.ndarray, bool]:
     """The (HAIR_POINTS, 2) hair outline in window pixels from the (H, W) bool masks of the
     `hair`, the `face` oval and the head's `skin` (the oval and the skin joined to it),
     rays from `centre` (2,) turned by `roll` degrees; and whether a fringe covers the
-    forehead (the inner edge dips below the oval's top)."""
+    forehead (the inner edge dips below the oval's top). `frontal`: the head faces the
+    camera, so its hair is held symmetric-ish above the middle of the face too."""
     angles = np.linspace(0.0, 360.0, RAYS, endpoint=False) + 180.0 / RAYS
     directions = _directions(angles, roll)
     gap = RAY_GAP * face_width
@@ -209,6 +228,8 @@ def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, centre: np.nd
     mirrored = np.interp(360.0 - angles, angles, beyond, period=360.0)
     low = np.abs(angles - TOP) > 90.0  # rays pointing below the middle of the face
     beyond = np.where(low, np.minimum(beyond, SYMMETRY * mirrored), beyond)
+    if frontal:
+        beyond = np.minimum(beyond, SYMMETRY * mirrored + SYMMETRY_SLACK * face_width)
     outer = face_reach + beyond
     inner = _median3(np.minimum(np.where(end > 0, start, np.inf), face_reach))
     hair_out = (end > face_reach + HAIR_BEYOND * face_width) & (beyond > HAIR_BEYOND * face_width)

@@ -247,7 +247,7 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     skin = colours["skin"]
     if skin is None:
         raise InputError(f"{source}: the face shows too little skin to sample its colour; expected a clear portrait")
-    head = segment_head(photo.rgb, mesh, skin, roll, landmarker().person)
+    head = segment_head(photo.rgb, mesh, skin, roll, turn, landmarker().person)
     hair_level = _rotate2d(head.polygon, middle[:2], -roll)
     hair_depth = float(np.mean(level[[234, 454], 2]))
     hair_xyz = np.column_stack([hair_level, np.full(len(hair_level), hair_depth)])
