@@ -71,6 +71,9 @@ RAY_GAP = 0.05
 # hair must not pull the outline away).
 HAIR_BEYOND = 0.02
 MAX_HAIR = 0.6
+# Below the middle of the face hair must be this many face widths thick to count (a
+# shadow along the jaw is not a lock of hair).
+LOW_HAIR_BEYOND = 0.07
 # Below the middle of the face, hair reaches beyond the face at most SYMMETRY times as
 # far as at the mirrored ray: long hair hangs on both sides, a dark collar or background
 # on one side only is not hair. On a head turned less than FRONTAL degrees the same holds
@@ -232,7 +235,8 @@ def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, centre: np.nd
         beyond = np.minimum(beyond, SYMMETRY * mirrored + SYMMETRY_SLACK * face_width)
     outer = face_reach + beyond
     inner = _median3(np.minimum(np.where(end > 0, start, np.inf), face_reach))
-    hair_out = (end > face_reach + HAIR_BEYOND * face_width) & (beyond > HAIR_BEYOND * face_width)
+    least = np.where(low, LOW_HAIR_BEYOND, HAIR_BEYOND) * face_width
+    hair_out = (end > face_reach + least) & (beyond > least)
     found = _median3((hair_out | (inner < face_reach)).astype(float)) > 0
     top = int(np.argmin(np.abs(angles - TOP)))
     seeds = [ray for ray in (top, top + 1) if found[ray]]
