@@ -127,9 +127,12 @@ def test_mirrored_photo_gives_the_mirrored_model(original):
     photo[:, 0] = 512.0 - photo[:, 0]
     assert np.median(np.hypot(*(flipped.points[MIRROR] - photo).T)) < 1.5
     assert flipped.turn == pytest.approx(-original.turn, abs=3)
-    # the hair polygon runs the other way round: ray k mirrors ray 22 - k
+    # the hair outline covers the mirrored area (its points may slide along it)
+    from cartoonface.photo.palette import polygon_mask
+
     hair = np.column_stack([400.0 - original.face.hair[:, 0], original.face.hair[:, 1]])
-    assert np.median(np.hypot(*(flipped.face.hair[::-1] - hair).T)) < 0.08 * d
+    mirrored, found = polygon_mask((480, 400), hair), polygon_mask((480, 400), flipped.face.hair)
+    assert (mirrored & found).sum() / (mirrored | found).sum() > 0.85
 
 
 def test_scaled_photo_gives_the_same_model(original):
