@@ -86,17 +86,17 @@ def reference_hair(rgb: np.ndarray, mesh: np.ndarray, person: np.ndarray, skin: 
     return np.median(lab[region], axis=0) if region.sum() >= REF_MIN_PIXELS else None
 
 
-def main() -> None:
-    """Print the figures."""
+def crop_figures() -> list[dict[str, float | bool | None]]:
+    """Per crop, in annotation order: "overlap" (share, None when no model), "colour"
+    (CIE76, None without a reference region), "fallback" (eyebrow colour), "seconds"
+    (face_from_photo), "turn" (degrees)."""
     from cartoonface.errors import InputError
     from cartoonface.photo.landmarks import landmarker
     from cartoonface.photo.model_from_photo import face_from_photo, photo_from_image
 
     marker = landmarker()
-    overlaps, colour, seconds = [], [], []
-    failures, fallbacks = 0, 0
-    faces = annotated_faces()
-    for path, box, _ in faces:
+    rows: list[dict[str, float | bool | None]] = []
+    for path, box, _ in annotated_faces():
         with Image.open(path) as image:
             picture, _, _ = crop(image.convert("RGB"), box)
         photo = photo_from_image(picture, path.name)
@@ -104,21 +104,34 @@ def main() -> None:
         try:
             result = face_from_photo(photo)
         except InputError:
-            failures += 1
+            rows.append({"overlap": None, "colour": None, "fallback": False, "seconds": None, "turn": None})
             continue
-        seconds.append(time.perf_counter() - started)
+        seconds = time.perf_counter() - started
         found = marker.find(photo.rgb)
         if found is None:
-            failures += 1
+            rows.append({"overlap": None, "colour": None, "fallback": False, "seconds": seconds, "turn": None})
             continue
         mesh = found.points
-        overlaps.append(overlap(result.hair, mesh, photo.rgb.shape[:2]))
-        fallbacks += any("eyebrow colour" in note for note in result.warnings)
         ref = reference_hair(photo.rgb, mesh, marker.person(photo.rgb), _hex_rgb(result.face.palette.skin))
-        if ref is not None:
-            colour.append(float(np.linalg.norm(_lab(_hex_rgb(result.face.palette.hair)) - ref)))
-    n = len(faces)
-    print(f"crops: {n}; failures (no face / no model): {failures}; hair colour from the eyebrows: {fallbacks}")
+        rows.append({
+            "overlap": overlap(result.hair, mesh, photo.rgb.shape[:2]),
+            "colour": None if ref is None else float(np.linalg.norm(_lab(_hex_rgb(result.face.palette.hair)) - ref)),
+            "fallback": any("eyebrow colour" in note for note in result.warnings),
+            "seconds": seconds,
+            "turn": result.turn,
+        })
+    return rows
+
+
+def main() -> None:
+    """Print the figures."""
+    rows = crop_figures()
+    overlaps = [float(r["overlap"]) for r in rows if r["overlap"] is not None]
+    colour = [float(r["colour"]) for r in rows if r["colour"] is not None]
+    seconds = [float(r["seconds"]) for r in rows if r["seconds"] is not None]
+    failures = sum(r["overlap"] is None for r in rows)
+    fallbacks = sum(bool(r["fallback"]) for r in rows)
+    print(f"crops: {len(rows)}; failures (no face / no model): {failures}; hair colour from the eyebrows: {fallbacks}")
     print(f"hair polygon on the face oval below the brows: median {statistics.median(overlaps):.1%}, "
           f"mean {statistics.mean(overlaps):.1%}, worst {max(overlaps):.1%}; "
           f"crops over 5 %: {sum(o > 0.05 for o in overlaps)}/{len(overlaps)}")
@@ -127,3 +140,42 @@ def main() -> None:
           f"over 10: {sum(c > 10 for c in colour)}")
     print(f"face_from_photo per crop (models loaded): median {statistics.median(seconds) * 1000:.0f} ms, "
           f"max {max(seconds) * 1000:.0f} ms")
+
+
+def figure_sheet(before: list[dict[str, float | bool | None]], after: list[dict[str, float | bool | None]],
+                 path: str) -> None:
+    """Write a PNG (256 colours) of the per-crop figures `before` and `after` (lists of
+    crop_figures() rows): the overlap with the face and the colour distance per crop.
+    Needs matplotlib (installed with mediapipe, the photo extra)."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    def values(rows: list[dict[str, float | bool | None]], key: str, scale: float = 1.0) -> np.ndarray:
+        return np.array([np.nan if r[key] is None else float(r[key]) * scale for r in rows])  # type: ignore[arg-type]
+
+    index = np.arange(len(after))
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(9, 5.2), dpi=90, sharex=True)
+    width = 0.4
+    top.bar(index - width / 2, values(before, "overlap", 100), width, label="before (GrabCut)", color="#b0b0b0")
+    top.bar(index + width / 2, values(after, "overlap", 100), width, label="after (selfie segmentation)", color="#1565c0")
+    top.set_ylabel("% of the outline on\nthe face below the brows")
+    top.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=8)
+    bottom.bar(index - width / 2, values(before, "colour"), width, color="#b0b0b0")
+    bottom.bar(index + width / 2, values(after, "colour"), width, color="#1565c0")
+    for rows, shift in ((before, -width / 2), (after, width / 2)):
+        fell = [i for i, r in enumerate(rows) if r["fallback"]]
+        bottom.plot(index[fell] + shift, values(rows, "colour")[fell] + 2, "v", color="#c62828", markersize=5,
+                    label="eyebrow colour (fallback)" if fell else None)
+    bottom.set_ylabel("hair colour vs the\nhair region (CIE76)")
+    bottom.set_xlabel("crop (dlib examples, annotation order)")
+    bottom.legend(loc="upper left", fontsize=8)
+    figure.tight_layout()
+    out = io.BytesIO()
+    figure.savefig(out, format="png")
+    plt.close(figure)
+    out.seek(0)
+    Image.open(out).convert("RGB").quantize(256).save(path, optimize=True)
