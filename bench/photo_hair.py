@@ -89,7 +89,7 @@ def reference_hair(rgb: np.ndarray, mesh: np.ndarray, person: np.ndarray, skin: 
 def crop_figures() -> list[dict[str, float | bool | None]]:
     """Per crop, in annotation order: "overlap" (share, None when no model), "colour"
     (CIE76, None without a reference region), "fallback" (eyebrow colour), "seconds"
-    (face_from_photo), "turn" (degrees)."""
+    (face_from_photo), "turn" (degrees), "fringe" (the outline dips over the forehead)."""
     from cartoonface.errors import InputError
     from cartoonface.photo.landmarks import landmarker
     from cartoonface.photo.model_from_photo import face_from_photo, photo_from_image
@@ -104,12 +104,14 @@ def crop_figures() -> list[dict[str, float | bool | None]]:
         try:
             result = face_from_photo(photo)
         except InputError:
-            rows.append({"overlap": None, "colour": None, "fallback": False, "seconds": None, "turn": None})
+            rows.append({"overlap": None, "colour": None, "fallback": False, "seconds": None, "turn": None,
+                         "fringe": False})
             continue
         seconds = time.perf_counter() - started
         found = marker.find(photo.rgb)
         if found is None:
-            rows.append({"overlap": None, "colour": None, "fallback": False, "seconds": seconds, "turn": None})
+            rows.append({"overlap": None, "colour": None, "fallback": False, "seconds": seconds, "turn": None,
+                         "fringe": False})
             continue
         mesh = found.points
         ref = reference_hair(photo.rgb, mesh, marker.person(photo.rgb), _hex_rgb(result.face.palette.skin))
@@ -119,6 +121,7 @@ def crop_figures() -> list[dict[str, float | bool | None]]:
             "fallback": any("eyebrow colour" in note for note in result.warnings),
             "seconds": seconds,
             "turn": result.turn,
+            "fringe": bool(getattr(result, "fringe", False)),  # the GrabCut version had none
         })
     return rows
 
@@ -131,7 +134,8 @@ def main() -> None:
     seconds = [float(r["seconds"]) for r in rows if r["seconds"] is not None]
     failures = sum(r["overlap"] is None for r in rows)
     fallbacks = sum(bool(r["fallback"]) for r in rows)
-    print(f"crops: {len(rows)}; failures (no face / no model): {failures}; hair colour from the eyebrows: {fallbacks}")
+    print(f"crops: {len(rows)}; failures (no face / no model): {failures}; hair colour from the eyebrows: {fallbacks}; "
+          f"outlines with a fringe: {sum(bool(r['fringe']) for r in rows)}")
     print(f"hair polygon on the face oval below the brows: median {statistics.median(overlaps):.1%}, "
           f"mean {statistics.mean(overlaps):.1%}, worst {max(overlaps):.1%}; "
           f"crops over 5 %: {sum(o > 0.05 for o in overlaps)}/{len(overlaps)}")

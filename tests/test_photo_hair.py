@@ -138,3 +138,9 @@ def test_hair_of_the_background_colour_keeps_its_own_colour(astronaut_face):
     result = face_from_photo(photo_from_image(canvas, "same colour"))
     assert not any("eyebrow" in note for note in result.warnings)
     assert np.linalg.norm(hex_rgb(result.face.palette.hair) - hair) < 40
+
+
+def test_astronaut_fringe_is_found(astronaut_face):
+    # her hair falls over the top of her forehead
+    _, result, _ = astronaut_face
+    assert result.fringe

@@ -95,6 +95,8 @@ OUTER = HAIR_POINTS - 2 * INNER_SIDE
 # spacing), so the straight edges do not cut into the face.
 FOREHEAD = 50.0
 FOREHEAD_INSET = 0.08
+# The outline has a fringe where its inner edge comes this many face widths below the oval.
+FRINGE_DIP = 0.06
 # Where no hair is found round the crown (a bald head, hair of the background's colour),
 # the outline is a cap this many degrees each side of the top, from INSIDE_FACE of the
 # way to the face oval to the oval: hidden behind the drawn face.
@@ -247,7 +249,7 @@ def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, centre: np.nd
         while hi < RAYS - 1 and found[hi + 1]:
             hi += 1
         first, last = angles[lo], angles[hi]
-        fringe = bool(np.any(inner[lo:hi + 1] < face_reach[lo:hi + 1] - HAIR_BEYOND * face_width))
+        fringe = bool(np.any(inner[lo:hi + 1] < face_reach[lo:hi + 1] - FRINGE_DIP * face_width))
     else:
         first, last = TOP - CAP_HALF_ANGLE, TOP + CAP_HALF_ANGLE
         outer, inner, fringe = face_reach, INSIDE_FACE * face_reach, False

@@ -76,6 +76,7 @@ class PhotoFace:
         roll > 0: the head leans with its top to the image left).
     clothes: '#rrggbb' clothes colour below the chin, or None.
     warnings: what was not neutral or was guessed, for the user.
+    fringe: whether the hair outline comes down over the forehead (a fringe).
     """
 
     face: FaceModel
@@ -85,6 +86,7 @@ class PhotoFace:
     roll: float
     clothes: str | None
     warnings: tuple[str, ...]
+    fringe: bool
 
 
 def photo_from_image(image: Image.Image, source: str) -> Photo:
@@ -282,4 +284,4 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
         raise InputError(f"{source}: the face found could not be made into a model ({exc})") from None
     return PhotoFace(face=face, points=photo_points, hair=head.polygon, turn=turn, roll=roll,
                      clothes=hex_colour(head.clothes) if head.clothes is not None else None,
-                     warnings=tuple(notes))
+                     warnings=tuple(notes), fringe=head.fringe)
