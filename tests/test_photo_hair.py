@@ -36,6 +36,13 @@ def rows_below(y: float) -> np.ndarray:
     return np.mgrid[0:SIDE, 0:SIDE][0] > y
 
 
+BROW_Y = CENTRE[1] - 10  # the brows' clearance line of the synthetic faces
+
+
+def bare(face: np.ndarray) -> np.ndarray:
+    return face & rows_below(BROW_Y)
+
+
 def lower_face_share(polygon: np.ndarray, face: np.ndarray, brow_y: float) -> float:
     area = polygon_mask(face.shape, polygon)
     return float((area & face & rows_below(brow_y)).sum() / area.sum())
@@ -45,15 +52,15 @@ def test_outline_goes_round_the_hair_and_stays_off_the_face():
     face = disk(FACE_RADIUS)
     # hair: a cap over the top half of the head, 20 px thick, down to the middle of the face
     hair = disk(FACE_RADIUS + 20) & ~face & ~rows_below(CENTRE[1])
-    outline, fringe = _outline(hair, face, face, CENTRE, 0.0, 2 * FACE_RADIUS)
+    outline, fringe = _outline(hair, face, face, bare(face), CENTRE, 0.0, 2 * FACE_RADIUS)
     assert outline.shape == (HAIR_POINTS, 2) and not fringe
     radius = np.hypot(*(outline - CENTRE).T)
     outer = radius[INNER_SIDE:HAIR_POINTS - INNER_SIDE]
     inner = np.concatenate([radius[:INNER_SIDE], radius[HAIR_POINTS - INNER_SIDE:]])
     assert np.all(outer > FACE_RADIUS + 10) and np.all(outer < FACE_RADIUS + 25)
     assert np.all(inner < FACE_RADIUS + 5)
-    # nothing of it on the face below the brows (a line 10 px above the centre)
-    assert lower_face_share(outline, face, CENTRE[1] - 10) < 0.02
+    # nothing of it on the face below the brows
+    assert lower_face_share(outline, face, BROW_Y) < 0.02
     # the outer edge runs over the top from the image left to the image right
     top = outline[INNER_SIDE:HAIR_POINTS - INNER_SIDE]
     assert top[0, 0] < CENTRE[0] < top[-1, 0] and top[:, 1].min() < CENTRE[1] - FACE_RADIUS
@@ -62,19 +69,19 @@ def test_outline_goes_round_the_hair_and_stays_off_the_face():
 def test_a_fringe_brings_the_inner_edge_down_over_the_forehead():
     face = disk(FACE_RADIUS)
     cap = disk(FACE_RADIUS + 20) & ~rows_below(CENTRE[1])
-    plain, plain_fringe = _outline(cap & ~face, face, face, CENTRE, 0.0, 2 * FACE_RADIUS)
+    plain, plain_fringe = _outline(cap & ~face, face, face, bare(face), CENTRE, 0.0, 2 * FACE_RADIUS)
     # a fringe: hair inside the face down to 25 px above the centre
     fringed = cap & ~(face & rows_below(CENTRE[1] - 25))
-    outline, fringe = _outline(fringed, face, face, CENTRE, 0.0, 2 * FACE_RADIUS)
+    outline, fringe = _outline(fringed, face, face, bare(face), CENTRE, 0.0, 2 * FACE_RADIUS)
     assert fringe and not plain_fringe
     middle = [0, HAIR_POINTS - 1]  # the inner points beside the top of the head
     assert np.all(outline[middle, 1] > plain[middle, 1] + 10)
-    assert np.all(outline[middle, 1] < CENTRE[1] - 20)  # above the brows
+    assert np.all(outline[middle, 1] <= BROW_Y)  # never below the brows
 
 
 def test_no_hair_gives_a_cap_hidden_behind_the_face():
     face = disk(FACE_RADIUS)
-    outline, fringe = _outline(np.zeros_like(face), face, face, CENTRE, 0.0, 2 * FACE_RADIUS)
+    outline, fringe = _outline(np.zeros_like(face), face, face, bare(face), CENTRE, 0.0, 2 * FACE_RADIUS)
     assert not fringe
     assert np.all(np.hypot(*(outline - CENTRE).T) <= FACE_RADIUS + 1)
     assert np.all(outline[:, 1] < CENTRE[1])
@@ -85,9 +92,9 @@ def test_mirrored_masks_give_the_mirrored_outline():
     # hair longer on the image left (a side parting)
     hair = (disk(FACE_RADIUS + 20) | (disk(FACE_RADIUS + 30) & (np.mgrid[0:SIDE, 0:SIDE][1] < 80))) & ~face
     hair &= ~rows_below(CENTRE[1] + 20)
-    outline, _ = _outline(hair, face, face, CENTRE, 0.0, 2 * FACE_RADIUS)
-    mirrored, _ = _outline(hair[:, ::-1], face[:, ::-1], face[:, ::-1], np.array([SIDE - 1 - CENTRE[0], CENTRE[1]]),
-                           0.0, 2 * FACE_RADIUS)
+    outline, _ = _outline(hair, face, face, bare(face), CENTRE, 0.0, 2 * FACE_RADIUS)
+    mirrored, _ = _outline(hair[:, ::-1], face[:, ::-1], face[:, ::-1], bare(face)[:, ::-1],
+                           np.array([SIDE - 1 - CENTRE[0], CENTRE[1]]), 0.0, 2 * FACE_RADIUS)
     back = np.column_stack([SIDE - 1 - mirrored[::-1, 0], mirrored[::-1, 1]])
     assert np.max(np.hypot(*(back - outline).T)) < 3.0
 

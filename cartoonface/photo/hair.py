@@ -88,13 +88,13 @@ SYMMETRY_SLACK = 0.1
 INNER_SIDE = 4
 INNER_SHARES = (0.125, 0.375, 0.625, 0.875)
 OUTER = HAIR_POINTS - 2 * INNER_SIDE
-# Over the forehead (inner points within FOREHEAD degrees of the top) the inner edge is
-# pulled FOREHEAD_INSET of its radius into the face, so the drawn face (whose top is
-# smoother than the oval) leaves no gap under the hair; lower down the inner points lie
-# outside the oval by the sag of the chords between them (1 / cos of half their
-# spacing), so the straight edges do not cut into the face.
-FOREHEAD = 50.0
-FOREHEAD_INSET = 0.08
+# The inner edge is pulled INSET face widths into the face, but never into the bare
+# face (the oval below the line BROW_CLEAR above the brows): over the forehead the hair
+# then reaches under the drawn face, so a head that turns or nods, moving the face over
+# the hair, shows no gap between them. Where the bare face stops it (the sides), the
+# inner points lie outside the oval by the sag of the chords between them (1 / cos of
+# half their spacing), so the straight edges do not cut into the face.
+INSET = 0.1
 # The outline has a fringe where its inner edge comes this many face widths below the oval.
 FRINGE_DIP = 0.06
 # Where no hair is found round the crown (a bald head, hair of the background's colour),
@@ -169,7 +169,9 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     eyes_y = (middle[1] - top) * scale
     rows, cols = np.mgrid[0:sh, 0:sw]
     (xa, ya), (xb, yb) = window_mesh[list(BROW_TOPS)]
-    brow_line = ya + (cols - xa) * (yb - ya) / (xb - xa) - BROW_CLEAR * d * scale
+    # in profile the brow tops can be one above the other: then the higher one, level
+    slope, level = ((yb - ya) / (xb - xa), ya) if abs(xb - xa) >= 1.0 else (0.0, min(ya, yb))
+    brow_line = level + (cols - xa) * slope - BROW_CLEAR * d * scale
 
     confidence = person_of(image)
     person = confidence > PERSON
@@ -205,28 +207,31 @@ def segment_head(rgb: np.ndarray, mesh: np.ndarray, skin: np.ndarray, roll: floa
     clothes = np.median(image[clothes_px], axis=0) if clothes_px.sum() >= MIN_HAIR_PIXELS else None
 
     closed = cv2.morphologyEx(hair_mask.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((CLOSE_SIDE, CLOSE_SIDE), np.uint8))
-    hair_mask = closed.astype(bool) & ~(face & (rows >= brow_line))
+    bare = face & (rows >= brow_line)
+    hair_mask = closed.astype(bool) & ~bare
     # the skin of the head beyond the oval (a high forehead, the ears) joins face and hair
     _, labels = cv2.connectedComponents((face | (person & skinlike & (rows < chin_y))).astype(np.uint8))
     head_skin = np.isin(labels, np.unique(labels[face]))
     # the rays start at the middle of the face oval (not at the nose: on a turned head
     # the nose tip can lie outside the oval)
     centre = np.array([cols[face].mean(), rows[face].mean()])
-    polygon, fringe = _outline(hair_mask, face, head_skin, centre, roll, ws, abs(turn) < FRONTAL)
+    polygon, fringe = _outline(hair_mask, face, head_skin, bare, centre, roll, ws, abs(turn) < FRONTAL)
     return Head(polygon=polygon / scale + to_window, hair=hair, clothes=clothes, fringe=fringe)
 
 
-def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, centre: np.ndarray, roll: float,
-             face_width: float, frontal: bool = True) -> tuple[np.ndarray, bool]:
+def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, bare: np.ndarray, centre: np.ndarray,
+             roll: float, face_width: float, frontal: bool = True) -> tuple[np.ndarray, bool]:
     """The (HAIR_POINTS, 2) hair outline in window pixels from the (H, W) bool masks of the
-    `hair`, the `face` oval and the head's `skin` (the oval and the skin joined to it),
-    rays from `centre` (2,) turned by `roll` degrees; and whether a fringe covers the
+    `hair`, the `face` oval, the head's `skin` (the oval and the skin joined to it) and the
+    `bare` face the outline keeps off (below the brows; it holds `centre`), rays from
+    `centre` (2,) turned by `roll` degrees; and whether a fringe covers the
     forehead (the inner edge dips below the oval's top). `frontal`: the head faces the
     camera, so its hair is held symmetric-ish above the middle of the face too."""
     angles = np.linspace(0.0, 360.0, RAYS, endpoint=False) + 180.0 / RAYS
     directions = _directions(angles, roll)
     gap = RAY_GAP * face_width
     face_reach = _runs(face, centre, directions, gap)[1]
+    bare_reach = _runs(bare, centre, directions, gap)[1]
     start, end = _runs(hair, centre, directions, gap)
     silhouette = _runs(hair | skin, centre, directions, gap)[1]
     beyond = _median3(np.clip(silhouette - face_reach, 0.0, MAX_HAIR * face_width))
@@ -258,11 +263,14 @@ def _outline(hair: np.ndarray, face: np.ndarray, skin: np.ndarray, centre: np.nd
     inner_right = (TOP + (last - TOP) * shares)[::-1]
     outer_angles = np.linspace(first, last, OUTER)
     spacing = np.diff(shares[:2])[0]
-    left_out, right_out = (1.0 / np.cos(np.radians(spread * spacing / 2)) for spread in (TOP - first, last - TOP))
-    left_k = np.where(np.abs(inner_left - TOP) < FOREHEAD, 1.0 - FOREHEAD_INSET, left_out)
-    right_k = np.where(np.abs(inner_right - TOP) < FOREHEAD, 1.0 - FOREHEAD_INSET, right_out)
-    radii = np.concatenate([left_k * np.interp(inner_left, angles, inner), np.interp(outer_angles, angles, outer),
-                            right_k * np.interp(inner_right, angles, inner)])
+
+    def inner_radii(at: np.ndarray, spread: float) -> np.ndarray:
+        reach = np.maximum(np.interp(at, angles, bare_reach), np.interp(at, angles, inner) - INSET * face_width)
+        stopped = reach >= np.interp(at, angles, face_reach) - RAY_STEP
+        return np.where(stopped, reach / np.cos(np.radians(spread * spacing / 2)), reach)
+
+    radii = np.concatenate([inner_radii(inner_left, TOP - first), np.interp(outer_angles, angles, outer),
+                            inner_radii(inner_right, last - TOP)])
     points = np.concatenate([inner_left, outer_angles, inner_right])
     return centre + radii[:, None] * _directions(points, roll), fringe
 
