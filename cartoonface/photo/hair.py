@@ -12,8 +12,8 @@ The outline (thesis 002, Alg. 2.2 step 2: HAIR_POINTS points, drawn behind the f
 is the hair's own outline, read along rays from the middle of the face oval and turned with
 the head's roll: the outer edge (the hair's silhouette) over the stretch of rays that
 find hair round the crown, and back along the inner edge (the face oval on the sides,
-the hairline or the fringe's edge over the forehead), so it stays off the face below
-the brows. docs/photo.md, "Hair".
+the hairline or the fringe's edge over the forehead, taken a little under the drawn
+face), so it stays off the face below the brows. docs/photo.md, "Hair".
 """
 
 from __future__ import annotations
@@ -60,6 +60,7 @@ HAIR_BELOW_CHIN = 0.6
 # (mesh points 105 and 334): the outline never reaches the brows.
 BROW_TOPS = (105, 334)
 BROW_CLEAR = 0.12
+# Fewer hair pixels than this (in the window) are no hair: too few for a median.
 MIN_HAIR_PIXELS = 30
 # The outline is read off RAYS rays round the face, sampled every RAY_STEP pixels of the window.
 RAYS = 72
@@ -113,7 +114,8 @@ class Head:
     polygon: (HAIR_POINTS, 2) the hair outline, drawing order (docs/photo.md, "Hair").
     hair: (3,) median RGB of the hair, None when no hair was found (bald or hidden).
     clothes: (3,) median RGB of the clothes below the chin, None when none is visible.
-    fringe: whether hair covers part of the forehead below the face mesh's top.
+    fringe: whether hair covers the forehead FRINGE_DIP face widths or more below the
+        top of the face oval.
     """
 
     polygon: np.ndarray
