@@ -151,3 +151,19 @@ def test_astronaut_fringe_is_found(astronaut_face):
     # her hair falls over the top of her forehead
     _, result, _ = astronaut_face
     assert result.fringe
+
+
+def test_no_person_found_gives_no_hair_and_a_hidden_cap(astronaut_face):
+    from cartoonface.photo.hair import segment_head
+    from cartoonface.photo.palette import face_colours
+
+    photo, _, mesh = astronaut_face
+    skin = face_colours(photo.rgb, mesh)["skin"]
+    head = segment_head(photo.rgb, mesh, skin, 0.0, 0.0, lambda image: np.zeros(image.shape[:2]))
+    assert head.hair is None and not head.fringe
+    oval = polygon_mask(photo.rgb.shape[:2], mesh[list(OVAL), :2])
+    cap = polygon_mask(photo.rgb.shape[:2], head.polygon)
+    assert cap.any() and (cap & ~oval).sum() <= 0.02 * cap.sum()  # behind the drawn face
+    # the whole window taken for the person: hair is found again, above the eyes
+    found = segment_head(photo.rgb, mesh, skin, 0.0, 0.0, lambda image: np.ones(image.shape[:2]))
+    assert found.hair is not None and found.polygon[:, 1].min() < mesh[10, 1]
