@@ -127,9 +127,12 @@ def test_mirrored_photo_gives_the_mirrored_model(original):
     photo[:, 0] = 512.0 - photo[:, 0]
     assert np.median(np.hypot(*(flipped.points[MIRROR] - photo).T)) < 1.5
     assert flipped.turn == pytest.approx(-original.turn, abs=3)
-    # the hair polygon runs the other way round: ray k mirrors ray 22 - k
+    # the hair outline covers the mirrored area (its points may slide along it)
+    from cartoonface.photo.palette import polygon_mask
+
     hair = np.column_stack([400.0 - original.face.hair[:, 0], original.face.hair[:, 1]])
-    assert np.median(np.hypot(*(flipped.face.hair[::-1] - hair).T)) < 0.08 * d
+    mirrored, found = polygon_mask((480, 400), hair), polygon_mask((480, 400), flipped.face.hair)
+    assert (mirrored & found).sum() / (mirrored | found).sum() > 0.85
 
 
 def test_scaled_photo_gives_the_same_model(original):
@@ -146,7 +149,11 @@ def test_rotated_photo_is_levelled(original):
     d = original.face.fapu.d
     error = np.hypot(*(rotated.face.points - original.face.points).T)
     assert np.median(error) < 0.05 * d
-    assert np.median(np.hypot(*(rotated.face.hair - original.face.hair).T)) < 0.08 * d
+    # the hair outline covers the same area (its points may slide along it)
+    from cartoonface.photo.palette import polygon_mask
+
+    before, after = (polygon_mask((480, 400), face.hair) for face in (original.face, rotated.face))
+    assert (before & after).sum() / (before | after).sum() > 0.8
     # the detected photo points follow the turned face
     a = np.radians(10)
     rel = original.points - 256

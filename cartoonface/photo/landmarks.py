@@ -1,10 +1,13 @@
-"""Face landmarks from a photo: MediaPipe's face detector and 478-point face mesh.
+"""Face landmarks and the person's outline from a photo: MediaPipe's face detector,
+478-point face mesh and selfie segmentation.
 
 The models ship inside the pinned `mediapipe` wheel (the optional `photo` extra,
 docs/photo.md); nothing is downloaded. The full-range detector finds every face (the
 short-range one is asked when it finds none);
 the largest one is cropped, scaled to MESH_SIDE pixels and given to the face mesh
-(with iris refinement), and its points are mapped back to the photo.
+(with iris refinement), and its points are mapped back to the photo. The selfie
+segmentation (the general 256 x 256 model) gives each pixel's confidence of being
+part of a person (hair, face, body) rather than the background.
 """
 
 from __future__ import annotations
@@ -90,8 +93,8 @@ class Landmarker:
         os.environ.setdefault("GLOG_minloglevel", "2")
         try:
             with _quiet():
-                import cv2  # noqa: F401  (the crops, GrabCut and masks need it too)
-                from mediapipe.python.solutions import face_detection, face_mesh
+                import cv2  # noqa: F401  (the crops and masks need it too)
+                from mediapipe.python.solutions import face_detection, face_mesh, selfie_segmentation
         except ImportError as exc:
             raise PhotoExtraMissing(
                 f"reading a photo needs the photo extra ({exc.name or exc}): "
@@ -103,6 +106,8 @@ class Landmarker:
                                face_detection.FaceDetection(model_selection=0, min_detection_confidence=0.5))
             self._mesh = face_mesh.FaceMesh(static_image_mode=True, max_num_faces=1, refine_landmarks=True,
                                             min_detection_confidence=0.3)
+            # the general model (0); the landscape one (1) is for wide video frames
+            self._selfie = selfie_segmentation.SelfieSegmentation(model_selection=0)
         self._lock = threading.Lock()
 
     def boxes(self, rgb: np.ndarray) -> list[tuple[float, float, float, float]]:
@@ -120,6 +125,13 @@ class Landmarker:
             boxes.append((rel.xmin * width, rel.ymin * height,
                           (rel.xmin + rel.width) * width, (rel.ymin + rel.height) * height))
         return boxes
+
+    def person(self, rgb: np.ndarray) -> np.ndarray:
+        """(H, W) float confidence, 0..1, that each pixel of `rgb` ((H, W, 3) uint8) shows a
+        person rather than the background (MediaPipe selfie segmentation)."""
+        with self._lock, _quiet():
+            mask = self._selfie.process(np.ascontiguousarray(rgb)).segmentation_mask
+        return np.clip(np.asarray(mask, dtype=float), 0.0, 1.0)
 
     def find(self, rgb: np.ndarray) -> Landmarks | None:
         """Landmarks of the largest face in `rgb` ((H, W, 3) uint8), or None when there is none."""

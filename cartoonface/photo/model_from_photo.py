@@ -50,11 +50,9 @@ SMILE_SIDEWAYS = 1.0 / 1.5
 TURN_PAIRS = ((33, 263), (133, 362), (234, 454), (93, 323), (61, 291), (129, 358))
 # Smallest eye opening kept, in d (closed eyes are opened this far).
 MIN_EYE_OPENING = 0.08
-# Stand-ins for colours a photo does not show (RGB), and the RGB distance under which
-# the hair is taken for the background.
+# Stand-ins for colours a photo does not show (RGB).
 BROWN_IRIS = np.array([91.0, 58.0, 41.0])
 LIP_RED = np.array([200.0, 80.0, 90.0])
-SAME_COLOUR = 30.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +76,7 @@ class PhotoFace:
         roll > 0: the head leans with its top to the image left).
     clothes: '#rrggbb' clothes colour below the chin, or None.
     warnings: what was not neutral or was guessed, for the user.
+    fringe: whether the hair outline comes down over the forehead (a fringe).
     """
 
     face: FaceModel
@@ -87,6 +86,7 @@ class PhotoFace:
     roll: float
     clothes: str | None
     warnings: tuple[str, ...]
+    fringe: bool
 
 
 def photo_from_image(image: Image.Image, source: str) -> Photo:
@@ -189,15 +189,12 @@ def _neutral_mouth(points: np.ndarray, d: float) -> tuple[np.ndarray, list[str]]
 
 def _palette(colours: dict[str, np.ndarray | None], head: Head, skin: np.ndarray) -> tuple[dict[str, str], list[str]]:
     """The face's palette (hex colours by name) from the sampled face colours and the head
-    segmentation, with a stand-in (and a warning) for what could not be sampled: hair that
-    is missing or looks like the background takes the eyebrow colour."""
+    segmentation, with a stand-in (and a warning) for what could not be sampled: when no
+    hair is found the hair takes the eyebrow colour."""
     notes = []
     brow = colours["brow"] if colours["brow"] is not None else mix(skin, BLACK, 0.6)
     hair = head.hair
-    if hair is not None and np.linalg.norm(hair - head.background) < SAME_COLOUR:
-        notes.append("the hair cannot be told from the background; the hair takes the eyebrow colour")
-        hair = None
-    elif hair is None:
+    if hair is None:
         notes.append("no hair found around the face; the hair takes the eyebrow colour")
     iris = colours["iris"]
     if iris is None:
@@ -252,7 +249,7 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
     skin = colours["skin"]
     if skin is None:
         raise InputError(f"{source}: the face shows too little skin to sample its colour; expected a clear portrait")
-    head = segment_head(photo.rgb, mesh, skin, roll)
+    head = segment_head(photo.rgb, mesh, skin, roll, turn, landmarker().person)
     hair_level = _rotate2d(head.polygon, middle[:2], -roll)
     hair_depth = float(np.mean(level[[234, 454], 2]))
     hair_xyz = np.column_stack([hair_level, np.full(len(hair_level), hair_depth)])
@@ -287,4 +284,4 @@ def face_from_landmarks(photo: Photo, found: Landmarks, name: str = "photo") -> 
         raise InputError(f"{source}: the face found could not be made into a model ({exc})") from None
     return PhotoFace(face=face, points=photo_points, hair=head.polygon, turn=turn, roll=roll,
                      clothes=hex_colour(head.clothes) if head.clothes is not None else None,
-                     warnings=tuple(notes))
+                     warnings=tuple(notes), fringe=head.fringe)

@@ -44,12 +44,12 @@ def display_jpeg(rgb: np.ndarray, max_side: int) -> tuple[bytes, tuple[int, int]
 
 def overlay_png(photo: Photo, result: PhotoFace, max_side: int = 512) -> bytes:
     """PNG bytes of the photo (scaled to at most `max_side` pixels a side) with the
-    detected named points (red dots) and the hair polygon (blue line and dots) drawn on it."""
+    detected named points (red dots) and the hair outline (blue closed line and dots) drawn on it."""
     image, k = scaled_image(photo.rgb, max_side)
     draw = ImageDraw.Draw(image)
     r = max(MIN_DOT_RADIUS, DOT_SHARE * float(np.ptp(result.points[:, 0])) * k)
     hair = [(float(x) * k, float(y) * k) for x, y in result.hair]
-    draw.line(hair, fill=HAIR_COLOUR, width=max(1, round(r / 2)))
+    draw.line(hair + hair[:1], fill=HAIR_COLOUR, width=max(1, round(r / 2)))
     for x, y in hair:
         draw.ellipse((x - r, y - r, x + r, y + r), fill=HAIR_COLOUR)
     for x, y in result.points * k:
