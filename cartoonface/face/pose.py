@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cartoonface.face.emotion import EMOTIONS, emotion_basis, emotion_coefficients
 from cartoonface.face.expression import EXPRESSIONS, LOWER_LIDS, UPPER_LIDS, expression_displacements
 from cartoonface.face.lift import LIFTED_INDEX, LIFTED_NAMES, LiftedFace
 from cartoonface.face.model import POINT_NAMES
@@ -122,7 +123,7 @@ class Rig:
     relative to the rotation origin. Built once per LiftedFace by rig()."""
 
     neutral: np.ndarray  # (N*2,) lifted image points minus origin, flattened
-    basis: np.ndarray  # (12 + 3, N*2) mouth shapes then expressions, flattened displacements
+    basis: np.ndarray  # (12 + 3 + 14, N*2) mouth shapes, expressions, emotions (D_i, D_l), flattened
     template: np.ndarray  # (N + H, 3) column 2 filled: depths, hair depths
     hair_shift: tuple[np.ndarray, np.ndarray]  # (H,) z shift per degree for turn > 0, turn < 0
     centres: np.ndarray  # (2, 3) eyeball centres
@@ -162,7 +163,7 @@ def rig(lifted: LiftedFace) -> Rig:
     n, p = len(LIFTED_NAMES), len(POINT_NAMES)
     flip = np.array([1.0, -1.0, 1.0])
     image_rel = lifted.local[:, :2] * flip[:2]  # local -> image orientation, origin-relative
-    model_moves = np.concatenate([shape_displacements(face), expression_displacements(face)])
+    model_moves = np.concatenate([shape_displacements(face), expression_displacements(face), emotion_basis(face)])
     basis = (model_moves.reshape(len(model_moves), 2 * p) @ lifted.depends.T)
     template = np.zeros((n + len(lifted.hair), 3))
     template[:n, 2] = lifted.local[:, 2]
@@ -212,6 +213,7 @@ def _keep_in_lids(pupils: np.ndarray, upper: np.ndarray, lower: np.ndarray, iris
 
 _N_MOUTH = len(MOUTH_SYMBOLS)
 _N_COEF = _N_MOUTH + len(EXPRESSIONS)
+_NO_EMOTION = np.zeros(2 * len(EMOTIONS))
 
 
 def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
@@ -228,7 +230,8 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     coef[_N_MOUTH] = state.blink
     coef[_N_MOUTH + 1] = state.smile
     coef[_N_MOUTH + 2] = state.brow
-    flat = r.neutral + coef @ r.basis
+    feeling = emotion_coefficients(state.emotion, state.lips) if state.emotion else _NO_EMOTION
+    flat = r.neutral + coef @ r.basis[:_N_COEF] + feeling @ r.basis[_N_COEF:]
     upper, lower = r.lids
     flat[lower] = np.maximum(flat[lower], flat[upper])  # expression.close_lids on the flat rows
 
