@@ -21,6 +21,12 @@ Kinds and what they drive (Pose is (tilt, turn, roll) about X, Y, Z):
   degrees away from the viewer (towards the image right / down), over
   `duration`; the eyes stay there until the next saccade.
 - ``smile``: a slight smile rises and fades; `amplitude` is the smile 0..1.
+- ``emotion``: one of face/emotion.py's EMOTIONS (the action's `emotion`)
+  rises to the intensity `amplitude` 0..1 and fades (the ease in and out is
+  `attack` and `release`); the user sets these (transcript markup, actions.json,
+  a default mood), `schedule` draws none. Emotions of different names may
+  overlap (one fades into the next); `adapt_to_emotions` thins the blinks and
+  scales the brow raises and smiles drawn during one (EMOTION_ADAPT).
 
 Envelope kinds (blink, brow, nod, smile) rise from 0 to `amplitude` over `attack`
 seconds, hold, and fall back to 0 over `release` seconds, all inside
@@ -33,16 +39,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from cartoonface.animate.gaze import Saccade, saccades
 from cartoonface.animate.style import ANNOUNCER, Style
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model, also the gaze limit
 
-KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile")
-ENVELOPE_KINDS = ("blink", "brow", "nod", "smile")
+KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile", "emotion")
+ENVELOPE_KINDS = ("blink", "brow", "nod", "smile", "emotion")
 ANGLE_KINDS = ("tilt", "turn", "nod", "gaze_h", "gaze_v")
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
@@ -104,6 +111,21 @@ SMILE_RELEASE = (0.4, 0.7)  # seconds
 SMILE_GAP = 4.0  # seconds: at least this long between two smiles
 
 
+# How an emotion at intensity 1 changes the drawn behaviour (our choice, after the
+# descriptions of each expression): blink rate factor (<= 1: blinks are thinned;
+# the eyes of a surprised face stay open, Ekman and Friesen's "eyes wide open"),
+# brow raise factor (the brows of surprise and fear are raised already and stay
+# there; frowning brows do not rise) and smile factor (no smile in a negative mood).
+# An intensity e scales each factor's departure from 1 by e.
+EMOTION_ADAPT: dict[str, tuple[float, float, float]] = {
+    "happy": (1.0, 1.0, 1.0),
+    "sad": (0.8, 0.4, 0.0),
+    "angry": (0.7, 0.0, 0.0),
+    "fear": (1.0, 0.0, 0.0),
+    "surprise": (0.3, 0.0, 0.0),
+    "disgust": (0.9, 0.2, 0.0),
+    "wink": (1.0, 1.0, 1.0),
+}
 TIME_SLACK = 0.0005  # seconds: times are kept to the ms, so limits (attack + release <= duration, ...) allow this
 
 
@@ -124,6 +146,7 @@ class Action:
     amplitude: float
     attack: float = 0.0
     release: float = 0.0
+    emotion: str = ""  # the emotion of an "emotion" action (face/emotion.py EMOTIONS), else ""
 
     def __post_init__(self) -> None:
         """Raise ValueError naming the field unless the action is one the timeline can play."""
@@ -147,6 +170,10 @@ class Action:
             raise ValueError(f"{self.kind} angle {self.amplitude:g} degrees; expected -{MAX_ANGLE:g} to {MAX_ANGLE:g}")
         if self.kind not in ANGLE_KINDS and not 0.0 <= self.amplitude <= 1.0:
             raise ValueError(f"{self.kind} amplitude {self.amplitude:g}; expected an amount from 0 to 1")
+        if self.kind == "emotion" and self.emotion not in EMOTIONS:
+            raise ValueError(f"emotion {self.emotion!r} is unknown; expected one of {', '.join(EMOTIONS)}")
+        if self.kind != "emotion" and self.emotion:
+            raise ValueError(f"a {self.kind} has no emotion; expected emotion ''")
 
     @property
     def end(self) -> float:
@@ -386,3 +413,44 @@ def _smiles(
             continue
         smiles.append(Action("smile", start, length, amount, attack, release))
     return smiles
+
+
+def emotion_at(actions: Sequence[Action], t: float) -> dict[str, float]:
+    """{emotion: intensity} of the "emotion" `actions` at `t` seconds (linear ramps over
+    attack and release; the timeline eases them, this is the amount for adapting)."""
+    out: dict[str, float] = {}
+    for action in actions:
+        if action.kind != "emotion" or not action.start <= t <= action.end:
+            continue
+        rise = (t - action.start) / action.attack if action.attack else 1.0
+        fall = (action.end - t) / action.release if action.release else 1.0
+        out[action.emotion] = out.get(action.emotion, 0.0) + action.amplitude * min(1.0, rise, fall)
+    return out
+
+
+def adapt_to_emotions(actions: Sequence[Action]) -> tuple[Action, ...]:
+    """`actions` with the behaviour drawn during an emotion changed by EMOTION_ADAPT: blinks
+    thinned (deterministically: a blink is kept each time the running sum of the rate factor
+    reaches 1), brow raises and smiles scaled (dropped at 0). Without emotions: unchanged."""
+    moods = [a for a in actions if a.kind == "emotion"]
+    if not moods:
+        return tuple(actions)
+    kept: list[Action] = []
+    credit = 0.0
+    for action in sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))):
+        column = {"blink": 0, "brow": 1, "smile": 2}.get(action.kind)
+        if column is None:
+            kept.append(action)
+            continue
+        factor = 1.0
+        for name, amount in emotion_at(moods, action.start).items():
+            factor -= min(amount, 1.0) * (1.0 - EMOTION_ADAPT[name][column])
+        factor = max(factor, 0.0)
+        if column == 0:
+            credit += factor
+            if credit >= 1.0 - TIME_SLACK:
+                credit -= 1.0
+                kept.append(action)
+        elif round(action.amplitude * factor, 2) > 0:
+            kept.append(replace(action, amplitude=round(action.amplitude * factor, 2)))
+    return tuple(kept)
