@@ -454,3 +454,72 @@ def adapt_to_emotions(actions: Sequence[Action]) -> tuple[Action, ...]:
         elif round(action.amplitude * factor, 2) > 0:
             kept.append(replace(action, amplitude=round(action.amplitude * factor, 2)))
     return tuple(kept)
+
+
+# An emotion set by the transcript's markup is fully there when its first marked syllable
+# starts and holds through its last; it eases in over this long before and out after (our
+# choice: about a breath; shortened where the audio starts or ends sooner).
+EMOTION_EASE = 0.4
+
+
+def marked_spans(alignment, marks: Sequence) -> tuple[tuple[str, float, float, float], ...] | None:
+    """(name, intensity, start, end seconds) of each transcript mark (speech/transcript.py
+    EmotionMark: syllable indices) over the Alignment's syllables in time order; None when the
+    alignment holds another number of syllables than the marks were counted on (an edited
+    TextGrid of other text)."""
+    syllables = sorted((s for sentence in alignment.sentences for s in sentence.syllables), key=lambda s: s.start)
+    if marks and max(mark.last for mark in marks) >= len(syllables):
+        return None
+    return tuple((m.name, m.intensity, syllables[m.first].start, syllables[m.last].end) for m in marks)
+
+
+def emotion_actions(spans: Sequence[tuple[str, float, float, float]], duration: float,
+                    default: tuple[str, float] | None = None) -> tuple[Action, ...]:
+    """The "emotion" actions of marked speech `spans` ((name, intensity, start, end) seconds)
+    in audio of `duration` s, each easing in over EMOTION_EASE before its start and out after
+    its end (overlapping spans of one emotion join, at the larger intensity); `default` (name,
+    intensity) holds everywhere else, cross-fading into and out of the marked spans of other
+    emotions (next to a marked span of its own emotion the default fades to neutral and back,
+    over EMOTION_EASE or a third of its stretch, as one emotion's actions never overlap)."""
+    marked: list[Action] = []
+    for name, intensity, start, end in sorted(spans, key=lambda s: (s[2], s[0])):
+        begin, finish = _round_to_ms(max(0.0, start - EMOTION_EASE)), _round_to_ms(min(duration, end + EMOTION_EASE))
+        same = [a for a in marked if a.emotion == name and a.end > begin - TIME_SLACK]
+        if same:
+            marked.remove(same[-1])
+            begin, intensity = same[-1].start, max(intensity, same[-1].amplitude)
+        attack = _round_to_ms(min(EMOTION_EASE, start - begin)) if not same else same[-1].attack
+        release = _round_to_ms(max(0.0, finish - max(end, begin + attack)))
+        marked.append(Action("emotion", begin, _round_to_ms(finish - begin), float(intensity), max(attack, 0.0),
+                             release, name))
+    actions = list(marked)
+    if default is not None:
+        name, intensity = default[0], float(default[1])
+        # covered stretches (start, end, attack, release), merged; a stretch holding the default's own
+        # emotion is cut out without overlap (actions of one emotion never overlap), others cross-fade
+        edges: list[tuple[float, float, float, float]] = []
+        for action in sorted(marked, key=lambda a: a.start):
+            rise, fall = (0.0, 0.0) if action.emotion == name else (action.attack, action.release)
+            if edges and action.start < edges[-1][1]:
+                first = edges[-1]
+                edges[-1] = (first[0], max(first[1], action.end), min(first[2], rise), fall)
+            else:
+                edges.append((action.start, action.end, rise, fall))
+        start, attack = 0.0, 0.0
+        for begin, end, rise, fall in edges:
+            stop = _round_to_ms(begin + rise)
+            if stop > start:
+                length = _round_to_ms(stop - start)
+                actions.append(Action("emotion", start, length, intensity, min(attack, length / 2),
+                                      min(rise or _ramp(length), length / 2), name))
+            start, attack = _round_to_ms(end - fall), fall or _ramp(duration - end)
+        if duration > start:
+            length = _round_to_ms(duration - start)
+            actions.append(Action("emotion", start, length, intensity, min(attack, length / 2), 0.0, name))
+    return tuple(sorted(actions, key=lambda a: (a.start, a.emotion)))
+
+
+def _ramp(length: float) -> float:
+    """The ease of a default mood's stretch of `length` s next to its own emotion: EMOTION_EASE
+    or a third of the stretch, whichever is shorter (ms)."""
+    return _round_to_ms(min(EMOTION_EASE, max(length, 0.0) / 3))
