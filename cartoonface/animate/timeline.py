@@ -54,12 +54,13 @@ FINAL_LENGTHENING = 1.4
 # A b/p/m syllable whose next shape comes too early for the closure moves its later shapes
 # (towards its end), keeping at least this share of their time (our choice).
 CLOSURE_KEEP = 0.5
-# Seed 000 eq. 18's gamma while talking (our choice): the mouth shapes carry the speech and
-# the emotion keeps half of its lip movement (the corners of a happy 'a' still rise; the
-# dropped jaw of surprise gives way to the syllables). At rest gamma is 1. It changes over
-# LIPS_EASE_MS before a sentence starts and after it ends (pauses shorter than twice that
-# keep it), like the lead-in and lead-out of the lips.
-LIPS_SPEAKING = 0.5
+# Seed 000 eq. 18's gamma while talking (our choice): the mouth shapes alone open and shape
+# the lips, the emotion keeps its mouth corners (face/emotion.py LIP_POINTS: the corners of a
+# happy 'a' still rise; the dropped jaw of surprise gives way to the syllables, and a
+# surprised 'm' closes). At rest gamma is 1. It changes over LIPS_EASE_MS before a sentence
+# starts and after it ends (pauses shorter than twice that keep it), like the lead-in and
+# lead-out of the lips.
+LIPS_SPEAKING = 0.0
 LIPS_EASE_MS = 200
 MOUTH_EASING = "smoothstep"
 AMOUNT_EASING = "smoothstep"

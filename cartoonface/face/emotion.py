@@ -11,10 +11,12 @@ intensity 0..1, so emotions blend with each other, with the mouth shapes and
 with blink / smile / brow, and interpolate between key frames.
 
 Seed 000, eq. 18: FE = P(N + sum_i D_i + gamma D_l + (1 - gamma) L). The
-emotion's displacement splits into D_i (brows, eyes, nose: every point but
-the lips) and D_l (LIP_POINTS); `lip_split` returns the two parts, and
-face/pose.py weighs D_l by the state's `lips` (gamma: 1 at rest, less while
-talking, animate/timeline.py). The coefficients are ours, chosen by looking at
+emotion's displacement splits into D_i (brows, eyes, nose, mouth corners:
+every point but the lips) and D_l (LIP_POINTS); `lip_split` returns the two
+parts, and face/pose.py weighs D_l by the state's `lips` (gamma: 1 at rest, 0
+while talking, animate/timeline.py). L, the mouth shape, is kept whole rather
+than weighed by 1 - gamma: the shapes are made for a face at rest, and while
+gamma is 1 the mouth is at rest (L = 0), so the two readings agree there. The coefficients are ours, chosen by looking at
 the sample faces against the descriptions of the six basic expressions
 (Ekman and Friesen's FACS action units: e.g. happy AU6+12, sad AU1+4+15,
 surprise AU1+2+5+26); docs/emotions.md shows them.
@@ -34,8 +36,11 @@ from cartoonface.face.rbf import deform
 EMOTIONS: tuple[str, ...] = ("happy", "sad", "angry", "fear", "surprise", "disgust", "wink")
 EMOTION_INDEX: dict[str, int] = {name: i for i, name in enumerate(EMOTIONS)}
 
-# The lips of seed 000 eq. 18 (D_l): the mouth points and the chin that follows them.
-LIP_POINTS: tuple[str, ...] = ("8.1", "8.2", "8.3", "8.4", "8.9", "8.10", "2.2", "2.3", "2.1")
+# The lips of seed 000 eq. 18 (D_l): the points that open and shape the mouth, and the chin
+# and jaw corners that follow them. The mouth corners 8.3 / 8.4 are not among them: they
+# carry the emotion (a smile, a frown) through speech as the brows do, while the opening
+# belongs to the syllables (a surprised 'm' still closes the lips).
+LIP_POINTS: tuple[str, ...] = ("8.1", "8.2", "8.9", "8.10", "2.2", "2.3", "2.1", "2.13", "2.14")
 
 # Image-left / image-right pairs; a symmetric entry names the image-left point
 # and its dx, the image-right point gets -dx (the face's mirror image).
