@@ -129,7 +129,8 @@ def test_bad_emotions_are_refused_naming_them(bad) -> None:
 
 def test_every_emotion_mouth_blend_and_pose_draws_sound_eyes_and_lips(face) -> None:
     """Lids never cross (lower lid at or below the upper one across the eye, to 0.01 d: shut lids
-    meet at one height but not always at one x), the eye
+    meet at one height but not always at one x), each open eye's iris centre lies between its
+    lids, the eye
     outlines and the lips never cross themselves; emotions x mouth shapes x weights x poses."""
     lifted = lift(face)
     weights = (0.5, 1.0)
@@ -138,13 +139,15 @@ def test_every_emotion_mouth_blend_and_pose_draws_sound_eyes_and_lips(face) -> N
         state = FaceState(pose=pose, emotion=mood, lips=lips).with_mouth(symbol)
         posed = pose_face(lifted, state)
         where = f"{mood} {symbol} {pose} lips {lips}"
-        for outer, upper, inner, lower in EYES:
+        for (outer, upper, inner, lower), pupil in zip(EYES, posed.pupils, strict=True):
             o, u, i, lo = (posed.p(n) for n in (outer, upper, inner, lower))
             axis = np.array([-(i - o)[1], (i - o)[0]]) * np.sign((i - o)[0])  # down the face, across the eye
             opening = (lo - u) @ axis / np.hypot(*axis)
             assert opening >= -0.01 * face.fapu.d, where
             if opening > 0.01 * face.fapu.d:  # an open eye; a shut one is a line
                 assert crossings(np.array([o, u, i, lo])) == 0, where
+                share = (pupil - u) @ (lo - u) / ((lo - u) @ (lo - u))  # the iris centre between the lids
+                assert 0 < share < 1, where
         out = mouth_outlines(posed.xy[ROWS], posed.mouth @ shown_parts(), face.fapu.d)
         lips_outline = sample(out.lips)
         assert area(lips_outline) > 0 and crossings(lips_outline) == 0, where
