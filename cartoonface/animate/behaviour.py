@@ -502,7 +502,7 @@ def emotion_actions(spans: Sequence[tuple[str, float, float, float]], duration: 
             rise, fall = (0.0, 0.0) if action.emotion == name else (action.attack, action.release)
             if edges and action.start < edges[-1][1]:
                 first = edges[-1]
-                edges[-1] = (first[0], max(first[1], action.end), min(first[2], rise), fall)
+                edges[-1] = (first[0], max(first[1], action.end), first[2], fall if action.end >= first[1] else first[3])
             else:
                 edges.append((action.start, action.end, rise, fall))
         start, attack = 0.0, 0.0

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cartoonface.face.emotion import EMOTIONS, emotion_basis, emotion_coefficients
+from cartoonface.face.emotion import emotion_basis, emotion_coefficients
 from cartoonface.face.expression import EXPRESSIONS, LOWER_LIDS, UPPER_LIDS, expression_displacements
 from cartoonface.face.lift import LIFTED_INDEX, LIFTED_NAMES, LiftedFace
 from cartoonface.face.model import POINT_NAMES
@@ -213,7 +213,6 @@ def _keep_in_lids(pupils: np.ndarray, upper: np.ndarray, lower: np.ndarray, iris
 
 _N_MOUTH = len(MOUTH_SYMBOLS)
 _N_COEF = _N_MOUTH + len(EXPRESSIONS)
-_NO_EMOTION = np.zeros(2 * len(EMOTIONS))
 
 
 def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
@@ -230,8 +229,9 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     coef[_N_MOUTH] = state.blink
     coef[_N_MOUTH + 1] = state.smile
     coef[_N_MOUTH + 2] = state.brow
-    feeling = emotion_coefficients(state.emotion, state.lips) if state.emotion else _NO_EMOTION
-    flat = r.neutral + coef @ r.basis[:_N_COEF] + feeling @ r.basis[_N_COEF:]
+    flat = r.neutral + coef @ r.basis[:_N_COEF]
+    if state.emotion:
+        flat += emotion_coefficients(state.emotion, state.lips) @ r.basis[_N_COEF:]
     upper, lower = r.lids
     flat[lower] = np.maximum(flat[lower], flat[upper])  # expression.close_lids on the flat rows
 
