@@ -29,7 +29,7 @@ import numbers
 import numpy as np
 
 from cartoonface.errors import OptionError
-from cartoonface.face.model import POINT_INDEX, POINT_NAMES
+from cartoonface.face.model import POINT_INDEX, POINT_NAMES, FaceModel, Fapu
 from cartoonface.face.mouth import JAW_CORNER_SHARE
 from cartoonface.face.rbf import deform
 
@@ -156,7 +156,7 @@ def template_points(name: str) -> tuple[str, ...]:
     return FEATURE_POINTS + tuple(dict.fromkeys(p for p in named if p not in FEATURE_POINTS))
 
 
-def template_fapu(name: str, fapu) -> np.ndarray:
+def template_fapu(name: str, fapu: Fapu) -> np.ndarray:
     """(len(template_points(name)), 2) pixel displacement of the template's points at
     intensity 1, each coefficient times `fapu`'s (a face's Fapu) unit: plain FAPU scaling."""
     points = template_points(name)
@@ -167,7 +167,7 @@ def template_fapu(name: str, fapu) -> np.ndarray:
     return out
 
 
-def scaled_displacements(face) -> np.ndarray:
+def scaled_displacements(face: FaceModel) -> np.ndarray:
     """(len(EMOTIONS), P, 2) image displacement of every model point at intensity 1 by plain
     FAPU scaling: the points a template names move, no other point does."""
     out = np.zeros((len(EMOTIONS), len(POINT_NAMES), 2))
@@ -204,7 +204,7 @@ def check_intensity(value: object, what: str) -> float:
     return float(value)
 
 
-def emotion_displacements(face, widths: str | None = "cluster") -> np.ndarray:
+def emotion_displacements(face: FaceModel, widths: str | None = "cluster") -> np.ndarray:
     """(len(EMOTIONS), P, 2) image displacement of every model point of `face` at intensity 1.
 
     The template's points move by their FAPU terms on this face; `widths` a face/rbf.py
@@ -219,7 +219,7 @@ def emotion_displacements(face, widths: str | None = "cluster") -> np.ndarray:
     return out
 
 
-def emotion_basis(face) -> np.ndarray:
+def emotion_basis(face: FaceModel) -> np.ndarray:
     """(2 len(EMOTIONS), P, 2) the emotions' D_i (rows 0..6) then D_l (rows 7..13) of seed
     000 eq. 18 at intensity 1 on `face` (RBF transfer): face/pose.py's rig rows."""
     rest, lips = lip_split(emotion_displacements(face))
