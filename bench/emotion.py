@@ -1,7 +1,8 @@
 """Emotions (face/emotion.py) and their transfer (face/rbf.py): how far apart they look, how
 well the RBF predicts a moved point, and what they cost in `generate`.
 
-Figures, for each sample face (female, male):
+Figures, for each sample face (female, male) and, with the photo extra, the face made from
+scikit-image's astronaut portrait (public domain; docs/photo.md):
 - pixels: each emotion at intensity 1 against neutral, and every pair of emotions, in a frontal
   render (bench/mouth.py's measures: `face` = pixels differing by more than CHANGED in a channel,
   a share of the face outline's pixels; `figure` = issue 10's measure). Goals (issue 13, face
@@ -15,8 +16,8 @@ Figures, for each sample face (female, male):
   time of `pipeline.generate` (median of RUNS).
 
 `python -m bench.emotion --pictures DIR` also writes the contact sheets emotions x mouth
-shapes (emotions-female.png, emotions-male.png) and the RBF / plain scaling comparison
-(emotions-rbf.png) into DIR.
+shapes (emotions-female.png, emotions-male.png), the emotions on the astronaut's face
+(emotions-astronaut.png) and the RBF / plain scaling comparison (emotions-rbf.png) into DIR.
 """
 
 from __future__ import annotations
@@ -63,7 +64,21 @@ GOAL_PAIR = 0.01
 SHEET_CELL = 96.0  # contact sheet cell width, pixels
 CROP = (70, 90, 330, 370)  # the head in a sample face's 400 x 480 canvas, for the RBF picture
 DOT, DOT_COLOUR = 2.5, (220, 30, 30)  # the marks of the points only the RBF moves
+ASTRONAUT_SHAPES = ("a", "i", "u")  # the astronaut's sheet: the rest mouth and these shapes
 REST = "rest"  # the contact sheet's first column: the closed mouth with the emotion's whole lips (gamma 1)
+
+
+def faces() -> list[tuple[str, FaceModel]]:
+    """(label, face): the two samples, and the astronaut's face when the photo extra is installed."""
+    out = [(name, load_face(SAMPLE_FACES / f"{name}.json")) for name in ("female", "male")]
+    try:
+        from skimage import data
+
+        from cartoonface.photo.model_from_photo import face_from_photo, photo_from_image
+    except ImportError:
+        return out
+    photo = photo_from_image(Image.fromarray(data.astronaut()), "astronaut")
+    return out + [("astronaut (photo)", face_from_photo(photo, "astronaut").face)]
 
 
 def pixel_shares(face: FaceModel) -> tuple[dict[str, tuple[float, float]], dict[tuple[str, str], float]]:
@@ -112,8 +127,7 @@ def generate_figures() -> dict[str, tuple[float, float]]:
 
 def main() -> None:
     """Print the pixel, leave-one-out and generate figures."""
-    for name in ("female", "male"):
-        face = load_face(SAMPLE_FACES / f"{name}.json")
+    for name, face in faces():
         singles, pairs = pixel_shares(face)
         print(f"{name}: vs neutral (face measure, figure measure in brackets): " + ", ".join(
             f"{e} {100 * f:.1f} % ({100 * g:.1f} %)" for e, (f, g) in singles.items()))
@@ -135,16 +149,18 @@ def main() -> None:
         print(f"story {label}: SVG {per_minute:.2f} MB per minute, generate {seconds:.2f} s (median of {RUNS})")
 
 
-def contact_sheet(face: FaceModel) -> bytes:
-    """PNG (256 colours): rows neutral and each emotion at intensity 1, columns the rest mouth
-    (gamma 1) and the 12 shapes as spoken (gamma LIPS_SPEAKING)."""
-    rows = []
-    for name in ("neutral",) + EMOTIONS:
-        emotion = () if name == "neutral" else ((name, 1.0),)
-        states = [FaceState(emotion=emotion)] + [FaceState(emotion=emotion, lips=LIPS_SPEAKING).with_mouth(s)
-                                                 for s in MOUTH_SYMBOLS]
-        rows.append((name, states))
-    return svg_to_png(svg_bytes(sheet_svg(face, rows, [REST, *MOUTH_SYMBOLS], SHEET_CELL)), palette=True)
+def contact_sheet(face: FaceModel, shapes: tuple[str, ...] = MOUTH_SYMBOLS, across: bool = False) -> bytes:
+    """PNG (256 colours): neutral and each emotion at intensity 1 (rows, or columns when
+    `across`) x the rest mouth (gamma 1) and the mouth `shapes` as spoken (gamma LIPS_SPEAKING)."""
+    moods = ("neutral",) + EMOTIONS
+    grid = [[FaceState(emotion=() if name == "neutral" else ((name, 1.0),), lips=1.0 if s == REST else LIPS_SPEAKING)
+             .with_mouth("m" if s == REST else s) for s in (REST, *shapes)] for name in moods]
+    if across:
+        rows = [(s, [line[k] for line in grid]) for k, s in enumerate((REST, *shapes))]
+        root = sheet_svg(face, rows, list(moods), SHEET_CELL)
+    else:
+        root = sheet_svg(face, list(zip(moods, grid, strict=True)), [REST, *shapes], SHEET_CELL)
+    return svg_to_png(svg_bytes(root), palette=True)
 
 
 def rbf_picture(face: FaceModel) -> Image.Image:
@@ -178,6 +194,9 @@ def pictures(folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for name in ("female", "male"):
         (folder / f"emotions-{name}.png").write_bytes(contact_sheet(load_face(SAMPLE_FACES / f"{name}.json")))
+    photo_faces = faces()[2:]
+    if photo_faces:
+        (folder / "emotions-astronaut.png").write_bytes(contact_sheet(photo_faces[0][1], ASTRONAUT_SHAPES, True))
     rbf_picture(load_face(SAMPLE_FACES / "female.json")).quantize(256).save(folder / "emotions-rbf.png")
 
 
