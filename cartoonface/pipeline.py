@@ -18,13 +18,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.animate.actions import actions_to_json, load_actions
-from cartoonface.animate.behaviour import schedule, speech_pauses, speech_spans
+from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedule, speech_pauses, speech_spans
 from cartoonface.animate.frames import FPS_RANGE, sample_frames
 from cartoonface.animate.idle import with_sway
 from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
 from cartoonface.files import atomic_directory, folder_size, read_user_text
 from cartoonface.render.animation import animation_svg
@@ -34,6 +35,7 @@ from cartoonface.speech.analyse import analyse
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
+from cartoonface.speech.transcript import emotion_marks
 
 # Share of the whole job done when each stage starts (measured on the sample book:
 # alignment and drawing take most of the time).
@@ -60,6 +62,8 @@ class Options:
     alignment: Path | None = None  # edited TextGrid: skips alignment
     pause: tuple[float, float] | None = None  # thesis mode of Alg. 3.1
     links: tuple[tuple[str, str], ...] = ()  # (label, url) for the audio-book page
+    emotion: str | None = None  # default mood (face/emotion.py EMOTIONS) where the transcript marks none
+    intensity: float = 1.0  # of the default mood, 0..1
 
 
 @dataclass(frozen=True)
@@ -96,6 +100,11 @@ def check_options(options: Options) -> None:
         if not 0 <= start < end:
             raise OptionError(f"pause {start},{end}: expected START,END seconds with 0 <= START < END")
     check_links(options.links)
+    if options.emotion is not None and options.emotion not in EMOTIONS:
+        raise OptionError(f"emotion {options.emotion!r}: expected one of {', '.join(EMOTIONS)}")
+    intensity = options.intensity
+    if isinstance(intensity, bool) or not isinstance(intensity, int | float) or not 0 <= intensity <= 1:
+        raise OptionError(f"intensity {intensity!r}: expected a number from 0 to 1")
 
 
 def edited_alignment(path: str | os.PathLike[str], duration: float) -> Alignment:
@@ -164,6 +173,8 @@ def generate(
     check_out_dir(target)
     model = face if isinstance(face, FaceModel) else load_face(face)
     text = transcript if isinstance(transcript, str) else read_user_text(transcript, TranscriptError, "transcript file")
+    source = "transcript" if isinstance(transcript, str) else str(transcript)
+    marks = emotion_marks(text, source)
     report("decode")
     recording = load_audio(audio)
     duration = recording.duration
@@ -172,7 +183,6 @@ def generate(
         report("align")
         alignment = edited_alignment(options.alignment, duration)
     else:
-        source = "transcript" if isinstance(transcript, str) else str(transcript)
         alignment = analyse(recording, text, pause=options.pause, progress=report, source=source)
     report("schedule")
     style = STYLES[options.style or PAGE_STYLES[options.page]]
@@ -181,6 +191,12 @@ def generate(
     else:
         actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
                            peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment))
+        spans = marked_spans(alignment, marks)
+        if spans is None:
+            alignment = dataclasses.replace(alignment, notes=alignment.notes + (
+                "the transcript's emotion marks were not used: the alignment holds other syllables",))
+        default = None if options.emotion is None else (options.emotion, options.intensity)
+        actions += emotion_actions(spans or (), duration, default)
     report("frames")
     states = sample_frames(build_timeline(alignment, actions), options.fps)
     states = with_sway(states, options.fps, options.seed, style.sway_peak)

@@ -18,6 +18,20 @@ def _doc(*rows: dict) -> str:
 
 
 GOOD = {"kind": "turn", "start": 1.0, "duration": 0.5, "amplitude": 5.0}
+MOOD = {"kind": "emotion", "emotion": "happy", "start": 1.0, "duration": 3.0, "amplitude": 0.8, "attack": 0.5,
+        "release": 0.5}
+
+
+def test_emotions_round_trip_and_different_ones_may_overlap():
+    """Two emotions cross-fading (happy fading out while sad fades in) are kept; the same
+    emotion twice at once is refused."""
+    text = _doc(MOOD, {**MOOD, "emotion": "sad", "start": 3.5})
+    happy, sad = actions_from_json(text, "a.json", DURATION)
+    assert (happy.emotion, sad.emotion) == ("happy", "sad") and happy.end > sad.start
+    assert happy == Action("emotion", 1.0, 3.0, 0.8, 0.5, 0.5, "happy")
+    assert actions_from_json(actions_to_json((happy, sad)), "b.json", DURATION) == (happy, sad)
+    with pytest.raises(ActionsError, match=r"actions\[1\]\.start.*happy emotion"):
+        actions_from_json(_doc(MOOD, {**MOOD, "start": 3.5}), "a.json", DURATION)
 
 
 def test_schedule_round_trips_through_a_file(tmp_path):
@@ -67,6 +81,10 @@ def test_deleting_and_moving_actions_is_kept():
         ({**GOOD, "kind": "blink", "amplitude": 1, "attack": 0.3, "release": 0.3}, "actions[1].release", "exceed"),
         ({**GOOD, "kind": "blink", "amplitude": 1, "attack": -0.1}, "actions[1].attack", "negative"),
         ("blink", "actions[1]", "expected an object"),
+        ({**MOOD, "emotion": "joy"}, "actions[1].emotion", "unknown emotion 'joy'"),
+        ({k: v for k, v in MOOD.items() if k != "emotion"}, "actions[1].emotion", "missing"),
+        ({**MOOD, "amplitude": 1.5}, "actions[1].amplitude", "intensity from 0 to 1"),
+        ({**GOOD, "emotion": "sad"}, "actions[1].emotion", "has no emotion"),
     ],
 )
 def test_bad_field_names_index_and_field(row, field, words):

@@ -101,6 +101,8 @@ def test_bad_options_are_refused_in_one_line(tmp_path: Path, option: str, value:
     (("render", "--smile", "-0.1"), "--smile"),
     (("render", "--brow", "lots"), "--brow"),
     (("render", "--mouth", "A"), "'A'"),
+    (("render", "--emotion", "joy"), "--emotion 'joy'"),
+    (("render", "--emotion", "sad", "--intensity", "1.2"), "--intensity 1.2"),
     (("sheet",), "8.4"),
     (("diagram",), "8.4"),
 ])

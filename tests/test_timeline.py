@@ -7,6 +7,7 @@ import pytest
 from cartoonface.animate.behaviour import Action
 from cartoonface.animate.frames import states_at
 from cartoonface.animate.timeline import CLOSURE_MS, FINAL_LENGTHENING, LAG_MS, LEAD_MS, REST, build_timeline
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.mouth_shapes import shape_onsets
 
@@ -83,7 +84,8 @@ def test_key_frames_are_integer_ms_in_order():
         times = [key.t for key in track.keys]
         assert all(isinstance(t, int) for t in times)
         assert times == sorted(times) and times[0] == 0 and times[-1] <= timeline.duration
-    assert {t.name for t in timeline.tracks} == {"mouth", "blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile"}
+    assert {t.name for t in timeline.tracks} == {"mouth", "blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v",
+                                                 "smile", "lips", *(f"emotion:{name}" for name in EMOTIONS)}
 
 
 def test_blink_and_brow_envelopes():

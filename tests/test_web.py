@@ -362,6 +362,14 @@ def test_binary_or_control_characters_in_a_transcript_file_are_refused(client, s
     assert "longer than" not in page
 
 
+def test_the_mood_and_the_markup_reach_the_job(app, client, speech, sample_name):
+    response = post(client, form(client, speech, sample_name, transcript="[happy]你好，世界。", mood="sad"))
+    assert response.status_code == 303
+    job = load_job(Path(app.instance_path), job_id_of(response.headers["Location"]))
+    assert (job.folder / "transcript.txt").read_text(encoding="utf-8") == "[happy]你好，世界。"
+    assert job.spec["mood"] == "sad"
+
+
 def test_transcript_file_is_used_instead_of_pasted_text(app, client, speech, sample_name):
     response = post(client, form(client, speech, sample_name, transcript="",
                                  transcript_file=(io.BytesIO("\ufeff你好，世界。\r\n".encode()), "t.txt")))
@@ -439,6 +447,9 @@ def test_photo_size_and_either_model_or_photo(client, speech, sample_name):
     ("background", "<img src=x>", "Choose one of the backgrounds"),
     ("clothes", "", "Choose one of the clothes"),
     ("style", "lively", "Choose one of the styles"),
+    ("mood", "joy", "Choose one of the moods"),
+    ("transcript", "你好。\n世界[joy]。", "line 2, column 3: unknown emotion &#39;joy&#39;"),
+    ("transcript", "你好[/sad]世界。", "line 1, column 3: closing mark [/sad]"),
     ("title", "x" * 201, "at most 200 are accepted"),
     ("title", "ring\x07bell", "control character U+0007"),
     ("title", "\x1b[31mred", "control character U+001B"),

@@ -4,7 +4,9 @@ Format (docs/actions.md)::
 
     {"format": "cartoonface-actions", "version": 1,
      "actions": [{"kind": "nod", "start": 2.31, "duration": 1.2, "amplitude": 4.5,
-                  "attack": 0.5, "release": 0.4}, ...]}
+                  "attack": 0.5, "release": 0.4},
+                 {"kind": "emotion", "emotion": "happy", "start": 0.5, "duration": 3.0,
+                  "amplitude": 0.8, "attack": 0.4, "release": 0.6}, ...]}
 
 `actions_to_json` / `save_actions` write it; `actions_from_json` / `load_actions`
 read and validate it against the audio's duration and raise ActionsError naming
@@ -21,6 +23,7 @@ from pathlib import Path
 
 from cartoonface.animate.behaviour import ANGLE_KINDS, ENVELOPE_KINDS, KINDS, TIME_SLACK, Action
 from cartoonface.errors import ActionsError
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.state import MAX_ANGLE
 from cartoonface.files import read_user_text, write_text_atomic
 
@@ -28,6 +31,7 @@ FORMAT = "cartoonface-actions"
 VERSION = 1
 REQUIRED = ("kind", "start", "duration", "amplitude")
 OPTIONAL = ("attack", "release")
+EMOTION_FIELD = "emotion"  # required for kind "emotion" (its name), refused for the others
 # An envelope action written without attack/release rises over a third of its
 # duration and falls over a third (our default, documented in docs/actions.md).
 DEFAULT_RAMP = 1 / 3
@@ -36,8 +40,11 @@ DEFAULT_RAMP = 1 / 3
 def actions_to_json(actions: Sequence[Action]) -> str:
     """The actions as actions.json text (UTF-8, one action per line), sorted by start."""
     rows = []
-    for action in sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))):
-        row = {"kind": action.kind, "start": action.start, "duration": action.duration, "amplitude": action.amplitude}
+    for action in sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind), a.emotion)):
+        row: dict[str, object] = {"kind": action.kind}
+        if action.emotion:
+            row[EMOTION_FIELD] = action.emotion
+        row |= {"start": action.start, "duration": action.duration, "amplitude": action.amplitude}
         if action.kind in ENVELOPE_KINDS:
             row |= {"attack": action.attack, "release": action.release}
         rows.append("    " + json.dumps(row, ensure_ascii=False))
@@ -86,22 +93,30 @@ def actions_from_json(text: str, source: str, duration: float) -> tuple[Action, 
         raise ActionsError(f"{source}: field 'actions' must be a list of actions")
     actions = [_action(row, f"{source}: actions[{i}]", duration) for i, row in enumerate(rows)]
     _check_overlaps(actions, source)
-    return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))
+    return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind), a.emotion)))
 
 
 def _action(row: object, where: str, duration: float) -> Action:
     """One validated Action from the JSON object `row`; `where` prefixes messages."""
     if not isinstance(row, dict):
         raise ActionsError(f"{where}: expected an object with kind, start, duration, amplitude")
+    fields = REQUIRED + OPTIONAL + (EMOTION_FIELD,)
     for key in row:
-        if key not in REQUIRED + OPTIONAL:
-            raise ActionsError(f"{where}.{key}: unknown field; expected {', '.join(REQUIRED + OPTIONAL)}")
+        if key not in fields:
+            raise ActionsError(f"{where}.{key}: unknown field; expected {', '.join(fields)}")
     for key in REQUIRED:
         if key not in row:
             raise ActionsError(f"{where}.{key}: missing")
     kind = row["kind"]
     if kind not in KINDS:
         raise ActionsError(f"{where}.kind: unknown kind {kind!r}; expected one of {', '.join(KINDS)}")
+    emotion = row.get(EMOTION_FIELD, "")
+    if kind == "emotion" and EMOTION_FIELD not in row:
+        raise ActionsError(f"{where}.{EMOTION_FIELD}: missing; expected one of {', '.join(EMOTIONS)}")
+    if kind == "emotion" and emotion not in EMOTIONS:
+        raise ActionsError(f"{where}.{EMOTION_FIELD}: unknown emotion {emotion!r}; expected one of {', '.join(EMOTIONS)}")
+    if kind != "emotion" and EMOTION_FIELD in row:
+        raise ActionsError(f"{where}.{EMOTION_FIELD}: a {kind} has no emotion; remove {EMOTION_FIELD!r}")
     start, length, amplitude = (_number(row, key, where) for key in ("start", "duration", "amplitude"))
     if start < 0:
         raise ActionsError(f"{where}.start: {start} is negative; expected seconds from 0")
@@ -116,7 +131,8 @@ def _action(row: object, where: str, duration: float) -> Action:
     if kind in ANGLE_KINDS and abs(amplitude) > MAX_ANGLE:
         raise ActionsError(f"{where}.amplitude: angle {amplitude} degrees; expected -{MAX_ANGLE:g}..{MAX_ANGLE:g}")
     if kind not in ANGLE_KINDS and not 0 <= amplitude <= 1:
-        raise ActionsError(f"{where}.amplitude: {amplitude}; expected an amount from 0 to 1 for a {kind}")
+        what = "an intensity" if kind == "emotion" else "an amount"
+        raise ActionsError(f"{where}.amplitude: {amplitude}; expected {what} from 0 to 1 for a {kind}")
     if kind not in ENVELOPE_KINDS:
         for key in OPTIONAL:
             if key in row:
@@ -130,14 +146,15 @@ def _action(row: object, where: str, duration: float) -> Action:
         raise ActionsError(
             f"{where}.release: attack + release ({ramps[0] + ramps[1]:g} s) exceed the duration ({length:g} s)"
         )
-    return _made(where, kind, round(start, 3), round(length, 3), amplitude, round(ramps[0], 3), round(ramps[1], 3))
+    return _made(where, kind, round(start, 3), round(length, 3), amplitude, round(ramps[0], 3), round(ramps[1], 3),
+                 emotion)
 
 
 def _made(where: str, kind: str, start: float, length: float, amplitude: float,
-          attack: float = 0.0, release: float = 0.0) -> Action:
+          attack: float = 0.0, release: float = 0.0, emotion: str = "") -> Action:
     """The Action of these fields; its own check's ValueError becomes an ActionsError prefixed by `where`."""
     try:
-        return Action(kind, start, length, amplitude, attack, release)
+        return Action(kind, start, length, amplitude, attack, release, emotion)
     except ValueError as exc:
         raise ActionsError(f"{where}: {exc}") from None
 
@@ -151,12 +168,14 @@ def _number(row: dict, key: str, where: str) -> float:
 
 
 def _check_overlaps(actions: Sequence[Action], source: str) -> None:
-    """ActionsError if two actions of the same kind overlap in time (indices as in the file)."""
-    for kind in KINDS:
-        same = sorted((a.start, i, a) for i, a in enumerate(actions) if a.kind == kind)
+    """ActionsError if two actions of the same kind (for emotions: of the same emotion)
+    overlap in time (indices as in the file)."""
+    for kind, emotion in {(a.kind, a.emotion) for a in actions}:
+        same = sorted((a.start, i, a) for i, a in enumerate(actions) if (a.kind, a.emotion) == (kind, emotion))
+        what = f"{emotion} emotion" if emotion else kind
         for (_, i, first), (_, j, second) in zip(same, same[1:]):
             if second.start < first.end - TIME_SLACK:
                 raise ActionsError(
-                    f"{source}: actions[{j}].start: this {kind} at {second.start:g} s starts before "
-                    f"actions[{i}] (a {kind} until {first.end:g} s) ends; actions of one kind must not overlap"
+                    f"{source}: actions[{j}].start: this {what} at {second.start:g} s starts before "
+                    f"actions[{i}] (a {what} until {first.end:g} s) ends; actions of one kind must not overlap"
                 )

@@ -21,6 +21,12 @@ Kinds and what they drive (Pose is (tilt, turn, roll) about X, Y, Z):
   degrees away from the viewer (towards the image right / down), over
   `duration`; the eyes stay there until the next saccade.
 - ``smile``: a slight smile rises and fades; `amplitude` is the smile 0..1.
+- ``emotion``: one of face/emotion.py's EMOTIONS (the action's `emotion`)
+  rises to the intensity `amplitude` 0..1 and fades (the ease in and out is
+  `attack` and `release`); the user sets these (transcript markup, actions.json,
+  a default mood), `schedule` draws none. Emotions of different names may
+  overlap (one fades into the next); `adapt_to_emotions` thins the blinks and
+  scales the brow raises and smiles drawn during one (EMOTION_ADAPT).
 
 Envelope kinds (blink, brow, nod, smile) rise from 0 to `amplitude` over `attack`
 seconds, hold, and fall back to 0 over `release` seconds, all inside
@@ -33,16 +39,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from cartoonface.animate.gaze import Saccade, saccades
 from cartoonface.animate.style import ANNOUNCER, Style
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model, also the gaze limit
 
-KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile")
-ENVELOPE_KINDS = ("blink", "brow", "nod", "smile")
+KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile", "emotion")
+ENVELOPE_KINDS = ("blink", "brow", "nod", "smile", "emotion")
 ANGLE_KINDS = ("tilt", "turn", "nod", "gaze_h", "gaze_v")
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
@@ -104,6 +111,21 @@ SMILE_RELEASE = (0.4, 0.7)  # seconds
 SMILE_GAP = 4.0  # seconds: at least this long between two smiles
 
 
+# How an emotion at intensity 1 changes the drawn behaviour (our choice, after the
+# descriptions of each expression): blink rate factor (<= 1: blinks are thinned;
+# the eyes of a surprised face stay open, Ekman and Friesen's "eyes wide open"),
+# brow raise factor (the brows of surprise and fear are raised already and stay
+# there; frowning brows do not rise) and smile factor (no smile in a negative mood).
+# An intensity e scales each factor's departure from 1 by e.
+EMOTION_ADAPT: dict[str, tuple[float, float, float]] = {
+    "happy": (1.0, 1.0, 1.0),
+    "sad": (0.8, 0.4, 0.0),
+    "angry": (0.7, 0.0, 0.0),
+    "fear": (1.0, 0.0, 0.0),
+    "surprise": (0.3, 0.0, 0.0),
+    "disgust": (0.9, 0.2, 0.0),
+    "wink": (1.0, 1.0, 1.0),
+}
 TIME_SLACK = 0.0005  # seconds: times are kept to the ms, so limits (attack + release <= duration, ...) allow this
 
 
@@ -124,6 +146,7 @@ class Action:
     amplitude: float
     attack: float = 0.0
     release: float = 0.0
+    emotion: str = ""  # the emotion of an "emotion" action (face/emotion.py EMOTIONS), else ""
 
     def __post_init__(self) -> None:
         """Raise ValueError naming the field unless the action is one the timeline can play."""
@@ -147,6 +170,10 @@ class Action:
             raise ValueError(f"{self.kind} angle {self.amplitude:g} degrees; expected -{MAX_ANGLE:g} to {MAX_ANGLE:g}")
         if self.kind not in ANGLE_KINDS and not 0.0 <= self.amplitude <= 1.0:
             raise ValueError(f"{self.kind} amplitude {self.amplitude:g}; expected an amount from 0 to 1")
+        if self.kind == "emotion" and self.emotion not in EMOTIONS:
+            raise ValueError(f"emotion {self.emotion!r} is unknown; expected one of {', '.join(EMOTIONS)}")
+        if self.kind != "emotion" and self.emotion:
+            raise ValueError(f"a {self.kind} has no emotion; expected emotion ''")
 
     @property
     def end(self) -> float:
@@ -386,3 +413,113 @@ def _smiles(
             continue
         smiles.append(Action("smile", start, length, amount, attack, release))
     return smiles
+
+
+def emotion_at(actions: Sequence[Action], t: float) -> dict[str, float]:
+    """{emotion: intensity} of the "emotion" `actions` at `t` seconds (linear ramps over
+    attack and release; the timeline eases them, this is the amount for adapting)."""
+    out: dict[str, float] = {}
+    for action in actions:
+        if action.kind != "emotion" or not action.start <= t <= action.end:
+            continue
+        rise = (t - action.start) / action.attack if action.attack else 1.0
+        fall = (action.end - t) / action.release if action.release else 1.0
+        out[action.emotion] = out.get(action.emotion, 0.0) + action.amplitude * min(1.0, rise, fall)
+    return out
+
+
+def adapt_to_emotions(actions: Sequence[Action]) -> tuple[Action, ...]:
+    """`actions` with the behaviour drawn during an emotion changed by EMOTION_ADAPT: blinks
+    thinned (deterministically: a blink is kept each time the running sum of the rate factor
+    reaches 1), brow raises and smiles scaled (dropped at 0). Without emotions: unchanged."""
+    moods = [a for a in actions if a.kind == "emotion"]
+    if not moods:
+        return tuple(actions)
+    kept: list[Action] = []
+    credit = 0.0
+    for action in sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))):
+        column = {"blink": 0, "brow": 1, "smile": 2}.get(action.kind)
+        if column is None:
+            kept.append(action)
+            continue
+        factor = 1.0
+        for name, amount in emotion_at(moods, action.start).items():
+            factor -= min(amount, 1.0) * (1.0 - EMOTION_ADAPT[name][column])
+        factor = max(factor, 0.0)
+        if column == 0:
+            credit += factor
+            if credit >= 1.0 - TIME_SLACK:
+                credit -= 1.0
+                kept.append(action)
+        elif round(action.amplitude * factor, 2) > 0:
+            kept.append(replace(action, amplitude=round(action.amplitude * factor, 2)))
+    return tuple(kept)
+
+
+# An emotion set by the transcript's markup is fully there when its first marked syllable
+# starts and holds through its last; it eases in over this long before and out after (our
+# choice: about a breath; shortened where the audio starts or ends sooner).
+EMOTION_EASE = 0.4
+
+
+def marked_spans(alignment, marks: Sequence) -> tuple[tuple[str, float, float, float], ...] | None:
+    """(name, intensity, start, end seconds) of each transcript mark (speech/transcript.py
+    EmotionMark: syllable indices) over the Alignment's syllables in time order; None when the
+    alignment holds another number of syllables than the marks were counted on (an edited
+    TextGrid of other text)."""
+    syllables = sorted((s for sentence in alignment.sentences for s in sentence.syllables), key=lambda s: s.start)
+    if marks and max(mark.last for mark in marks) >= len(syllables):
+        return None
+    return tuple((m.name, m.intensity, syllables[m.first].start, syllables[m.last].end) for m in marks)
+
+
+def emotion_actions(spans: Sequence[tuple[str, float, float, float]], duration: float,
+                    default: tuple[str, float] | None = None) -> tuple[Action, ...]:
+    """The "emotion" actions of marked speech `spans` ((name, intensity, start, end) seconds)
+    in audio of `duration` s, each easing in over EMOTION_EASE before its start and out after
+    its end (overlapping spans of one emotion join, at the larger intensity); `default` (name,
+    intensity) holds everywhere else, cross-fading into and out of the marked spans of other
+    emotions (next to a marked span of its own emotion the default fades to neutral and back,
+    over EMOTION_EASE or a third of its stretch, as one emotion's actions never overlap)."""
+    marked: list[Action] = []
+    for name, intensity, start, end in sorted(spans, key=lambda s: (s[2], s[0])):
+        begin, finish = _round_to_ms(max(0.0, start - EMOTION_EASE)), _round_to_ms(min(duration, end + EMOTION_EASE))
+        same = [a for a in marked if a.emotion == name and a.end > begin - TIME_SLACK]
+        if same:
+            marked.remove(same[-1])
+            begin, intensity = same[-1].start, max(intensity, same[-1].amplitude)
+        attack = _round_to_ms(min(EMOTION_EASE, start - begin)) if not same else same[-1].attack
+        release = _round_to_ms(max(0.0, finish - max(end, begin + attack)))
+        marked.append(Action("emotion", begin, _round_to_ms(finish - begin), float(intensity), max(attack, 0.0),
+                             release, name))
+    actions = list(marked)
+    if default is not None:
+        name, intensity = default[0], float(default[1])
+        # covered stretches (start, end, attack, release), merged; a stretch holding the default's own
+        # emotion is cut out without overlap (actions of one emotion never overlap), others cross-fade
+        edges: list[tuple[float, float, float, float]] = []
+        for action in sorted(marked, key=lambda a: a.start):
+            rise, fall = (0.0, 0.0) if action.emotion == name else (action.attack, action.release)
+            if edges and action.start < edges[-1][1]:
+                first = edges[-1]
+                edges[-1] = (first[0], max(first[1], action.end), first[2], fall if action.end >= first[1] else first[3])
+            else:
+                edges.append((action.start, action.end, rise, fall))
+        start, attack = 0.0, 0.0
+        for begin, end, rise, fall in edges:
+            stop = _round_to_ms(begin + rise)
+            if stop > start:
+                length = _round_to_ms(stop - start)
+                actions.append(Action("emotion", start, length, intensity, min(attack, length / 2),
+                                      min(rise or _ramp(length), length / 2), name))
+            start, attack = _round_to_ms(end - fall), fall or _ramp(duration - end)
+        if duration > start:
+            length = _round_to_ms(duration - start)
+            actions.append(Action("emotion", start, length, intensity, min(attack, length / 2), 0.0, name))
+    return tuple(sorted(actions, key=lambda a: (a.start, a.emotion)))
+
+
+def _ramp(length: float) -> float:
+    """The ease of a default mood's stretch of `length` s next to its own emotion: EMOTION_EASE
+    or a third of the stretch, whichever is shorter (ms)."""
+    return _round_to_ms(min(EMOTION_EASE, max(length, 0.0) / 3))

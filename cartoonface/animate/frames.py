@@ -21,6 +21,7 @@ import numpy as np
 
 from cartoonface.animate.timeline import Timeline, Track
 from cartoonface.errors import OptionError
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.state import FaceState, Pose
 
@@ -55,20 +56,32 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
     blink, brow, smile = (_amount(timeline.track(name), t) for name in ("blink", "brow", "smile"))
     tilt, turn, nod, gaze_h, gaze_v = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod", "gaze_h", "gaze_v"))
     pitch = NOD_SIGN * nod + 0.0
+    feelings = _emotions(timeline, t)
+    lips = _amount(timeline.track("lips"), t) if any(feelings) else np.ones_like(t)
     columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
-                  gaze_h.tolist(), gaze_v.tolist(), mouth, strict=True)
+                  gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
     states: list[FaceState] = []
     previous = None
     for values in columns:
         if values != previous:
-            eyes, brows, smiling, down, sideways, lean, look_h, look_v, mix = values
+            eyes, brows, smiling, down, sideways, lean, look_h, look_v, mix, feeling, gamma = values
             pose = Pose(tilt=down, turn=sideways, roll=lean)
             states.append(FaceState(pose=pose, blink=eyes, smile=smiling, brow=brows, mouth=mix,
-                                    gaze_h=look_h, gaze_v=look_v))
+                                    gaze_h=look_h, gaze_v=look_v, emotion=feeling,
+                                    lips=gamma if feeling else 1.0))
             previous = values
         else:
             states.append(states[-1])
     return tuple(states)
+
+
+def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float], ...]]:
+    """The emotions at times `t` (ms): ((name, intensity), ...) of those above 0, to 0.01,
+    in EMOTIONS order; () where none is felt (or the timeline has no emotion tracks)."""
+    names = [name for name in EMOTIONS if f"emotion:{name}" in timeline.names]
+    amounts = [_amount(timeline.track(f"emotion:{name}"), t).tolist() for name in names]
+    return [tuple((name, a) for name, a in zip(names, column, strict=True) if a > 0)
+            for column in zip(*amounts, strict=True)] if names else [()] * len(t)
 
 
 def _segments(track: Track, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -12,6 +12,11 @@ them. Tracks:
   of the nod in degrees, Pose.tilt): see behaviour.py for the kinds.
 - ``gaze_h``, ``gaze_v``: the eyes' angles away from the viewer, degrees.
 - ``smile``: amount 0..1.
+- ``emotion:NAME`` for each NAME of face/emotion.py's EMOTIONS: its intensity
+  0..1 (the "emotion" actions, after `adapt_to_emotions` has fitted the other
+  behaviour to them).
+- ``lips``: gamma of seed 000 eq. 18, the share of the emotions' lip
+  displacement shown: 1 at rest, LIPS_SPEAKING while a sentence is spoken.
 """
 
 from __future__ import annotations
@@ -19,7 +24,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from cartoonface.animate.behaviour import KINDS, Action
+from cartoonface.animate.behaviour import KINDS, Action, adapt_to_emotions
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.speech.mouth_shapes import shape_onsets
 
 REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: shape m, lips closed)
@@ -48,6 +54,14 @@ FINAL_LENGTHENING = 1.4
 # A b/p/m syllable whose next shape comes too early for the closure moves its later shapes
 # (towards its end), keeping at least this share of their time (our choice).
 CLOSURE_KEEP = 0.5
+# Seed 000 eq. 18's gamma while talking (our choice): the mouth shapes alone open and shape
+# the lips, the emotion keeps its mouth corners (face/emotion.py LIP_POINTS: the corners of a
+# happy 'a' still rise; the dropped jaw of surprise gives way to the syllables, and a
+# surprised 'm' closes). At rest gamma is 1. It changes over LIPS_EASE_MS before a sentence
+# starts and after it ends (pauses shorter than twice that keep it), like the lead-in and
+# lead-out of the lips.
+LIPS_SPEAKING = 0.0
+LIPS_EASE_MS = 200
 MOUTH_EASING = "smoothstep"
 AMOUNT_EASING = "smoothstep"
 ANGLE_EASING = "cosine"
@@ -88,16 +102,27 @@ class Timeline:
                 return track
         raise KeyError(name)
 
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The names of the tracks, in order."""
+        return tuple(track.name for track in self.tracks)
+
 
 def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
     """Key frames for an Alignment (speech/records.py) and behaviour `actions`.
 
     Returns a Timeline of alignment.duration (rounded to ms) with the tracks
-    mouth, blink, brow, tilt, turn, nod, gaze_h, gaze_v and smile.
+    mouth, blink, brow, tilt, turn, nod, gaze_h, gaze_v, smile, emotion:NAME for
+    each emotion and lips. The blinks, brow raises and smiles are first fitted to
+    the emotions (behaviour.adapt_to_emotions).
     """
     duration = round(alignment.duration * 1000)
     syllables = sorted((syl for sentence in alignment.sentences for syl in sentence.syllables), key=lambda s: s.start)
+    actions = adapt_to_emotions(actions)
     by_kind = {kind: sorted((a for a in actions if a.kind == kind), key=lambda a: a.start) for kind in KINDS}
+    feelings = tuple(
+        Track(f"emotion:{name}", envelope_keys([a for a in by_kind["emotion"] if a.emotion == name]), AMOUNT_EASING)
+        for name in EMOTIONS)
     return Timeline(
         duration,
         (
@@ -110,8 +135,27 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
             Track("gaze_h", move_keys(by_kind["gaze_h"]), ANGLE_EASING),
             Track("gaze_v", move_keys(by_kind["gaze_v"]), ANGLE_EASING),
             Track("smile", envelope_keys(by_kind["smile"]), AMOUNT_EASING),
+            *feelings,
+            Track("lips", lips_keys([(s.start, s.end) for s in alignment.sentences]), AMOUNT_EASING),
         ),
     )
+
+
+def lips_keys(spans: Sequence[tuple[float, float]]) -> tuple[Keyframe, ...]:
+    """Key frames of gamma (seed 000 eq. 18) for sentences spoken over `spans` ((start, end)
+    seconds): 1, easing to LIPS_SPEAKING over LIPS_EASE_MS before each stretch of speech and
+    back to 1 over LIPS_EASE_MS after it; stretches closer than 2 LIPS_EASE_MS join."""
+    joined: list[list[int]] = []
+    for start, end in sorted((_seconds_to_ms(a), _seconds_to_ms(b)) for a, b in spans):
+        if joined and start - joined[-1][1] < 2 * LIPS_EASE_MS:
+            joined[-1][1] = max(joined[-1][1], end)
+        else:
+            joined.append([start, end])
+    keys = [Keyframe(0, 1.0)]
+    for start, end in joined:
+        keys += [Keyframe(max(start - LIPS_EASE_MS, 0), 1.0), Keyframe(start, LIPS_SPEAKING),
+                 Keyframe(end, LIPS_SPEAKING), Keyframe(end + LIPS_EASE_MS, 1.0)]
+    return _monotonic(keys)
 
 
 def mouth_keys(syllables: Sequence, duration: int) -> tuple[Keyframe, ...]:

@@ -40,6 +40,7 @@ HELP = "draw a face model as SVG: one pose and expression, a contact sheet, the 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `face` subcommand with its `render`, `sheet`, `diagram` and `from-photo` actions."""
+    from cartoonface.face.emotion import EMOTIONS
     from cartoonface.face.mouth import MOUTH_SYMBOLS
     from cartoonface.face.state import MAX_ANGLE
 
@@ -65,6 +66,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     render.add_argument("--mouth", default="m", metavar="SYMBOL",
                         help=f"basic mouth shape, one of {' '.join(MOUTH_SYMBOLS)} (thesis 5.2.2; default m, "
                              "the closed rest shape)")
+    render.add_argument("--emotion", default=None, metavar="NAME",
+                        help=f"emotion, one of {' '.join(EMOTIONS)} (docs/emotions.md; default none)")
+    render.add_argument("--intensity", default="1", metavar="X",
+                        help="intensity of the --emotion, 0..1 (default 1)")
     render.set_defaults(func=run_render)
 
     sheet = actions.add_parser(
@@ -104,6 +109,7 @@ def _number(text: str, option: str) -> float:
 
 def _state(args: argparse.Namespace) -> FaceState:
     """The FaceState the render options describe (OptionError names a bad one; Pose checks the angles)."""
+    from cartoonface.face.emotion import EMOTIONS
     from cartoonface.face.mouth import MOUTH_SYMBOLS
     from cartoonface.face.state import FaceState, Pose
 
@@ -121,8 +127,17 @@ def _state(args: argparse.Namespace) -> FaceState:
         amounts[name] = _number(getattr(args, name), name)
         if not 0 <= amounts[name] <= 1:
             raise OptionError(f"--{name} {amounts[name]:g}: out of range; expected 0 to 1")
+    intensity = _number(args.intensity, "intensity")
+    if not 0 <= intensity <= 1:
+        raise OptionError(f"--intensity {intensity:g}: out of range; expected 0 to 1")
+    emotion: tuple[tuple[str, float], ...] = ()
+    if args.emotion is not None:
+        if args.emotion not in EMOTIONS:
+            raise OptionError(f"--emotion {args.emotion!r}: unknown emotion; expected one of {' '.join(EMOTIONS)}")
+        emotion = ((args.emotion, intensity),)
     pose = Pose(**angles)
-    return FaceState(pose, amounts["blink"], amounts["smile"], amounts["brow"]).with_mouth(args.mouth)
+    return FaceState(pose, amounts["blink"], amounts["smile"], amounts["brow"],
+                     emotion=emotion).with_mouth(args.mouth)
 
 
 def _write(root: etree._Element, args: argparse.Namespace, palette: bool = False) -> int:

@@ -24,6 +24,7 @@ HELP = "make the talking-face pages from a face, a recording and its transcript"
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `generate` subcommand."""
+    from cartoonface.face.emotion import EMOTIONS
     from cartoonface.pipeline import Options
     from cartoonface.render.pages import PAGES
     from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
@@ -54,6 +55,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--background", choices=BACKGROUNDS, default=defaults.background,
                         help="backdrop (default %(default)s)")
     parser.add_argument("--clothes", choices=CLOTHES, default=defaults.clothes, help="clothes (default %(default)s)")
+    parser.add_argument("--emotion", choices=EMOTIONS, default=None,
+                        help="default mood where the transcript's [emotion] marks set none (docs/emotions.md)")
+    parser.add_argument("--intensity", type=float, default=defaults.intensity, metavar="X",
+                        help="intensity of the --emotion, 0..1 (default %(default)s)")
     parser.add_argument("--pause", metavar="S,E",
                         help="a stretch of pure silence in the recording (start,end seconds): sentence "
                              "segmentation then uses the thesis's threshold from it (Alg. 3.1)")
@@ -83,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
-        links=tuple(parse_link(link) for link in args.link),
+        links=tuple(parse_link(link) for link in args.link), emotion=args.emotion, intensity=args.intensity,
     )
     bar = ProgressBar(sys.stderr)
     try:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cartoonface.face.emotion import emotion_basis, emotion_coefficients
 from cartoonface.face.expression import EXPRESSIONS, LOWER_LIDS, UPPER_LIDS, expression_displacements
 from cartoonface.face.lift import LIFTED_INDEX, LIFTED_NAMES, LiftedFace
 from cartoonface.face.model import POINT_NAMES
@@ -100,7 +101,7 @@ class Rig:
     relative to the rotation origin. Built once per LiftedFace by rig()."""
 
     neutral: np.ndarray  # (N*2,) lifted image points minus origin, flattened
-    basis: np.ndarray  # (12 + 3, N*2) mouth shapes then expressions, flattened displacements
+    basis: np.ndarray  # (12 + 3 + 14, N*2) mouth shapes, expressions, emotions (D_i, D_l), flattened
     template: np.ndarray  # (N + H + F, 3) column 2 filled: depths, hair and front layer points
     outline: tuple[np.ndarray, ...]  # silhouette rows of the template, normals (k, 2), reach, front, back (k,)
     centres: np.ndarray  # (2, 3) eyeball centres
@@ -124,7 +125,7 @@ def rig(lifted: LiftedFace) -> Rig:
     n, p = len(LIFTED_NAMES), len(POINT_NAMES)
     flip = np.array([1.0, -1.0, 1.0])
     image_rel = lifted.local[:, :2] * flip[:2]  # local -> image orientation, origin-relative
-    model_moves = np.concatenate([shape_displacements(face), expression_displacements(face)])
+    model_moves = np.concatenate([shape_displacements(face), expression_displacements(face), emotion_basis(face)])
     basis = (model_moves.reshape(len(model_moves), 2 * p) @ lifted.depends.T)
     h = len(lifted.hair)
     template = np.zeros((n + h + len(lifted.front), 3))
@@ -210,7 +211,9 @@ def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     coef[_N_MOUTH] = state.blink
     coef[_N_MOUTH + 1] = state.smile
     coef[_N_MOUTH + 2] = state.brow
-    flat = r.neutral + coef @ r.basis
+    flat = r.neutral + coef @ r.basis[:_N_COEF]
+    if state.emotion:
+        flat += emotion_coefficients(state.emotion, state.lips) @ r.basis[_N_COEF:]
     upper, lower = r.lids
     flat[lower] = np.maximum(flat[lower], flat[upper])  # expression.close_lids on the flat rows
 

@@ -7,6 +7,7 @@ import numbers
 from dataclasses import dataclass, replace
 
 from cartoonface.errors import OptionError
+from cartoonface.face.emotion import check_emotion, check_intensity
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 
 # Thesis 002, 2.3.1 / 2.4.3: the generic depth model holds for slight head
@@ -56,7 +57,12 @@ class FaceState:
     summing to 1, so key frames interpolate by blending weights.
     gaze_h, gaze_v: the eyes' turn away from the viewer in degrees (gaze_h
     positive: towards the image right; gaze_v positive: down), each within
-    +-MAX_GAZE; 0, 0 looks at the viewer. OptionError for anything out of range.
+    +-MAX_GAZE; 0, 0 looks at the viewer.
+    emotion: (name, intensity) pairs, names from face/emotion.py EMOTIONS, each
+    once, intensities 0..1 (several blend, e.g. while one fades into another);
+    () is neutral. lips: gamma of seed 000 eq. 18, the share 0..1 of the
+    emotions' lip displacement shown (1 at rest, less while talking).
+    OptionError for anything out of range.
     """
 
     pose: Pose = Pose()
@@ -66,11 +72,13 @@ class FaceState:
     mouth: tuple[tuple[str, float], ...] = (("m", 1.0),)
     gaze_h: float = 0.0
     gaze_v: float = 0.0
+    emotion: tuple[tuple[str, float], ...] = ()
+    lips: float = 1.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.pose, Pose):
             raise OptionError(f"pose is {self.pose!r}; expected a Pose")
-        for name in ("blink", "smile", "brow"):
+        for name in ("blink", "smile", "brow", "lips"):
             value = _finite(getattr(self, name), name)
             if not 0.0 <= value <= 1.0:
                 raise OptionError(f"{name} {value:g} is out of range; expected 0 to 1")
@@ -80,6 +88,15 @@ class FaceState:
             if abs(value) > MAX_GAZE:
                 raise OptionError(f"{name} {value:g} degrees is out of range; expected -{MAX_GAZE:g} to {MAX_GAZE:g}")
             object.__setattr__(self, name, value)
+        seen = set()
+        for pair in self.emotion:
+            if not isinstance(pair, tuple) or len(pair) != 2:
+                raise OptionError(f"emotion entry {pair!r}; expected a (name, intensity) pair")
+            name = check_emotion(pair[0], "emotion")
+            if name in seen:
+                raise OptionError(f"emotion {name!r} is given twice; expected each emotion once")
+            seen.add(name)
+            check_intensity(pair[1], f"intensity of {name}")
         if not self.mouth:
             raise OptionError("mouth is empty; expected (symbol, weight) pairs")
         total = 0.0

@@ -10,10 +10,18 @@ docs/mandarin-mouth-shapes.md.
 
 Readings are the surface (spoken) tones, tone-numbered with 5 for the neutral tone and
 "ü" for u-umlaut: "hang2", "ni2 hao3", "lü4", erhua "dianr3".
+
+Emotion markup (docs/emotions.md): `[happy]` or `[happy 0.6]` before a sentence or inside
+one sets that emotion (face/emotion.py EMOTIONS, intensity 0..1, default 1) to the end of
+the sentence; with a closing `[/happy]` (or `[/]`, closing the latest open mark) it lasts
+to there instead, across sentences. Marks are never read and never count as syllables;
+`emotion_marks` returns them as spans of syllables.
 """
 
 from __future__ import annotations
 
+import itertools
+import math
 import re
 import unicodedata
 from dataclasses import dataclass, field, replace
@@ -21,6 +29,7 @@ from dataclasses import dataclass, field, replace
 from pypinyin.contrib.tone_convert import to_tone3
 
 from cartoonface.errors import TranscriptError
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.speech.mouth_shapes import shapes_for
 from cartoonface.speech.normalise import (
     DIGIT_READINGS,
@@ -74,6 +83,11 @@ _ENDS = frozenset("。！？；!?;…\n")
 _CLOSERS = frozenset("”’」』）)》〉】]\"'")
 _PAUSES = frozenset("，、,：:—–")
 
+# Emotion markup: a mark is replaced by this invisible character (a word joiner, which
+# _read_sentence skips) so every position in the text stays where the user wrote it.
+MARK_FILL = "\u2060"
+MARK_CLOSE_ANY = "/"  # [/] closes the latest open mark
+
 # Han characters: CJK Unified Ideographs with extensions A-H, compatibility ideographs, 〇.
 HAN_RE = re.compile(r"[\u3007\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\U00020000-\U0003134f]")
 
@@ -96,6 +110,7 @@ def parse_transcript(text: str, source: str = "transcript") -> tuple[SentenceTex
     """
     if not text.strip():
         raise TranscriptError(f"{source}: the transcript is empty; expected Mandarin text")
+    text, _ = _strip_marks(text, source)
     clean, overrides = _strip_overrides(text, source)
     sentences: list[SentenceText] = []
     pending_notes: list[str] = []
@@ -215,7 +230,7 @@ def _ends_sentence(clean: str, i: int) -> bool:
 def _read_sentence(clean: str, start: int, end: int,
                    overrides: dict[int, tuple[str, ...]]) -> _Sentence | None:
     """Tokenise one sentence span of the clean text into sandhi domains of units."""
-    text = clean[start:end].strip()
+    text = clean[start:end].replace(MARK_FILL, "").strip()
     if not text:
         return None
     sentence = _Sentence(text)
@@ -294,3 +309,141 @@ def _finish_sentence(raw: _Sentence) -> SentenceText:
     return SentenceText(raw.text, tuple(syllables), clause_ends, tuple(notes))
 
 
+
+
+@dataclass(frozen=True)
+class EmotionMark:
+    """An emotion the transcript's markup sets: `name` (EMOTIONS), `intensity` 0..1, over
+    the syllables `first`..`last` (inclusive indices into all the transcript's syllables in
+    order, as parse_transcript's sentences hold them); `where`: "line L, column C" of the mark."""
+
+    name: str
+    intensity: float
+    first: int
+    last: int
+    where: str
+
+
+@dataclass(frozen=True)
+class _Tag:
+    start: int  # index of '[' in the text
+    end: int  # index after ']'
+    name: str  # an emotion, or "" for a closing mark
+    closes: str  # for a closing mark: the emotion it closes, or MARK_CLOSE_ANY
+    intensity: float
+
+
+def _strip_marks(text: str, source: str) -> tuple[str, list[_Tag]]:
+    """The text with every emotion mark filled by MARK_FILL (same length), and the marks.
+    TranscriptError naming line and column for a '[' without ']' on its line, a ']' without
+    '[', an unknown emotion, or an intensity that is not a number from 0 to 1."""
+    if "[" not in text and "]" not in text:
+        return text, []
+    tags: list[_Tag] = []
+    out = list(text)
+    i = 0
+    while i < len(text):
+        ch = text[i]
+        if ch == "]":
+            raise TranscriptError(f"{source}: {_position(text, i)}: ']' without an opening '['; "
+                                  "expected an emotion mark like [happy]")
+        if ch != "[":
+            i += 1
+            continue
+        close = text.find("]", i + 1)
+        if close < 0 or any(c in "[\n" for c in text[i + 1:close]):
+            raise TranscriptError(f"{source}: {_position(text, i)}: '[' without a closing ']' on the same line; "
+                                  "expected an emotion mark like [happy] or [happy 0.5]")
+        tags.append(_tag(text[i + 1:close], i, close + 1, f"{source}: {_position(text, i)}"))
+        out[i:close + 1] = MARK_FILL * (close + 1 - i)
+        i = close + 1
+    return "".join(out), tags
+
+
+def _tag(inside: str, start: int, end: int, where: str) -> _Tag:
+    """The mark `[inside]` at text[start:end]; TranscriptError (prefixed by `where`) if broken."""
+    words = inside.split()
+    choices = ", ".join(EMOTIONS)
+    if not words:
+        raise TranscriptError(f"{where}: empty mark '[]'; expected an emotion mark like [happy] ({choices})")
+    if words[0].startswith(MARK_CLOSE_ANY):
+        closes = words[0][1:] or MARK_CLOSE_ANY
+        if len(words) > 1 or (closes != MARK_CLOSE_ANY and closes not in EMOTIONS):
+            raise TranscriptError(f"{where}: closing mark [{inside}]; expected [/] or [/NAME] with NAME one of "
+                                  f"{choices}")
+        return _Tag(start, end, "", closes, 0.0)
+    name = words[0].lower()
+    if name not in EMOTIONS:
+        raise TranscriptError(f"{where}: unknown emotion {words[0]!r} in [{inside}]; expected one of {choices}")
+    if len(words) > 2:
+        raise TranscriptError(f"{where}: mark [{inside}]; expected [NAME] or [NAME INTENSITY] like [{name} 0.5]")
+    intensity = 1.0
+    if len(words) == 2:
+        try:
+            intensity = float(words[1])
+        except ValueError:
+            intensity = math.nan
+        if not 0.0 <= intensity <= 1.0:
+            raise TranscriptError(f"{where}: intensity {words[1]!r} in [{inside}]; expected a number from 0 to 1")
+    return _Tag(start, end, name, "", intensity)
+
+
+def emotion_marks(text: str, source: str = "transcript") -> tuple[EmotionMark, ...]:
+    """The emotion marks of a transcript as syllable spans (see the module docstring).
+
+    An open mark without its closing one lasts to the end of the sentence it stands in
+    (or before). TranscriptError naming line and column for broken markup (see
+    _strip_marks), a closing mark with nothing open to close, or a mark over no syllable.
+    """
+    filled, tags = _strip_marks(text, source)
+    if not tags:
+        return ()
+    spans = _sentence_spans(filled)
+    open_marks: list[_Tag] = []
+    ranges: list[tuple[_Tag, int]] = []  # (opening tag, end position in the text)
+    for tag in tags:
+        if tag.name:
+            open_marks.append(tag)
+            continue
+        match = [t for t in open_marks if tag.closes in (MARK_CLOSE_ANY, t.name)]
+        if not match:
+            raise TranscriptError(f"{source}: {_position(text, tag.start)}: closing mark "
+                                  f"[/{'' if tag.closes == MARK_CLOSE_ANY else tag.closes}] with no open mark "
+                                  "to close; expected it after a mark like [happy]")
+        open_marks.remove(match[-1])
+        ranges.append((match[-1], tag.start))
+    for tag in open_marks:
+        ranges.append((tag, _sentence_end(filled, spans, tag.end)))
+    cuts = sorted({p for tag, end in ranges for p in (tag.end, end)})
+    counts = dict(zip(cuts, itertools.accumulate(_count(filled[a:b], source) for a, b in zip([0] + cuts, cuts)),
+                      strict=True))
+    marks = []
+    for tag, end in sorted(ranges, key=lambda r: r[0].start):
+        first, last = counts[tag.end], counts[end] - 1
+        if last < first:
+            raise TranscriptError(f"{source}: {_position(text, tag.start)}: the mark [{tag.name}] stands over no "
+                                  "spoken syllable; expected it before the words it colours")
+        marks.append(EmotionMark(tag.name, tag.intensity, first, last, _position(text, tag.start)))
+    return tuple(marks)
+
+
+def _sentence_end(filled: str, spans: list[tuple[int, int]], at: int) -> int:
+    """The end of the sentence span holding the first character at or after `at` that is
+    neither space nor a mark (the end of the text if none)."""
+    while at < len(filled) and (filled[at].isspace() or filled[at] == MARK_FILL):
+        at += 1
+    for start, end in spans:
+        if start <= at < end:
+            return end
+    return len(filled)
+
+
+def _count(piece: str, source: str) -> int:
+    """How many syllables `piece` of a (mark-filled) transcript speaks."""
+    clean, overrides = _strip_overrides(piece, source)
+    total = 0
+    for start, end in _sentence_spans(clean):
+        raw = _read_sentence(clean, start, end, overrides)
+        if raw is not None:
+            total += len(_finish_sentence(raw).syllables)
+    return total

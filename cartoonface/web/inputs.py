@@ -23,16 +23,19 @@ from pathlib import Path
 from werkzeug.datastructures import FileStorage, MultiDict
 
 from cartoonface.errors import InputError
+from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import face_from_dict, face_to_dict, json_with_long_numbers
 from cartoonface.photo.model_from_photo import face_from_photo, load_photo
 from cartoonface.pipeline import MAX_TITLE
 from cartoonface.speech.audio import load_audio
-from cartoonface.speech.transcript import parse_transcript
+from cartoonface.speech.transcript import emotion_marks, parse_transcript
 
 PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
 # The performance style (animate/style.py); "" leaves it to the page (audio book: storyteller).
 STYLE_CHOICES = {"": "the page's own (audio book: storyteller, announcer: announcer)",
                  "announcer": "announcer (restrained)", "storyteller": "storyteller (livelier)"}
+# The default mood (face/emotion.py EMOTIONS), where the transcript's [emotion] marks set none.
+MOOD_CHOICES = {"": "neutral", **{name: name for name in EMOTIONS}}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 SHOWN_NAME_CHARS = 80
@@ -135,7 +138,7 @@ def _text(form: MultiDict[str, str], name: str) -> str:
 
 def form_values(form: MultiDict[str, str]) -> dict[str, str]:
     """The plain fields as sent, to fill the form again when it comes back with errors."""
-    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "style", "title",
+    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "style", "mood", "title",
                                                  "background", "clothes", "transcript")}
 
 
@@ -273,6 +276,7 @@ def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         return None
     try:
         parse_transcript(text, name)
+        emotion_marks(text, name)
     except InputError as exc:
         errors[field] = str(exc)
         return None
@@ -301,6 +305,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         errors["title"] = f"The title has {len(title)} characters; at most {MAX_TITLE} are accepted."
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     style = check_choice(form, "style", STYLE_CHOICES, "styles", errors)
+    mood = check_choice(form, "mood", MOOD_CHOICES, "moods", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
     face, face_label, face_notes = check_face(form, files, limits, errors, chosen)
@@ -312,6 +317,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "title": title,
         "page": page,
         "style": style,
+        "mood": mood,
         "background": background,
         "clothes": clothes,
         "face_label": face_label,

@@ -26,8 +26,8 @@ from werkzeug.wrappers import Response as BaseResponse
 from cartoonface.files import remove_folder
 from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.draft_store import draft_choice, load_draft
-from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, STYLE_CHOICES, Limits, check_submission, form_values,
-                                    megabytes)
+from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, MOOD_CHOICES, PAGES, STYLE_CHOICES, Limits,
+                                    check_submission, form_values, megabytes)
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
@@ -143,7 +143,7 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     shown = {**defaults, **{key: value for key, value in values.items() if value}}
     draft = load_draft(state().settings.instance, shown["face_draft"]) if shown.get("face_draft") else None
     return render_template(
-        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES, styles=STYLE_CHOICES, draft=draft,
+        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES, styles=STYLE_CHOICES, moods=MOOD_CHOICES, draft=draft,
         max_title=MAX_TITLE, upload_mb=megabytes(limits.upload_bytes), photo_mb=megabytes(MAX_PHOTO_BYTES),
         csrf=csrf_token(),
         csrf_field=CSRF_FIELD, jobs=recent_jobs(),

@@ -146,7 +146,8 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
-                      background=str(spec["background"]), clothes=str(spec["clothes"]))
+                      background=str(spec["background"]), clothes=str(spec["clothes"]),
+                      emotion=str(spec.get("mood") or "") or None)
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
