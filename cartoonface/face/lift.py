@@ -114,11 +114,12 @@ SILHOUETTES: dict[str, tuple[str, float | None]] = {
 ON_SURFACE: dict[str, str] = {"3.7": "11.3", "3.12": "11.2", "4.5": "11.3", "4.6": "11.2"}
 # The hair's front layer: the crown is the hair outline above the height CROWN_CUT of
 # the way from the temples (11.2, 11.3) up to 11.2a / 11.3a, resampled to CROWN_POINTS
-# points evenly along it; the hairline is the forehead contour 11.2a, 11.1, 11.3a moved
-# down towards the eyebrows by FRINGE_DROP d x its weight (a fringe over the forehead).
+# points evenly along it; the hairline is the forehead contour 11.3a, 11.1, 11.2a moved
+# down towards the eyebrows by FRINGE_DROP d (a fringe over the forehead that keeps the
+# forehead's arch: dropping the middle further made a straight, helmet-like edge).
 CROWN_CUT = 0.5
 CROWN_POINTS = 9
-HAIRLINE = (("11.3a", 0.6), ("11.1", 1.0), ("11.2a", 0.6))  # image right to left, as drawn
+HAIRLINE = ("11.3a", "11.1", "11.2a")  # image right to left, as drawn
 FRINGE_DROP = 0.16
 FRONT_NAMES: tuple[str, ...] = (tuple(f"crown{i}" for i in range(CROWN_POINTS))
                                 + tuple(f"hairline{i}" for i in range(len(HAIRLINE))))
@@ -303,7 +304,7 @@ def _front_and_silhouette(local: np.ndarray, hair: np.ndarray, fade: np.ndarray,
     at = {name: local[LIFTED_INDEX[name]] for name in LIFTED_NAMES}
     temple_y = (at["11.2"][1] + at["11.3"][1]) / 2
     upper_y = (at["11.2a"][1] + at["11.3a"][1]) / 2
-    hairline = np.array([at[name] - np.array([0.0, FRINGE_DROP * d * weight, 0.0]) for name, weight in HAIRLINE])
+    hairline = np.array([at[name] - np.array([0.0, FRINGE_DROP * d, 0.0]) for name in HAIRLINE])
     bare = hair[:, 1].max() <= at["11.1"][1]  # hair that does not reach over the forehead: no front layer
     if bare:  # the crown laid on the hairline, left to right: the front layer has no area
         path = np.vstack([at["11.2"], hairline[::-1], at["11.3"]])
