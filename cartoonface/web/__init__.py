@@ -50,7 +50,8 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     CARTOONFACE_* environment variables, then `config`. The instance folder is
     config["INSTANCE_PATH"], else $CARTOONFACE_INSTANCE_PATH, else Flask's default
     (`instance/` beside the package). Jobs left unfinished by a previous server are
-    marked failed and the retention limit is applied before the worker pool starts.
+    marked failed (embedded queue only: with Redis, workers elsewhere may be running them and
+    their leases tell) and the retention limit is applied before the job runner starts.
     Raises OptionError for a bad setting."""
     config = dict(config or {})
     instance = config.get("INSTANCE_PATH") or os.environ.get(f"{ENV_PREFIX}_INSTANCE_PATH")
@@ -78,13 +79,16 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
             apply_retention(settings.instance, settings.retention_days)
             sweep_drafts(settings.instance)
 
-    fail_interrupted(settings.instance)
+    if settings.queue is None:  # the embedded queue: no job of this instance runs anywhere else
+        fail_interrupted(settings.instance)
     sweep()
     limits = Limits(upload_bytes=settings.upload_bytes, transcript_chars=settings.transcript_chars,
                     samples=sample_faces(settings.samples_dir), backgrounds=tuple(BACKGROUNDS),
                     clothes=tuple(CLOTHES))
     app.extensions["cartoonface"] = WebState(settings, limits, Runner(
-        settings.workers, sweep, JobLimits(settings.job_memory_bytes, settings.job_cpu_seconds), settings.queue_max))
+        settings.instance, settings.workers, sweep, JobLimits(settings.job_memory_bytes, settings.job_cpu_seconds),
+        settings.queue_max, queue=settings.queue, lease_seconds=settings.lease_seconds,
+        requeue_on_close=settings.queue is not None))
     app.url_map.converters["jobid"] = JobIdConverter
     app.register_blueprint(bp)
     app.register_blueprint(photo_views.bp)

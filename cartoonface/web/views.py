@@ -31,7 +31,7 @@ from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, PAGES, STYLE_CHO
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
-from cartoonface.web.worker import SITE, ZIP_NAME
+from cartoonface.web.worker import SITE, ZIP_NAME, download_zip
 
 RECENT = 20  # jobs remembered per browser session
 
@@ -236,7 +236,7 @@ def download(job_id: str) -> Response:
     job = stored_job(job_id)
     if job.status.state != DONE or not (job.folder / ZIP_NAME).is_file():
         abort(404, description="This job has no result to download (yet).")
-    return send_file(job.folder / ZIP_NAME, mimetype="application/zip", as_attachment=True,
+    return send_file(download_zip(job.folder, job.spec), mimetype="application/zip", as_attachment=True,
                      download_name=download_name(job.title, job.id))
 
 
