@@ -22,15 +22,19 @@ import multiprocessing
 import os
 import signal
 import socket
+import sqlite3
 import threading
 import time
 from collections.abc import Callable
 from multiprocessing.process import BaseProcess
 from pathlib import Path
+from urllib.parse import urlsplit
 
 from huey import Huey, RedisHuey, SqliteHuey
 from huey.consumer import Consumer
+from redis.exceptions import RedisError
 
+from cartoonface.errors import OptionError
 from cartoonface.files import write_text_atomic
 from cartoonface.web.store import (FAILED, FINAL_STATES, QUEUED, Status, jobs_root, list_jobs, read_status,
                                    valid_id, write_status)
@@ -73,6 +77,14 @@ def make_huey(instance: Path, url: str | None) -> Huey:
     if url:
         return RedisHuey(QUEUE_NAME, url=url, results=False)
     return SqliteHuey(QUEUE_NAME, filename=str(instance / SQLITE_FILE), results=False)
+
+
+def shown_url(url: str | None) -> str:
+    """The queue for messages: the Redis URL without its password, or the SQLite default."""
+    if not url:
+        return f"(unset: SQLite, {SQLITE_FILE} in the instance folder)"
+    parts = urlsplit(url)
+    return parts._replace(netloc=parts.netloc.rpartition("@")[2]).geturl()
 
 
 def lease_path(folder: Path, run: int) -> Path:
@@ -127,6 +139,10 @@ class Runner:
         self._jobs = jobs_root(instance)
         self._jobs.mkdir(parents=True, exist_ok=True)
         self._huey = make_huey(instance, queue)
+        try:
+            self._huey.pending_count()
+        except (RedisError, sqlite3.Error) as exc:
+            raise OptionError(f"CARTOONFACE_QUEUE={shown_url(queue)}: cannot use the queue ({exc})") from None
         self._task = self._huey.task(name="run_job")(self._run)
         self._queue_max = queue_max
         self._limits = limits
@@ -181,6 +197,10 @@ class Runner:
             self._consumer.shutdown_timeout = timeout
             self._consumer.stop(graceful=True)
         self._watcher.join(timeout)
+        pool = getattr(self._huey.storage, "pool", None)  # Redis: its connections
+        if pool is not None:
+            pool.disconnect()
+        self._huey.storage.close()
 
     # --- running a job (in a consumer thread) -------------------------------------------------
 
@@ -204,20 +224,23 @@ class Runner:
             self._after_job(folder)
 
     def _supervise(self, folder: Path, run: int) -> None:
-        with self._lock:
-            process = FORKSERVER.Process(target=forked_main, args=(str(folder), self._limits,
-                                                                   str(reaped_path(folder, run))),
-                                         name=f"cartoonface-{folder.name}")
-            process.start()
-            self._running[folder] = (process, run)
+        ended = threading.Event()
+        renewer = threading.Thread(target=self._renew, args=(folder, run, ended), daemon=True,
+                                   name=f"cartoonface-lease-{folder.name}")
+        renewer.start()
         try:
-            while process.exitcode is None:
-                process.join(self._lease / RENEWALS_PER_LEASE)
-                if process.exitcode is None and not reaped_path(folder, run).exists():
-                    write_text_atomic(lease_path(folder, run), _lease_text(run))
+            with self._lock:
+                process = FORKSERVER.Process(target=forked_main, args=(str(folder), self._limits,
+                                                                       str(reaped_path(folder, run))),
+                                             name=f"cartoonface-{folder.name}")
+                process.start()
+                self._running[folder] = (process, run)
+            process.join()
             code = process.exitcode
             process.close()
         finally:
+            ended.set()
+            renewer.join()
             with self._lock:
                 self._running.pop(folder, None)
         try:
@@ -235,6 +258,14 @@ class Runner:
             return
         write_status(folder, Status(state=FAILED, stage=status.stage, fraction=status.fraction,
                                     error=self._died(code), updated=time.time()))
+
+    def _renew(self, folder: Path, run: int, ended: threading.Event) -> None:
+        """Renew the lease of run `run` every lease/RENEWALS_PER_LEASE s until `ended` is set or
+        the run is given up."""
+        while not ended.wait(self._lease / RENEWALS_PER_LEASE):
+            if reaped_path(folder, run).exists():
+                return
+            write_text_atomic(lease_path(folder, run), _lease_text(run))
 
     def _died(self, code: int | None) -> str:
         """The user message for a worker process that ended with exit code `code` before its

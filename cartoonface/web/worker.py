@@ -39,6 +39,7 @@ from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, writ
 PROGRESS_INTERVAL = 0.25
 
 SITE = "site"
+DEFAULT_OPTIONS = Options()  # fps and seed of jobs that do not set them (the form does not)
 ZIP_NAME = "site.zip"
 
 
@@ -168,7 +169,8 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
-                      background=str(spec["background"]), clothes=str(spec["clothes"]))
+                      background=str(spec["background"]), clothes=str(spec["clothes"]),
+                      fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))))
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
