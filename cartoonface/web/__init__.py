@@ -17,7 +17,7 @@ from typing import IO
 from flask import Flask, Request, Response
 
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
-from cartoonface.web import photo_views
+from cartoonface.web import api, photo_views
 from cartoonface.web.config import DEFAULTS, PACKAGE, Settings, secret_key, sample_faces, settings_from
 from cartoonface.web.draft_store import sweep_drafts
 from cartoonface.web.inputs import MAX_FACE_BYTES, MAX_PHOTO_BYTES, Limits
@@ -101,6 +101,7 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     app.url_map.converters["jobid"] = JobIdConverter
     app.register_blueprint(bp)
     app.register_blueprint(photo_views.bp)
+    app.register_blueprint(api.bp)
 
     @app.after_request
     def headers(response: Response) -> Response:

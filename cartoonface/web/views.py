@@ -250,21 +250,25 @@ def too_large(error: RequestEntityTooLarge) -> tuple[str, int]:
 
 
 @bp.app_errorhandler(HTTPException)
-def http_error(error: HTTPException) -> tuple[str, int] | Response:
+def http_error(error: HTTPException) -> tuple[str | Response, int] | Response:
     """Any other 4xx/5xx from routing or Werkzeug as a small page (plain text when the
     Host header was refused: no URL can be built for a page then)."""
     if request_ctx.url_adapter is None:
         return Response(f"{error.code} {error.name}: {error.description}\n", status=error.code,
                         mimetype="text/plain")
+    if request.path.startswith("/api/"):
+        return jsonify(error=error.description or error.name, field=None), error.code or 500
     return render_template("web/error.html", code=error.code, name=error.name,
                            description=error.description), error.code or 500
 
 
 @bp.app_errorhandler(Exception)
-def internal_error(error: Exception) -> tuple[str, int] | Response:
+def internal_error(error: Exception) -> tuple[str | Response, int] | Response:
     """A bug: logged with its traceback, a 500 page without details."""
     current_app.logger.exception("unhandled error on %s %s", request.method, request.path)
     if request_ctx.url_adapter is None:
         return Response("500 Internal error\n", status=500, mimetype="text/plain")
+    if request.path.startswith("/api/"):
+        return jsonify(error="Something went wrong on the server; the log has the details.", field=None), 500
     return render_template("web/error.html", code=500, name="Internal error",
                            description="Something went wrong on the server; the log has the details."), 500
