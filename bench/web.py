@@ -22,6 +22,7 @@ All traffic goes to 127.0.0.1 only.
 
 from __future__ import annotations
 
+import html
 import http.client
 import http.cookiejar
 import io
@@ -628,7 +629,8 @@ def api_result_matches(base: str, job_id: str, title: str, transcript: str) -> b
     if code != 200:
         return False
     with zipfile.ZipFile(io.BytesIO(data)) as archive:
-        page = archive.read(next(name for name in archive.namelist() if name.endswith("/index.html"))).decode()
+        page = html.unescape(archive.read(next(name for name in archive.namelist()
+                                               if name.endswith("/index.html"))).decode())
     return title in page and transcript[:6] in page
 
 
@@ -664,11 +666,12 @@ def queue_round(work: Path, redis: Redis, sentences: list, workers: int, db: int
                       for i, job_id in enumerate(ids) if final.get(job_id, {}).get("state") == "done")
         by_worker = Counter(job["worker"]["pid"] for job in final.values() if job.get("worker"))
         memory = max(peak_mb(proc.pid) for proc in procs)
+        job_memory = max((job.get("result") or {}).get("peak_memory_mb", 0) for job in final.values())
         print(f"queue ({workers} worker{'s' if workers > 1 else ''}): {QUEUE_JOBS} jobs of {QUEUE_SECONDS:.0f} s "
               f"sent at once: {dict(states)}, lost {QUEUE_JOBS - len(final)}, results matching their own input "
               f"{matched}/{states.get('done', 0)}; jobs per worker {sorted(by_worker.values())}; all ended after "
               f"{wall:.1f} s ({wall / QUEUE_JOBS:.2f} s per job); peak memory server "
-              f"{peak_mb(server.process.pid):.0f} MB, worker consumer {memory:.0f} MB")  # type: ignore[union-attr]
+              f"{peak_mb(server.process.pid):.0f} MB, worker consumer {memory:.0f} MB, job process {job_memory} MB")  # type: ignore[union-attr]
         return wall
     finally:
         for proc in procs:

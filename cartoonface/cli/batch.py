@@ -193,7 +193,7 @@ def run_queued(rows: list[Row], out: Path, instance: Path | None, bar: ProgressB
     `out`/<name>; return the failures' messages. Ids are kept in `out`/batch-jobs.json."""
     from cartoonface.files import write_text_atomic
     from cartoonface.web import configured_app
-    from cartoonface.web.runner import Runner
+    from cartoonface.web.runner import Runner, shown_url
     from cartoonface.web.store import DONE, FAILED, create_job, job_folder, load_job
     from cartoonface.web.worker import SITE
 
@@ -215,6 +215,8 @@ def run_queued(rows: list[Row], out: Path, instance: Path | None, bar: ProgressB
             sent[row.name] = create_job(settings.instance, spec, files).id
             runner.submit(job_folder(settings.instance, sent[row.name]))
             write_text_atomic(record, json.dumps(sent, indent=1))
+        print(f"cartoonface batch: {len(sent)} jobs in the queue {shown_url(settings.queue)} of "
+              f"{settings.instance}; waiting for its server or workers", file=sys.stderr, flush=True)
         while pending:
             fractions = []
             for name, row in list(pending.items()):

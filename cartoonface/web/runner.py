@@ -254,7 +254,7 @@ class Runner:
                 self._give_up(folder, run, "the worker running it was stopped")
             else:
                 write_status(folder, Status(state=FAILED, stage=status.stage, fraction=status.fraction,
-                                            error=STOPPED, updated=time.time()))
+                                            error=STOPPED, updated=time.time(), interrupted=True))
             return
         write_status(folder, Status(state=FAILED, stage=status.stage, fraction=status.fraction,
                                     error=self._died(code), updated=time.time()))

@@ -186,6 +186,8 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         "size": result.size,
         "seconds": result.seconds,
         "notes": list(result.notes),
+        # the job process's peak resident memory (Linux reports ru_maxrss in KiB)
+        "peak_memory_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
     }
     write_status(folder, Status(state=DONE, stage="pages", fraction=1.0, updated=time.time(), result=summary))
 
