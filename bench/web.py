@@ -65,6 +65,7 @@ FUZZ_REQUESTS = 1000
 API_TOKEN = "bench-token-" + "0123456789abcdef"
 QUEUE_JOBS = 20
 QUEUE_SECONDS = 10.0
+QUEUE_ROUNDS = 2  # rounds of 20 jobs with 2 workers and with 1, alternated
 QUEUE_LEASE = 5.0  # seconds: a killed worker's job is taken again after this
 GAP = 0.4  # seconds of silence between joined sentences
 
@@ -639,7 +640,7 @@ def queue_round(work: Path, redis: Redis, sentences: list, workers: int, db: int
     what became of them; return the wall time until all ended."""
     env = {"CARTOONFACE_QUEUE": redis.url(db), "CARTOONFACE_WORKERS": "0", "CARTOONFACE_API_TOKEN": API_TOKEN,
            "CARTOONFACE_LEASE_SECONDS": str(QUEUE_LEASE), "CARTOONFACE_QUEUE_MAX": str(QUEUE_JOBS)}
-    server = Server(work / f"queue-{workers}" / "instance", env)
+    server = Server(work / f"queue-{db}-{workers}" / "instance", env)
     server.instance.mkdir(parents=True)
     server.start()
     procs = [start_worker(server.instance, env, n) for n in range(workers)]
@@ -667,10 +668,11 @@ def queue_round(work: Path, redis: Redis, sentences: list, workers: int, db: int
         by_worker = Counter(job["worker"]["pid"] for job in final.values() if job.get("worker"))
         memory = max(peak_mb(proc.pid) for proc in procs)
         job_memory = max((job.get("result") or {}).get("peak_memory_mb", 0) for job in final.values())
+        inside = float(np.median([(job.get("result") or {}).get("seconds", 0) for job in final.values()]))
         print(f"queue ({workers} worker{'s' if workers > 1 else ''}): {QUEUE_JOBS} jobs of {QUEUE_SECONDS:.0f} s "
               f"sent at once: {dict(states)}, lost {QUEUE_JOBS - len(final)}, results matching their own input "
               f"{matched}/{states.get('done', 0)}; jobs per worker {sorted(by_worker.values())}; all ended after "
-              f"{wall:.1f} s ({wall / QUEUE_JOBS:.2f} s per job); peak memory server "
+              f"{wall:.1f} s ({wall / QUEUE_JOBS:.2f} s per job; generate inside a job: median {inside:.2f} s); peak memory server "
               f"{peak_mb(server.process.pid):.0f} MB, worker consumer {memory:.0f} MB, job process {job_memory} MB")  # type: ignore[union-attr]
         return wall
     finally:
@@ -726,10 +728,13 @@ def kill_round(work: Path, redis: Redis, sentences: list, db: int) -> None:
 def queue_run(work: Path, sentences: list) -> None:
     redis = Redis(work / "redis")
     try:
-        two = queue_round(work, redis, sentences, 2, 1)
-        one = queue_round(work, redis, sentences, 1, 2)
-        print(f"queue: throughput 2 workers / 1 worker = {one / two:.2f}")
-        kill_round(work, redis, sentences, 3)
+        walls: dict[int, list[float]] = {1: [], 2: []}
+        for db, workers in enumerate((2, 1) * QUEUE_ROUNDS, start=1):  # alternated: the shared machine's load drifts
+            walls[workers].append(queue_round(work, redis, sentences, workers, db))
+        one, two = float(np.median(walls[1])), float(np.median(walls[2]))
+        print(f"queue: median wall 1 worker {one:.1f} s, 2 workers {two:.1f} s: throughput 2 workers / 1 worker "
+              f"= {one / two:.2f} (load average now {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+        kill_round(work, redis, sentences, 2 * QUEUE_ROUNDS + 1)
     finally:
         redis.stop()
 

@@ -17,6 +17,7 @@ import json
 import re
 import shutil
 import sys
+import textwrap
 import time
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
@@ -34,6 +35,7 @@ OPTIONAL = ("name", "title", "page", "style", "background", "clothes", "fps", "s
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
 JOBS_FILE = "batch-jobs.json"  # row name -> job id, when the rows run through the queue
 POLL = 0.5  # seconds between looks at the queued jobs' status
+DESCRIPTION_WIDTH = 79  # characters per line of --help
 
 
 @dataclass(frozen=True)
@@ -51,17 +53,21 @@ class Row:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `batch` subcommand."""
+    paragraphs = (
+        "Make one page folder per row of MANIFEST.csv in OUTDIR/<name>/.",
+        f"Columns (a header row names them): {', '.join(REQUIRED)} (required: a face model JSON file or a "
+        "sample face name, the recording, the transcript as a UTF-8 text file; paths relative to the "
+        f"manifest's folder), and optionally {', '.join(OPTIONAL)} (name: the output folder, default the "
+        "recording's file name without extension; the rest as for `generate`). A bad row is reported "
+        "with its row and column before anything runs (exit 2).",
+        "Rows already done (OUTDIR/<name>/index.html exists) are skipped: run the same command again to "
+        "finish a stopped batch. With CARTOONFACE_QUEUE=redis://... set (or --instance), the rows run as "
+        "jobs of the web app's queue (instance folder: --instance or CARTOONFACE_INSTANCE_PATH), taken by "
+        "its server or `cartoonface worker`s; otherwise one after the other here. Exit 1 when a row failed.",
+    )
     parser = subparsers.add_parser(
         "batch", help=HELP, formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Make one page folder per row of MANIFEST.csv in OUTDIR/<name>/.\n\n"
-                    f"Columns (a header row names them): {', '.join(REQUIRED)} (required: a face model JSON file "
-                    "or a sample face name, the recording, the transcript as a UTF-8 text file; paths relative "
-                    f"to the manifest's folder), and optionally {', '.join(OPTIONAL)} (name: the output folder, "
-                    "default the recording's file name without extension; the rest as for `generate`).\n"
-                    "Rows already done (OUTDIR/<name>/index.html exists) are skipped: run the same command "
-                    "again to finish a stopped batch. With CARTOONFACE_QUEUE=redis://... set, the rows run as "
-                    "jobs of the web app's queue (instance folder: --instance or CARTOONFACE_INSTANCE_PATH), "
-                    "taken by `cartoonface worker`s; otherwise one after the other here.")
+        description="\n\n".join(textwrap.fill(paragraph, DESCRIPTION_WIDTH) for paragraph in paragraphs))
     parser.add_argument("manifest", type=Path, metavar="MANIFEST.csv")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR", help="folder of the results")
     parser.add_argument("--instance", type=Path, default=None,

@@ -18,6 +18,7 @@ watcher acts on it, and the old run's process stops at its next progress report.
 from __future__ import annotations
 
 import json
+import logging
 import multiprocessing
 import os
 import signal
@@ -41,6 +42,9 @@ from cartoonface.web.store import (FAILED, FINAL_STATES, QUEUED, Status, jobs_ro
 from cartoonface.web.worker import JobLimits, forked_main
 
 FORKSERVER = multiprocessing.get_context("forkserver")
+LOG = logging.getLogger(__name__)
+# What the queue's storage raises when it cannot be reached or read.
+QUEUE_ERRORS = (RedisError, sqlite3.Error)
 
 QUEUE_NAME = "cartoonface"
 SQLITE_FILE = "queue.sqlite3"  # in the instance folder
@@ -141,7 +145,7 @@ class Runner:
         self._huey = make_huey(instance, queue)
         try:
             self._huey.pending_count()
-        except (RedisError, sqlite3.Error) as exc:
+        except QUEUE_ERRORS as exc:
             raise OptionError(f"CARTOONFACE_QUEUE={shown_url(queue)}: cannot use the queue ({exc})") from None
         self._task = self._huey.task(name="run_job")(self._run)
         self._queue_max = queue_max
@@ -170,19 +174,31 @@ class Runner:
             raise RuntimeError("the job runner is closed")
         if not self.has_room():
             raise QueueFull(folder)
-        self._task(folder.name, 1)
+        try:
+            self._task(folder.name, 1)
+        except QUEUE_ERRORS as exc:  # Redis unreachable: refused like a full queue, the reason logged
+            LOG.error("cannot queue job %s: %s", folder.name, exc)
+            raise QueueFull(folder) from exc
 
     def has_room(self) -> bool:
-        """True when another job may be queued now."""
-        return self._queue_max is None or self._huey.pending_count() < self._queue_max
+        """True when another job may be queued now (False when the queue cannot be reached)."""
+        try:
+            return self._queue_max is None or self._huey.pending_count() < self._queue_max
+        except QUEUE_ERRORS as exc:
+            LOG.error("cannot read the queue: %s", exc)
+            return False
 
     def waiting(self) -> list[str]:
         """The ids of the jobs waiting in the queue, the next to start first."""
         return [str(task.args[0]) for task in self._huey.pending() if task.args]
 
     def ahead_of(self, folder: Path) -> int | None:
-        """How many queued jobs will start before the one in `folder`; None when it is not waiting."""
-        waiting = self.waiting()
+        """How many queued jobs will start before the one in `folder`; None when it is not waiting
+        (or the queue cannot be read just now)."""
+        try:
+            waiting = self.waiting()
+        except QUEUE_ERRORS:
+            return None
         return waiting.index(folder.name) if folder.name in waiting else None
 
     def close(self, timeout: float = 5.0) -> None:
@@ -297,7 +313,12 @@ class Runner:
                                         error=WORKER_LOST, updated=time.time(), interrupted=True))
             return
         write_status(folder, Status(state=QUEUED, updated=time.time()))
-        self._task(folder.name, run + 1)
+        try:
+            self._task(folder.name, run + 1)
+        except QUEUE_ERRORS as exc:  # cannot queue it again: say so rather than leave it waiting
+            LOG.error("cannot queue job %s again: %s", folder.name, exc)
+            write_status(folder, Status(state=FAILED, stage=status.stage, fraction=status.fraction,
+                                        error=WORKER_LOST, updated=time.time(), interrupted=True))
 
     def reap(self, now: float | None = None) -> list[str]:
         """Give up every unfinished job whose latest lease is older than `lease_seconds`
@@ -329,3 +350,5 @@ class Runner:
                     self._after_job(None)
             except OSError:  # a job folder removed while it was read: look again next time
                 continue
+            except QUEUE_ERRORS as exc:  # the queue is down just now: look again next time
+                LOG.error("lease watch: %s", exc)
