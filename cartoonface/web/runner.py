@@ -55,6 +55,12 @@ POLL_MAX = 0.5
 RENEWALS_PER_LEASE = 5
 # The retention sweep runs this often (seconds) besides after each job.
 SWEEP_EVERY = 60.0
+# Threads of the BLAS/OpenMP libraries in a job process (unless set in the environment): the jobs
+# run side by side, one per core, so one each. With numpy's default (a thread per core) two jobs
+# on 2 cores spun 4 threads: 20 jobs on 2 workers took 69 s against 38 s on one; with 1 thread,
+# 34 s against 51 s (docs/BENCHMARKS.md, "Web app: ... the queue on Redis").
+JOB_MATHS_THREADS = 1
+MATHS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 # A job is run at most this many times (the first run and one more after its worker died).
 MAX_RUNS = 2
 
@@ -156,6 +162,8 @@ class Runner:
         self._lock = threading.Lock()
         self._running: dict[Path, tuple[BaseProcess, int]] = {}
         self._closed = threading.Event()
+        for name in MATHS_THREAD_VARIABLES:  # read by the forkserver's numpy when it starts
+            os.environ.setdefault(name, str(JOB_MATHS_THREADS))
         FORKSERVER.set_forkserver_preload(["cartoonface.web.worker"])
         self._consumer: _Consumer | None = None
         if workers:
@@ -251,6 +259,8 @@ class Runner:
                                              name=f"cartoonface-{folder.name}")
                 process.start()
                 self._running[folder] = (process, run)
+                if self._closed.is_set():  # close() came while the process was starting
+                    process.terminate()
             process.join()
             code = process.exitcode
             process.close()
