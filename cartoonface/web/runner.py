@@ -55,10 +55,10 @@ POLL_MAX = 0.5
 RENEWALS_PER_LEASE = 5
 # The retention sweep runs this often (seconds) besides after each job.
 SWEEP_EVERY = 60.0
-# Threads of the BLAS/OpenMP libraries in a job process (unless set in the environment): the jobs
-# run side by side, one per core, so one each. With numpy's default (a thread per core) two jobs
-# on 2 cores spun 4 threads: 20 jobs on 2 workers took 69 s against 38 s on one; with 1 thread,
-# 34 s against 51 s (docs/BENCHMARKS.md, "Web app: ... the queue on Redis").
+# Threads of the BLAS/OpenMP libraries in a job process (unless set in the environment): jobs run
+# side by side, one per core, so one thread each rather than numpy's default of one per core
+# (two jobs on 2 cores would spin 4). On the shared bench machine the effect was within its noise
+# (docs/BENCHMARKS.md, "Web app: ... the queue on Redis").
 JOB_MATHS_THREADS = 1
 MATHS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 # A job is run at most this many times (the first run and one more after its worker died).

@@ -3,11 +3,13 @@ as `python -m cartoonface.web.worker JOB_FOLDER PARENT_PID`.
 
 The job runs the same library call as `cartoonface generate`
 (`cartoonface.pipeline.generate`), writes its progress to status.json as it
-goes, zips the generated folder for download and ends with status done, or
-failed with the user message of an InputError. Any other exception is a bug:
-its traceback goes to stderr (the job's worker.log) and the user sees a short
-internal-error message. When the server that started it is gone, the worker
-stops at the next progress report; the restarted server marks the job failed.
+goes, zips the generated folder for download (without the recording, which
+`download_zip` adds when it is downloaded, so that it is stored once) and ends
+with status done, or failed with the user message of an InputError. Any other
+exception is a bug: its traceback goes to stderr (the job's worker.log) and the
+user sees a short internal-error message. When the consumer that started it is
+gone, or its run was given up (runner.py, leases), the worker stops at the next
+progress report.
 """
 
 from __future__ import annotations
