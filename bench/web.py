@@ -8,15 +8,21 @@
 2. Restart: jobs running, the server stopped (SIGTERM, then SIGKILL in a second
    round) and started again on the same instance: no finished job lost, every
    interrupted job failed with a reason.
-3. Fuzz: 600 malformed or random requests (bad ids, traversal, wrong types, bad Host headers,
-   truncated files and photos, huge fields, broken multipart, wrong methods); counts the
-   answers by status class; 5xx must be 0.
+3. Fuzz: 1000 malformed or random requests (bad ids, traversal, wrong types, bad Host headers,
+   truncated files and photos, huge fields, broken multipart, wrong methods, the JSON API
+   with missing, wrong and right tokens and broken fields); counts the answers by status
+   class; 5xx must be 0, tracebacks in the server log 0, peak memory under 2 GB.
+4. Queue: a redis-server of its own on a free loopback port, the server with
+   CARTOONFACE_QUEUE and no workers of its own, `cartoonface worker` processes; 20 jobs sent
+   at once through the JSON API to 2 workers and to 1 (throughput), every result checked
+   against its own input; then a worker killed (SIGKILL) mid-job: where each job ends up.
 
 All traffic goes to 127.0.0.1 only.
 """
 
 from __future__ import annotations
 
+import html
 import http.client
 import http.cookiejar
 import io
@@ -55,7 +61,12 @@ LOAD_ROUNDS = 3
 LOAD_SECONDS = 30.0
 RESTART_JOBS = 8
 RESTART_SECONDS = 10.0
-FUZZ_REQUESTS = 600
+FUZZ_REQUESTS = 1000
+API_TOKEN = "bench-token-" + "0123456789abcdef"
+QUEUE_JOBS = 20
+QUEUE_SECONDS = 10.0
+QUEUE_ROUNDS = 2  # rounds of 20 jobs with 2 workers and with 1, alternated
+QUEUE_LEASE = 5.0  # seconds: a killed worker's job is taken again after this
 GAP = 0.4  # seconds of silence between joined sentences
 
 
@@ -408,7 +419,7 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
     }
     requests: list[FuzzRequest] = []
     while len(requests) < FUZZ_REQUESTS:
-        kind = rng.randrange(6)
+        kind = rng.randrange(8)
         headers = {"Cookie": cookie}
         if rng.random() < 0.05:  # a foreign or broken Host header (DNS rebinding, garbage)
             headers["Host"] = rng.choice(["rebound.example", "", "127.0.0.1:99999", "".join(chr(rng.randrange(33, 127)) for _ in range(20))])
@@ -437,6 +448,35 @@ def fuzz_requests(rng: random.Random, token: str, cookie: str, wav: bytes, face:
                                        "multipart/form-data; boundary=", "application/x-www-form-urlencoded",
                                        "multipart/form-data; boundary=" + "x" * 300])
             requests.append(("POST", "/jobs", junk(rng.randrange(0, 4000)), {**headers, "Content-Type": content_type}))
+        elif kind == 6:  # the JSON API: no, wrong or right token; broken fields, odd routes
+            auth = rng.choice(["", f"Bearer {API_TOKEN}", f"Bearer {API_TOKEN}", "Bearer x", f"Basic {API_TOKEN}",
+                               "Bearer " + "".join(chr(rng.randrange(33, 127)) for _ in range(40))])
+            api_headers = {"Authorization": auth} if auth else {}
+            if rng.random() < 0.3:
+                path = rng.choice([f"/api/jobs/{rng.choice(ids)}", f"/api/jobs/{rng.choice(ids)}/result.zip",
+                                   "/api/", "/api/nothing", "/api/jobs"])
+                requests.append((rng.choice(["GET", "DELETE", "PUT"]), path, None, api_headers))
+                continue
+            api_fields: dict[str, object] = {"sample": SAMPLE_FACE, "transcript": "你好。",
+                                             "audio": ("a.wav", wav, "audio/wav")}
+            choices = {"sample": lambda: rng.choice(["", "../x", junk_text(20)]),
+                       "face": broken_values["face_file"], "photo": broken_values["photo"],
+                       "audio": broken_values["audio"], "transcript": broken_values["transcript"],
+                       "title": broken_values["title"], "page": broken_values["page"],
+                       junk_text(8).replace('"', "") or "x": lambda: junk_text(20)}
+            for name in rng.sample(sorted(choices), rng.randrange(1, 4)):
+                api_fields[name] = choices[name]()
+            if not any(name in api_fields and api_fields[name] != good.get(name) for name in ("face", "audio")):
+                api_fields["face"] = broken_values["face_file"]()  # never a valid job
+            body, content_type = multipart(api_fields)
+            requests.append(("POST", "/api/jobs", body, {**api_headers, "Content-Type": content_type}))
+        elif kind == 7:  # hostile face models and text in otherwise good forms, through the form
+            fields = dict(good)
+            fields["face_file"] = ("f.json", hostile_face(face, rng.choice(["digits", "fapu", "hair"])),
+                                   "application/json")
+            fields[rng.choice(["title", "transcript"])] = rng.choice(["bell\x07", "nul\x00", "\x1b[31mred"])
+            body, content_type = multipart(fields)
+            requests.append(("POST", "/jobs", body, {**headers, "Content-Type": content_type}))
         else:
             big = rng.choice([2 << 20, 12 << 20])  # a field over the form memory limit, a body over the 5 MB cap
             body, content_type = multipart({"csrf_token": token, "title": "x"})
@@ -478,7 +518,7 @@ def send_raw(port: int, method: str, path: str, body, headers: dict) -> int:
 
 
 def fuzz_run(work: Path, sentences: list) -> None:
-    server = Server(work / "fuzz", {"CARTOONFACE_MAX_UPLOAD_MB": "5"})
+    server = Server(work / "fuzz", {"CARTOONFACE_MAX_UPLOAD_MB": "5", "CARTOONFACE_API_TOKEN": API_TOKEN})
     server.start()
     try:
         connection = http.client.HTTPConnection(HOST, server.port, timeout=30)
@@ -491,7 +531,7 @@ def fuzz_run(work: Path, sentences: list) -> None:
         wav, _text = recording(sentences, 0, 3.0)
         face = (SAMPLE_FACES / f"{SAMPLE_FACE}.json").read_bytes()
         photo = (ROOT / "docs" / "photo-astronaut.png").read_bytes()
-        requests = fuzz_requests(random.Random(20261121), token, cookie, wav, face, photo)
+        requests = fuzz_requests(random.Random(20261125), token, cookie, wav, face, photo)
         counts: dict[str, int] = {}
         fives = []
         began = time.monotonic()
@@ -515,11 +555,196 @@ def fuzz_run(work: Path, sentences: list) -> None:
         server.stop()
 
 
+class Redis:
+    """A redis-server of our own on a free loopback port, without persistence; stopped by its pid."""
+
+    def __init__(self, folder: Path) -> None:
+        self.port = free_port()
+        folder.mkdir(parents=True, exist_ok=True)
+        self.process = subprocess.Popen(["redis-server", "--port", str(self.port), "--bind", HOST, "--save", "",
+                                         "--appendonly", "no", "--dir", str(folder)],
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            try:
+                with socket.create_connection((HOST, self.port), timeout=1) as conn:
+                    conn.sendall(b"PING\r\n")
+                    if conn.recv(16).startswith(b"+PONG"):
+                        return
+            except OSError:
+                time.sleep(0.05)
+        raise RuntimeError("redis-server did not start")
+
+    def url(self, db: int) -> str:
+        return f"redis://{HOST}:{self.port}/{db}"
+
+    def stop(self) -> None:
+        os.kill(self.process.pid, signal.SIGTERM)
+        self.process.wait(30)
+
+
+def start_worker(instance: Path, env: dict[str, str], n: int) -> subprocess.Popen[bytes]:
+    """`cartoonface worker --jobs 1` on `instance` with `env` (the queue and lease settings)."""
+    with open(instance.parent / f"worker-{n}.log", "ab") as log:
+        return subprocess.Popen([sys.executable, "-m", "cartoonface", "worker", "--instance", str(instance),
+                                 "--jobs", "1"], stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,
+                                env={**os.environ, **env})
+
+
+def api_submit(base: str, title: str, transcript: str, wav: bytes) -> str:
+    """Send a job through the JSON API; return its id."""
+    body, kind = multipart({"sample": SAMPLE_FACE, "title": title, "transcript": transcript,
+                            "audio": ("speech.wav", wav, "audio/wav")})
+    request = urllib.request.Request(base + "/api/jobs", data=body, headers={
+        "Content-Type": kind, "Authorization": f"Bearer {API_TOKEN}"})
+    with urllib.request.urlopen(request, timeout=120) as answer:
+        return json.loads(answer.read())["id"]
+
+
+def api_get(base: str, path: str) -> tuple[int, bytes]:
+    request = urllib.request.Request(base + path, headers={"Authorization": f"Bearer {API_TOKEN}"})
+    try:
+        with urllib.request.urlopen(request, timeout=60) as answer:
+            return answer.status, answer.read()
+    except urllib.error.HTTPError as error:
+        return error.code, error.read()
+
+
+def api_wait(base: str, ids: list[str], timeout: float) -> dict[str, dict]:
+    """Poll the API until every job is done, failed or interrupted; id -> its JSON."""
+    final: dict[str, dict] = {}
+    deadline = time.monotonic() + timeout
+    while len(final) < len(ids) and time.monotonic() < deadline:
+        for job_id in ids:
+            if job_id not in final:
+                job = json.loads(api_get(base, f"/api/jobs/{job_id}")[1])
+                if job["state"] not in ("queued", "running"):
+                    final[job_id] = job
+        time.sleep(0.5)
+    return final
+
+
+def api_result_matches(base: str, job_id: str, title: str, transcript: str) -> bool:
+    """True when the job's result.zip holds its own title and the start of its own text."""
+    code, data = api_get(base, f"/api/jobs/{job_id}/result.zip")
+    if code != 200:
+        return False
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        page = html.unescape(archive.read(next(name for name in archive.namelist()
+                                               if name.endswith("/index.html"))).decode())
+    return title in page and transcript[:6] in page
+
+
+def queue_round(work: Path, redis: Redis, sentences: list, workers: int, db: int) -> float:
+    """QUEUE_JOBS jobs sent at once through the API to `workers` worker processes on Redis; print
+    what became of them; return the wall time until all ended."""
+    env = {"CARTOONFACE_QUEUE": redis.url(db), "CARTOONFACE_WORKERS": "0", "CARTOONFACE_API_TOKEN": API_TOKEN,
+           "CARTOONFACE_LEASE_SECONDS": str(QUEUE_LEASE), "CARTOONFACE_QUEUE_MAX": str(QUEUE_JOBS)}
+    server = Server(work / f"queue-{db}-{workers}" / "instance", env)
+    server.instance.mkdir(parents=True)
+    server.start()
+    procs = [start_worker(server.instance, env, n) for n in range(workers)]
+    try:
+        jobs = []
+        for i in range(QUEUE_JOBS):
+            wav, transcript = recording(sentences, (i * 5 + workers) % len(sentences), QUEUE_SECONDS)
+            jobs.append((f"queue {workers} job {i:02d}", transcript, wav))
+        ids: list[str] = [""] * QUEUE_JOBS
+
+        def send(i: int) -> None:
+            ids[i] = api_submit(server.base, *jobs[i])
+
+        begun = time.monotonic()
+        threads = [threading.Thread(target=send, args=(i,)) for i in range(QUEUE_JOBS)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        final = api_wait(server.base, ids, 3600)
+        wall = time.monotonic() - begun
+        states = Counter(job["state"] for job in final.values())
+        matched = sum(api_result_matches(server.base, job_id, jobs[i][0], jobs[i][1])
+                      for i, job_id in enumerate(ids) if final.get(job_id, {}).get("state") == "done")
+        by_worker = Counter(job["worker"]["pid"] for job in final.values() if job.get("worker"))
+        memory = max(peak_mb(proc.pid) for proc in procs)
+        job_memory = max((job.get("result") or {}).get("peak_memory_mb", 0) for job in final.values())
+        inside = float(np.median([(job.get("result") or {}).get("seconds", 0) for job in final.values()]))
+        print(f"queue ({workers} worker{'s' if workers > 1 else ''}): {QUEUE_JOBS} jobs of {QUEUE_SECONDS:.0f} s "
+              f"sent at once: {dict(states)}, lost {QUEUE_JOBS - len(final)}, results matching their own input "
+              f"{matched}/{states.get('done', 0)}; jobs per worker {sorted(by_worker.values())}; all ended after "
+              f"{wall:.1f} s ({wall / QUEUE_JOBS:.2f} s per job; generate inside a job: median {inside:.2f} s); peak memory server "
+              f"{peak_mb(server.process.pid):.0f} MB, worker consumer {memory:.0f} MB, job process {job_memory} MB")  # type: ignore[union-attr]
+        return wall
+    finally:
+        for proc in procs:
+            proc.send_signal(signal.SIGTERM)
+        for proc in procs:
+            proc.wait(60)
+        server.stop()
+
+
+def kill_round(work: Path, redis: Redis, sentences: list, db: int) -> None:
+    """4 jobs on 2 workers; the worker running the first job is killed (SIGKILL) mid-job."""
+    env = {"CARTOONFACE_QUEUE": redis.url(db), "CARTOONFACE_WORKERS": "0", "CARTOONFACE_API_TOKEN": API_TOKEN,
+           "CARTOONFACE_LEASE_SECONDS": str(QUEUE_LEASE)}
+    server = Server(work / "queue-kill" / "instance", env)
+    server.instance.mkdir(parents=True)
+    server.start()
+    procs = {proc.pid: proc for proc in (start_worker(server.instance, env, n) for n in range(2))}
+    try:
+        jobs = []
+        for i in range(4):
+            wav, transcript = recording(sentences, 11 * i + 3, QUEUE_SECONDS)
+            jobs.append((f"kill job {i}", transcript, wav))
+        ids = [api_submit(server.base, *job) for job in jobs]
+        deadline = time.monotonic() + 600
+        victim = None
+        while victim is None and time.monotonic() < deadline:
+            job = json.loads(api_get(server.base, f"/api/jobs/{ids[0]}")[1])
+            if job["state"] == "running" and job["progress"] >= 20:
+                victim = job["worker"]["pid"]
+            time.sleep(0.1)
+        killed_at = time.monotonic()
+        procs[victim].send_signal(signal.SIGKILL)
+        procs[victim].wait(30)
+        final = api_wait(server.base, ids, 1800)
+        took = time.monotonic() - killed_at
+        fates = [f"{final[job_id]['state']} (run {final[job_id]['worker']['run']})" if job_id in final else "lost"
+                 for job_id in ids]
+        matched = sum(api_result_matches(server.base, job_id, jobs[i][0], jobs[i][1])
+                      for i, job_id in enumerate(ids) if final.get(job_id, {}).get("state") == "done")
+        notes = final.get(ids[0], {}).get("notes", [])
+        print(f"queue kill: worker pid {victim} killed while running job 0 at >= 20 %; fates: {fates}; "
+              f"results matching their input {matched}; all ended {took:.1f} s after the kill; "
+              f"job 0 notes: {notes}")
+    finally:
+        for proc in procs.values():
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+                proc.wait(60)
+        server.stop()
+
+
+def queue_run(work: Path, sentences: list) -> None:
+    redis = Redis(work / "redis")
+    try:
+        walls: dict[int, list[float]] = {1: [], 2: []}
+        for db, workers in enumerate((2, 1) * QUEUE_ROUNDS, start=1):  # alternated: the shared machine's load drifts
+            walls[workers].append(queue_round(work, redis, sentences, workers, db))
+        one, two = float(np.median(walls[1])), float(np.median(walls[2]))
+        print(f"queue: median wall 1 worker {one:.1f} s, 2 workers {two:.1f} s: throughput 2 workers / 1 worker "
+              f"= {one / two:.2f} (load average now {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+        kill_round(work, redis, sentences, 2 * QUEUE_ROUNDS + 1)
+    finally:
+        redis.stop()
+
+
 def main() -> None:
     sentences = biaobei_sentences()
     with tempfile.TemporaryDirectory(prefix="cartoonface-bench-web-") as tmp:
         work = Path(tmp)
         fuzz_run(work, sentences)
+        queue_run(work, sentences)
         restart_run(work, sentences)
         load_run(work, sentences)
 

@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-DEB_PACKAGES=(espeak-ng libespeak-ng1 chromium fonts-noto-cjk sox)
+DEB_PACKAGES=(espeak-ng libespeak-ng1 chromium fonts-noto-cjk sox redis-server)
 missing=()
 for pkg in "${DEB_PACKAGES[@]}"; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")

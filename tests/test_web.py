@@ -564,7 +564,7 @@ def test_restart_keeps_finished_jobs_and_fails_interrupted_ones(tmp_path, speech
 
 def test_closing_the_runner_fails_the_job_it_was_running(tmp_path, speech):
     job = create_job(tmp_path, spec(), stored_inputs(speech))
-    runner = Runner(1)
+    runner = Runner(tmp_path, 1)
     runner.submit(job.folder)
     deadline = time.monotonic() + 60
     while load_job(tmp_path, job.id).status.state == QUEUED and time.monotonic() < deadline:
@@ -684,7 +684,7 @@ def test_serve_reports_a_port_it_cannot_use(tmp_path):
 
 def test_a_job_over_its_memory_limit_fails_alone_with_a_clear_message(tmp_path, speech):
     job = create_job(tmp_path, spec(), stored_inputs(speech))
-    runner = Runner(1, limits=JobLimits(memory_bytes=300 << 20, cpu_seconds=600))
+    runner = Runner(tmp_path, 1, limits=JobLimits(memory_bytes=300 << 20, cpu_seconds=600))
     try:
         runner.submit(job.folder)
         deadline = time.monotonic() + 120
@@ -700,7 +700,7 @@ def test_a_job_over_its_memory_limit_fails_alone_with_a_clear_message(tmp_path, 
 
 def test_the_queue_is_capped_and_tells_a_waiting_job_its_place(tmp_path, speech):
     jobs = [create_job(tmp_path, spec(f"job {i}"), stored_inputs(speech)) for i in range(3)]
-    runner = Runner(1, queue_max=1)
+    runner = Runner(tmp_path, 1, queue_max=1)
     try:
         runner.submit(jobs[0].folder)
         deadline = time.monotonic() + 60

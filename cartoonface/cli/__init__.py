@@ -15,11 +15,12 @@ import argparse
 import sys
 
 from cartoonface import __version__
-from cartoonface.cli import align, face, generate, serve
+from cartoonface.cli import align, batch, face, generate, serve, worker
 from cartoonface.errors import InputError
 
 # Subcommand name -> module, in the order they appear in --help.
-SUBCOMMANDS = {"face": face, "align": align, "generate": generate, "serve": serve}
+SUBCOMMANDS = {"face": face, "align": align, "generate": generate, "batch": batch, "serve": serve,
+               "worker": worker}
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:

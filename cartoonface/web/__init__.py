@@ -1,7 +1,8 @@
 """The cartoonface web app: upload a face model, a recording and its transcript,
 follow the job's progress, play the talking face and download it as a zip.
 
-`create_app(config=None)` builds the Flask app (docs/web.md lists the settings);
+`create_app(config=None)` builds the Flask app (docs/web.md lists the settings),
+`configured_app(config=None)` only loads its settings;
 `cartoonface serve` runs it under waitress.
 """
 
@@ -16,8 +17,8 @@ from typing import IO
 from flask import Flask, Request, Response
 
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
-from cartoonface.web import photo_views
-from cartoonface.web.config import DEFAULTS, PACKAGE, secret_key, sample_faces, settings_from
+from cartoonface.web import api, photo_views
+from cartoonface.web.config import DEFAULTS, PACKAGE, Settings, secret_key, sample_faces, settings_from
 from cartoonface.web.draft_store import sweep_drafts
 from cartoonface.web.inputs import MAX_FACE_BYTES, MAX_PHOTO_BYTES, Limits
 from cartoonface.web.runner import Runner
@@ -45,13 +46,13 @@ class UploadRequest(Request):
             stream.close()
 
 
-def create_app(config: Mapping[str, object] | None = None) -> Flask:
-    """Build the app. Settings come from DEFAULTS, then `<instance>/config.py`, then
-    CARTOONFACE_* environment variables, then `config`. The instance folder is
-    config["INSTANCE_PATH"], else $CARTOONFACE_INSTANCE_PATH, else Flask's default
-    (`instance/` beside the package). Jobs left unfinished by a previous server are
-    marked failed and the retention limit is applied before the worker pool starts.
-    Raises OptionError for a bad setting."""
+def configured_app(config: Mapping[str, object] | None = None) -> tuple[Flask, Settings]:
+    """The Flask app with its settings loaded and checked, and nothing started: settings come
+    from DEFAULTS, then `<instance>/config.py`, then CARTOONFACE_* environment variables,
+    then `config`. The instance folder is config["INSTANCE_PATH"], else
+    $CARTOONFACE_INSTANCE_PATH, else Flask's default (`instance/` beside the package); it is
+    made when missing. Also used by `cartoonface worker` and `batch`. Raises OptionError
+    for a bad setting."""
     config = dict(config or {})
     instance = config.get("INSTANCE_PATH") or os.environ.get(f"{ENV_PREFIX}_INSTANCE_PATH")
     app = Flask(__name__, instance_path=str(Path(str(instance)).resolve()) if instance else None,
@@ -64,6 +65,15 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     app.config["DEBUG"] = False
     settings = settings_from(app.config, Path(app.instance_path))
     settings.instance.mkdir(parents=True, exist_ok=True)
+    return app, settings
+
+
+def create_app(config: Mapping[str, object] | None = None) -> Flask:
+    """Build the app (settings as configured_app). Jobs left unfinished by a previous server
+    are marked failed (embedded queue only: with Redis, workers elsewhere may be running
+    them and their leases tell) and the retention limit is applied before the job runner
+    starts. Raises OptionError for a bad setting."""
+    app, settings = configured_app(config)
     if not app.config.get("SECRET_KEY"):
         app.config["SECRET_KEY"] = secret_key(settings.instance)
     # A request may hold the recording, a face model, a photo and a transcript file.
@@ -78,16 +88,20 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
             apply_retention(settings.instance, settings.retention_days)
             sweep_drafts(settings.instance)
 
-    fail_interrupted(settings.instance)
+    if settings.queue is None:  # the embedded queue: no job of this instance runs anywhere else
+        fail_interrupted(settings.instance)
     sweep()
     limits = Limits(upload_bytes=settings.upload_bytes, transcript_chars=settings.transcript_chars,
                     samples=sample_faces(settings.samples_dir), backgrounds=tuple(BACKGROUNDS),
                     clothes=tuple(CLOTHES))
     app.extensions["cartoonface"] = WebState(settings, limits, Runner(
-        settings.workers, sweep, JobLimits(settings.job_memory_bytes, settings.job_cpu_seconds), settings.queue_max))
+        settings.instance, settings.workers, sweep, JobLimits(settings.job_memory_bytes, settings.job_cpu_seconds),
+        settings.queue_max, queue=settings.queue, lease_seconds=settings.lease_seconds,
+        requeue_on_close=settings.queue is not None))
     app.url_map.converters["jobid"] = JobIdConverter
     app.register_blueprint(bp)
     app.register_blueprint(photo_views.bp)
+    app.register_blueprint(api.bp)
 
     @app.after_request
     def headers(response: Response) -> Response:

@@ -35,13 +35,21 @@ DEFAULTS: dict[str, object] = {
     "USER_QUOTA_MB": 1024,
     # `serve`: a connection that sends nothing for this many seconds is closed.
     "CHANNEL_TIMEOUT": 10,
+    # The job queue: None is Huey's SQLite storage in the instance folder (this machine only);
+    # "redis://HOST:PORT/DB" is Huey's Redis storage, shared with `cartoonface worker`s elsewhere.
+    "QUEUE": None,
+    # A running job's worker renews its lease this often (a fifth of it); a lease not renewed
+    # for LEASE_SECONDS means the worker died: the job is run again once, then marked interrupted.
+    "LEASE_SECONDS": 30,
+    # `Authorization: Bearer TOKEN` for the JSON API (/api/...): None turns the API off.
+    "API_TOKEN": None,
 }
 
 # key -> (type, smallest value)
 NUMBERS = {
     "MAX_UPLOAD_MB": (float, 0.001),
     "MAX_TRANSCRIPT_CHARS": (int, 1),
-    "WORKERS": (int, 1),
+    "WORKERS": (int, 0),
     "RETENTION_DAYS": (float, 0.0),
     "RETENTION_MB": (float, 0.0),
     "JOB_MEMORY_MB": (float, 64.0),
@@ -49,6 +57,7 @@ NUMBERS = {
     "QUEUE_MAX": (int, 1),
     "USER_QUOTA_MB": (float, 0.001),
     "CHANNEL_TIMEOUT": (int, 1),
+    "LEASE_SECONDS": (float, 1.0),
 }
 
 
@@ -56,7 +65,8 @@ NUMBERS = {
 class Settings:
     """Checked settings: instance folder, byte/char limits, pool size, retention, sample faces,
     per-job memory (bytes) and CPU time (seconds), queue length, per-session disk quota
-    (bytes) and the idle-connection timeout (seconds)."""
+    (bytes), the idle-connection timeout (seconds), the queue URL (None: SQLite in the
+    instance), the workers' lease (seconds) and the API tokens (none: no API)."""
 
     instance: Path
     upload_bytes: int
@@ -70,6 +80,9 @@ class Settings:
     queue_max: int
     user_quota_bytes: int
     channel_timeout: int
+    queue: str | None = None
+    lease_seconds: float = 30.0
+    api_tokens: tuple[str, ...] = ()
 
 
 def settings_from(config: Mapping[str, object], instance: Path) -> Settings:
@@ -87,6 +100,10 @@ def settings_from(config: Mapping[str, object], instance: Path) -> Settings:
         if not value >= smallest:
             raise OptionError(f"CARTOONFACE_{key}={raw!r}: expected at least {smallest}")
         values[key] = value
+    queue = queue_url(config.get("QUEUE"))
+    if values["WORKERS"] == 0 and queue is None:
+        raise OptionError("CARTOONFACE_WORKERS=0: expected at least 1 (0, no job runs in the server, only "
+                          "with CARTOONFACE_QUEUE set and `cartoonface worker`s taking the jobs)")
     return Settings(
         instance=instance,
         upload_bytes=int(values["MAX_UPLOAD_MB"] * 2**20),
@@ -100,7 +117,38 @@ def settings_from(config: Mapping[str, object], instance: Path) -> Settings:
         queue_max=values["QUEUE_MAX"],
         user_quota_bytes=int(values["USER_QUOTA_MB"] * 2**20),
         channel_timeout=values["CHANNEL_TIMEOUT"],
+        queue=queue,
+        lease_seconds=values["LEASE_SECONDS"],
+        api_tokens=api_tokens(config.get("API_TOKEN")),
     )
+
+
+def queue_url(raw: object) -> str | None:
+    """The QUEUE setting checked: None/"" (SQLite in the instance) or a redis:// URL."""
+    if raw in (None, ""):
+        return None
+    if not isinstance(raw, str) or not raw.startswith(("redis://", "rediss://", "unix://")):
+        raise OptionError(f"CARTOONFACE_QUEUE={raw!r}: expected redis://HOST:PORT/DB (or unset for the "
+                          "embedded SQLite queue)")
+    return raw
+
+
+# An API token shorter than this is refused: it is the only thing between the API and the world.
+MIN_TOKEN_CHARS = 16
+
+
+def api_tokens(raw: object) -> tuple[str, ...]:
+    """The API_TOKEN setting checked: None (no API), one token or a list of them, each at
+    least MIN_TOKEN_CHARS characters of visible ASCII."""
+    if raw in (None, ""):
+        return ()
+    tokens = raw if isinstance(raw, list) else [raw]
+    for token in tokens:
+        if not (isinstance(token, str) and len(token) >= MIN_TOKEN_CHARS and token.isascii()
+                and token.isprintable() and " " not in token):
+            raise OptionError(f"CARTOONFACE_API_TOKEN: each token must be a string of at least "
+                              f"{MIN_TOKEN_CHARS} visible ASCII characters (no spaces)")
+    return tuple(tokens)
 
 
 def secret_key(instance: Path) -> bytes:

@@ -40,7 +40,8 @@ INTERRUPTED = "Interrupted: the server stopped before this job finished. Please 
 class Status:
     """Where a job is: `state` (queued/running/done/failed), the pipeline `stage`,
     `fraction` 0..1 of the whole job, `error` (a user message when failed),
-    `updated` (epoch seconds) and `result` (summary of pipeline.Result when done)."""
+    `updated` (epoch seconds), `result` (summary of pipeline.Result when done) and
+    `interrupted` (failed because its server or worker stopped, not because of the job)."""
 
     state: str
     stage: str = ""
@@ -48,6 +49,7 @@ class Status:
     error: str = ""
     updated: float = 0.0
     result: Mapping[str, object] | None = None
+    interrupted: bool = False
 
     @property
     def percent(self) -> int:
@@ -65,6 +67,7 @@ class Status:
             "error": self.error,
             "updated": self.updated,
             "result": dict(self.result) if self.result is not None else None,
+            "interrupted": self.interrupted,
         }
 
 
@@ -150,6 +153,7 @@ def read_status(folder: Path) -> Status:
         error=str(data.get("error", "")),
         updated=float(data.get("updated", 0.0)),
         result=data.get("result"),
+        interrupted=bool(data.get("interrupted", False)),
     )
 
 
@@ -188,7 +192,7 @@ def fail_interrupted(instance: Path) -> list[str]:
         if job.status.state not in FINAL_STATES:
             write_status(job.folder, Status(state=FAILED, stage=job.status.stage,
                                             fraction=job.status.fraction, error=INTERRUPTED,
-                                            updated=time.time()))
+                                            updated=time.time(), interrupted=True))
             marked.append(job.id)
     return marked
 

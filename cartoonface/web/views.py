@@ -31,7 +31,7 @@ from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, MOOD_CHOICES, PA
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
-from cartoonface.web.worker import SITE, ZIP_NAME
+from cartoonface.web.worker import SITE, ZIP_NAME, download_zip
 
 RECENT = 20  # jobs remembered per browser session
 
@@ -236,7 +236,7 @@ def download(job_id: str) -> Response:
     job = stored_job(job_id)
     if job.status.state != DONE or not (job.folder / ZIP_NAME).is_file():
         abort(404, description="This job has no result to download (yet).")
-    return send_file(job.folder / ZIP_NAME, mimetype="application/zip", as_attachment=True,
+    return send_file(download_zip(job.folder, job.spec), mimetype="application/zip", as_attachment=True,
                      download_name=download_name(job.title, job.id))
 
 
@@ -250,21 +250,25 @@ def too_large(error: RequestEntityTooLarge) -> tuple[str, int]:
 
 
 @bp.app_errorhandler(HTTPException)
-def http_error(error: HTTPException) -> tuple[str, int] | Response:
+def http_error(error: HTTPException) -> tuple[str | Response, int] | Response:
     """Any other 4xx/5xx from routing or Werkzeug as a small page (plain text when the
     Host header was refused: no URL can be built for a page then)."""
     if request_ctx.url_adapter is None:
         return Response(f"{error.code} {error.name}: {error.description}\n", status=error.code,
                         mimetype="text/plain")
+    if request.path.startswith("/api/"):
+        return jsonify(error=error.description or error.name, field=None), error.code or 500
     return render_template("web/error.html", code=error.code, name=error.name,
                            description=error.description), error.code or 500
 
 
 @bp.app_errorhandler(Exception)
-def internal_error(error: Exception) -> tuple[str, int] | Response:
+def internal_error(error: Exception) -> tuple[str | Response, int] | Response:
     """A bug: logged with its traceback, a 500 page without details."""
     current_app.logger.exception("unhandled error on %s %s", request.method, request.path)
     if request_ctx.url_adapter is None:
         return Response("500 Internal error\n", status=500, mimetype="text/plain")
+    if request.path.startswith("/api/"):
+        return jsonify(error="Something went wrong on the server; the log has the details.", field=None), 500
     return render_template("web/error.html", code=500, name="Internal error",
                            description="Something went wrong on the server; the log has the details."), 500

@@ -3,11 +3,13 @@ as `python -m cartoonface.web.worker JOB_FOLDER PARENT_PID`.
 
 The job runs the same library call as `cartoonface generate`
 (`cartoonface.pipeline.generate`), writes its progress to status.json as it
-goes, zips the generated folder for download and ends with status done, or
-failed with the user message of an InputError. Any other exception is a bug:
-its traceback goes to stderr (the job's worker.log) and the user sees a short
-internal-error message. When the server that started it is gone, the worker
-stops at the next progress report; the restarted server marks the job failed.
+goes, zips the generated folder for download (without the recording, which
+`download_zip` adds when it is downloaded, so that it is stored once) and ends
+with status done, or failed with the user message of an InputError. Any other
+exception is a bug: its traceback goes to stderr (the job's worker.log) and the
+user sees a short internal-error message. When the consumer that started it is
+gone, or its run was given up (runner.py, leases), the worker stops at the next
+progress report.
 """
 
 from __future__ import annotations
@@ -18,14 +20,17 @@ import json
 import multiprocessing
 import os
 import resource
+import shutil
 import signal
 import sys
+import tempfile
 import time
 import traceback
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 from cartoonface.errors import InputError
 from cartoonface.files import write_bytes_atomic
@@ -36,6 +41,7 @@ from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, writ
 PROGRESS_INTERVAL = 0.25
 
 SITE = "site"
+DEFAULT_OPTIONS = Options()  # fps and seed of jobs that do not set them (the form does not)
 ZIP_NAME = "site.zip"
 
 
@@ -86,17 +92,36 @@ def apply_limits(limits: JobLimits) -> None:
     signal.signal(signal.SIGXCPU, _over_cpu)
 
 
-def zip_folder(folder: Path, top: str) -> bytes:
-    """Return a zip (bytes) of every file under `folder`, stored under the folder name `top`/."""
+def zip_folder(folder: Path, top: str, leave_out: tuple[str, ...] = ()) -> bytes:
+    """Return a zip (bytes) of every file under `folder` but the top-level names in `leave_out`,
+    stored under the folder name `top`/."""
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         for path in sorted(folder.rglob("*")):
-            if path.is_file():
+            if path.is_file() and path.relative_to(folder).as_posix() not in leave_out:
                 archive.write(path, f"{top}/{path.relative_to(folder).as_posix()}")
     return buffer.getvalue()
 
 
-def zip_top_name(spec: dict[str, object]) -> str:
+def download_zip(folder: Path, spec: Mapping[str, object]) -> IO[bytes]:
+    """The job's download, an unnamed temporary file (read from 0): the stored site.zip (which
+    leaves out the recording, so that it is stored once) with the recording added, stored
+    uncompressed (audio does not deflate). The copy is made beside the job (same disk)."""
+    stored = folder / ZIP_NAME
+    recording = folder / SITE / str(spec["audio_file"])
+    out = tempfile.TemporaryFile(dir=folder.parent)
+    with stored.open("rb") as source:
+        shutil.copyfileobj(source, out)
+    out.seek(0)
+    with zipfile.ZipFile(out, "a") as archive:
+        name = f"{zip_top_name(spec)}/{recording.name}"
+        if recording.is_file() and name not in archive.namelist():
+            archive.write(recording, name, compress_type=zipfile.ZIP_STORED)
+    out.seek(0)
+    return out
+
+
+def zip_top_name(spec: Mapping[str, object]) -> str:
     """The folder name inside the download zip: 'cartoonface-' + first 8 characters of the id."""
     return f"cartoonface-{str(spec['id'])[:8]}"
 
@@ -147,11 +172,12 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
                       background=str(spec["background"]), clothes=str(spec["clothes"]),
-                      emotion=str(spec.get("mood") or "") or None)
+                      emotion=str(spec.get("mood") or "") or None,
+                      fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))))
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
-        write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
+        write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec), (str(spec["audio_file"]),)))
         share_recording(folder / str(spec["audio_file"]), folder / SITE)
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
@@ -163,6 +189,8 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         "size": result.size,
         "seconds": result.seconds,
         "notes": list(result.notes),
+        # the job process's peak resident memory (Linux reports ru_maxrss in KiB)
+        "peak_memory_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
     }
     write_status(folder, Status(state=DONE, stage="pages", fraction=1.0, updated=time.time(), result=summary))
 
@@ -197,11 +225,12 @@ def main(folder: Path, server_alive: Callable[[], bool], limits: JobLimits | Non
     return 0
 
 
-def forked_main(folder: str, limits: JobLimits | None = None) -> None:
+def forked_main(folder: str, limits: JobLimits | None = None, given_up: str | None = None) -> None:
     """Entry point in a process the runner started through the forkserver: the process is
     held to `limits` (None: not limited), output goes to the job's worker.log; the server is alive while
     multiprocessing's parent sentinel is open (the forkserver itself outlives a killed
-    server while its children run)."""
+    server while its children run) and no file `given_up` exists (the runner's claim that
+    this run was given up and the job queued again)."""
     log = os.open(Path(folder) / "worker.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     os.dup2(log, 1)
     os.dup2(log, 2)
@@ -212,7 +241,8 @@ def forked_main(folder: str, limits: JobLimits | None = None) -> None:
                  "python -m cartoonface.web.worker JOB_FOLDER PARENT_PID")
     if limits is not None:
         apply_limits(limits)
-    sys.exit(main(Path(folder), server.is_alive, limits))
+    mark = Path(given_up) if given_up else None
+    sys.exit(main(Path(folder), lambda: server.is_alive() and not (mark is not None and mark.exists()), limits))
 
 
 if __name__ == "__main__":
