@@ -20,6 +20,7 @@ from markupsafe import escape
 
 from cartoonface.errors import OptionError
 from cartoonface.face.model import face_from_dict
+from cartoonface.pipeline import STAGES
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import create_app
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
@@ -517,10 +518,22 @@ def test_a_waiting_job_shows_its_place_and_progress(app, client, speech):
     assert f'data-status-url="/jobs/{job.id}/status"' in page
     assert "/static/web/job.js" in page
     assert XSS not in page
-    write_status(job.folder, Status(state=RUNNING, stage="frames", fraction=0.42))
+    write_status(job.folder, Status(state=RUNNING, stage="svg", fraction=0.42))
     status = client.get(f"/jobs/{job.id}/status").get_json()
     assert (status["percent"], status["stage_label"]) == (42, "Drawing the frames")
     assert client.get("/static/web/job.js").status_code == 200
+
+
+def test_the_job_page_lists_every_stage_with_those_passed_ticked(app, client, speech):
+    job = create_job(Path(app.instance_path), spec("stages"), stored_inputs(speech))  # stored, never queued
+    names = [name for name, _ in STAGES]
+    for at, current in enumerate(names):
+        write_status(job.folder, Status(state=RUNNING, stage=current, fraction=0.5))
+        page = client.get(f"/jobs/{job.id}").get_data(as_text=True)
+        marks = re.findall(r'<li data-stage="([a-z]+)"( class="(done|current)")?', page)
+        assert [name for name, _, _ in marks] == names
+        assert [mark for _, _, mark in marks] == ["done"] * at + ["current"] + [""] * (len(names) - at - 1)
+        assert all(stage_label(Status(state=RUNNING, stage=name)) in page for name in names)
 
 
 def test_restart_keeps_finished_jobs_and_fails_interrupted_ones(tmp_path, speech, sample_name):

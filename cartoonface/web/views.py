@@ -44,10 +44,12 @@ STAGES = {
     "segment": "Finding the sentences",
     "align": "Timing the syllables",
     "schedule": "Planning blinks and head moves",
-    "frames": "Drawing the frames",
-    "svg": "Writing the animation",
+    "frames": "Posing the face in every frame",
+    "svg": "Drawing the frames",
     "pages": "Writing the pages",
 }
+# The pipeline's stages in order (name, label), listed on the job page with the current one marked.
+STAGE_LIST = tuple((name, label) for name, label in STAGES.items() if name)
 
 # The generated pages (render/pages.py) load their script and CSS from files and hold
 # the SVG inline. They run sandboxed (an opaque origin: no access to this app's cookies
@@ -204,7 +206,7 @@ def job_page(job_id: str) -> str:
     """The job's progress, its error, or its player and download link."""
     job = stored_job(job_id)
     return render_template("web/job.html", job=job, status=job.status, stage=job_label(job),
-                           pages=PAGES, done=job.status.state == DONE)
+                           pages=PAGES, done=job.status.state == DONE, stages=STAGE_LIST)
 
 
 @bp.get("/jobs/<jobid:job_id>/status")
