@@ -86,7 +86,7 @@ def job_id_of(url: str) -> str:
 
 def test_home_page_offers_the_form_with_samples_and_a_csrf_token(client, sample_name):
     page = client.get("/").get_data(as_text=True)
-    assert f'<option value="{sample_name}"' in page
+    assert f'<input type="radio" name="face_sample" value="{sample_name}"' in page
     for name in ("face_file", "photo", "audio", "transcript", "transcript_file", "title", "background", "clothes"):
         assert f'name="{name}"' in page
     assert 'value="audiobook"' in page and 'value="announcer"' in page
@@ -319,7 +319,7 @@ def test_recording_over_the_size_limit_is_refused_in_the_form(client, speech, sa
 
 
 def test_request_far_over_the_limit_gets_413_with_a_message(client, speech, sample_name):
-    huge = b"RIFF" + bytes(24 << 20)  # over 1 MB recording + 20 MB photo + the rest
+    huge = b"RIFF" + bytes(36 << 20)  # over 1 MB recording + 20 MB photo + 8 MB TextGrid + the rest
     response = post(client, form(client, speech, sample_name, audio=(io.BytesIO(huge), "huge.wav")))
     assert response.status_code == 413
     assert "The upload is too large" in response.get_data(as_text=True)

@@ -109,6 +109,8 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
         folder / str(spec["audio_file"]): str(spec.get("audio_label", "recording")),
         folder / "face.json": str(spec.get("face_label", "face model")),
         folder / "transcript.txt": "transcript",
+        **{folder / str(spec[f"{kind}_file"]): str(spec.get(f"{kind}_label", spec[f"{kind}_file"]))
+           for kind in ("textgrid", "actions") if spec.get(f"{kind}_file")},
         folder: "job",
     }
     for path, label in names.items():
@@ -146,7 +148,9 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
-                      background=str(spec["background"]), clothes=str(spec["clothes"]))
+                      background=str(spec["background"]), clothes=str(spec["clothes"]),
+                      alignment=folder / str(spec["textgrid_file"]) if spec.get("textgrid_file") else None,
+                      actions=folder / str(spec["actions_file"]) if spec.get("actions_file") else None)
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
