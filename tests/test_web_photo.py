@@ -391,6 +391,7 @@ def test_check_drag_and_generate_in_chromium(server, speech, browser, tmp_path):
     page.click("#find-face")
     page.wait_for_url(f"{server}/photos/*")
     start = json.loads(page.input_value("#points"))["2.1"]
+    page.locator('circle.point[data-name="2.1"]').scroll_into_view_if_needed()  # under the cartoon on a phone
     box = page.locator('circle.point[data-name="2.1"]').bounding_box()
     x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     touch = phone.new_cdp_session(page)
