@@ -164,7 +164,9 @@ def _broken(points: np.ndarray, detected: np.ndarray) -> list[tuple[tuple[str, .
     ring = points[_outline_order(detected)]
     for name in INSIDE:
         if not _inside(points[POINT_INDEX[name]], ring):
-            broken.append((("outline", name), {name: "{name} is outside the face outline"}))
+            pulled = f"{{name}} leaves point {name} ({POINT_LABELS[name]}) outside the face outline"
+            broken.append((("outline", name), {name: "{name} is outside the face outline",
+                                               **{edge: pulled for edge in OUTLINE}}))
     for (right, left), what in PAIRS.items():
         i, j = POINT_INDEX[right], POINT_INDEX[left]
         side = np.sign(where[i, 0] - where[j, 0])
@@ -179,8 +181,8 @@ def _broken(points: np.ndarray, detected: np.ndarray) -> list[tuple[tuple[str, .
             for low in lower:
                 if face[POINT_INDEX[high], 1] - face[POINT_INDEX[low], 1] > margin:
                     broken.append((("above", high, low), {
-                        high: f"{{name}} is below {lower_name}; {upper_name} belong above {lower_name}",
-                        low: f"{{name}} is above {upper_name}; {lower_name} belong below {upper_name}"}))
+                        high: f"{{name}} is below {lower_name}; it belongs above {lower_name}",
+                        low: f"{{name}} is above {upper_name}; it belongs below {upper_name}"}))
     return broken
 
 
