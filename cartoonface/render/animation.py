@@ -80,11 +80,12 @@ ROLL_DECIMALS = 2
 # animation_svg tells its progress every this many frames while it draws them (a new state takes
 # ~1 ms to draw: a report every ~0.1 s at most).
 PROGRESS_FRAMES = 64
-# Share of animation_svg's time done when drawing the frames ends and when tidying the drawings
-# (compact.Writer.finish) ends; the rest writes the tracks and the document (measured on a
-# 4-minute recording: bench notes in docs/web.md, "Progress").
+# Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
+# (compact.Writer.finish) ends and when the tracks are written; the rest makes the document's
+# bytes (measured on a 4-minute recording: docs/BENCHMARKS.md, "Web progress").
 DRAWN_SHARE = 0.55
 TIDIED_SHARE = 0.88
+TRACKED_SHARE = 0.96
 
 
 @dataclass(frozen=True)
@@ -298,6 +299,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
     _roll((hair, layer), rolls, fps,
           f"{origin[0]:.6g} {origin[1]:.6g}")
+    report(TRACKED_SHARE)
     document = etree.tostring(root, xml_declaration=True, encoding="utf-8")
     report(1.0)
     return document
