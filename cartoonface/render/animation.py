@@ -81,10 +81,12 @@ ROLL_DECIMALS = 2
 # ~1 ms to draw: a report every ~0.1 s at most).
 PROGRESS_FRAMES = 64
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
-# (compact.Writer.finish) ends and when the tracks are written; the rest makes the document's
-# bytes (measured on a 4-minute recording: docs/BENCHMARKS.md, "Web progress").
+# (compact.Writer.finish) ends, when the shared parts are found and when the tracks are
+# written; the rest makes the document's bytes (measured on a 4-minute recording:
+# docs/BENCHMARKS.md, "Web progress").
 DRAWN_SHARE = 0.55
 TIDIED_SHARE = 0.88
+SHARED_SHARE = 0.9
 TRACKED_SHARE = 0.96
 
 
@@ -289,14 +291,16 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
+    report(SHARED_SHARE)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
     _lean(dressed[0], leans, fps, neck_pivot(figure))
     root.append(dressed)
     layer = element(root, "g", id="face")
-    for name, track in tracks.items():
+    for number, (name, track) in enumerate(tracks.items(), 1):
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
+        report(SHARED_SHARE + (TRACKED_SHARE - SHARED_SHARE) * number / len(tracks))
     _roll((hair, layer), rolls, fps,
           f"{origin[0]:.6g} {origin[1]:.6g}")
     report(TRACKED_SHARE)
