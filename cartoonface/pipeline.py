@@ -37,10 +37,10 @@ from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
 
-# Share of the whole job done when each stage starts (measured on the sample book:
-# alignment and drawing take most of the time).
-STAGES = (("decode", 0.0), ("segment", 0.05), ("align", 0.15), ("schedule", 0.35),
-          ("frames", 0.4), ("svg", 0.45), ("pages", 0.9))
+# Share of the whole job done when each stage starts (measured on a 4-minute recording, the
+# sample story ten times: drawing the SVG takes 80 % of the time; docs/web.md, "Progress").
+STAGES = (("decode", 0.0), ("segment", 0.01), ("align", 0.07), ("schedule", 0.14),
+          ("frames", 0.17), ("svg", 0.19), ("pages", 0.99))
 # An edited TextGrid may end this much after the audio (Praat rounds its times).
 ALIGNMENT_SLACK = 0.05  # seconds
 MAX_TITLE = 200  # characters
@@ -202,7 +202,8 @@ def generate(
     states = with_sway(states, options.fps, options.seed, style.sway_peak)
     report("svg")
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
-                        wide=options.page == "announcer", title=options.title)
+                        wide=options.page == "announcer", title=options.title,
+                        progress=lambda done: report("svg", done))
     report("pages")
     try:
         with atomic_directory(target) as folder:

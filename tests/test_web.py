@@ -20,6 +20,7 @@ from markupsafe import escape
 
 from cartoonface.errors import OptionError
 from cartoonface.face.model import face_from_dict
+from cartoonface.pipeline import STAGES
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import create_app
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
@@ -85,7 +86,7 @@ def job_id_of(url: str) -> str:
 
 def test_home_page_offers_the_form_with_samples_and_a_csrf_token(client, sample_name):
     page = client.get("/").get_data(as_text=True)
-    assert f'<option value="{sample_name}"' in page
+    assert f'<input type="radio" name="face_sample" value="{sample_name}"' in page
     for name in ("face_file", "photo", "audio", "transcript", "transcript_file", "title", "background", "clothes"):
         assert f'name="{name}"' in page
     assert 'value="audiobook"' in page and 'value="announcer"' in page
@@ -318,7 +319,7 @@ def test_recording_over_the_size_limit_is_refused_in_the_form(client, speech, sa
 
 
 def test_request_far_over_the_limit_gets_413_with_a_message(client, speech, sample_name):
-    huge = b"RIFF" + bytes(24 << 20)  # over 1 MB recording + 20 MB photo + the rest
+    huge = b"RIFF" + bytes(36 << 20)  # over 1 MB recording + 20 MB photo + 8 MB TextGrid + the rest
     response = post(client, form(client, speech, sample_name, audio=(io.BytesIO(huge), "huge.wav")))
     assert response.status_code == 413
     assert "The upload is too large" in response.get_data(as_text=True)
@@ -528,10 +529,22 @@ def test_a_waiting_job_shows_its_place_and_progress(app, client, speech):
     assert f'data-status-url="/jobs/{job.id}/status"' in page
     assert "/static/web/job.js" in page
     assert XSS not in page
-    write_status(job.folder, Status(state=RUNNING, stage="frames", fraction=0.42))
+    write_status(job.folder, Status(state=RUNNING, stage="svg", fraction=0.42))
     status = client.get(f"/jobs/{job.id}/status").get_json()
     assert (status["percent"], status["stage_label"]) == (42, "Drawing the frames")
     assert client.get("/static/web/job.js").status_code == 200
+
+
+def test_the_job_page_lists_every_stage_with_those_passed_ticked(app, client, speech):
+    job = create_job(Path(app.instance_path), spec("stages"), stored_inputs(speech))  # stored, never queued
+    names = [name for name, _ in STAGES]
+    for at, current in enumerate(names):
+        write_status(job.folder, Status(state=RUNNING, stage=current, fraction=0.5))
+        page = client.get(f"/jobs/{job.id}").get_data(as_text=True)
+        marks = re.findall(r'<li data-stage="([a-z]+)"( class="(done|current)")?', page)
+        assert [name for name, _, _ in marks] == names
+        assert [mark for _, _, mark in marks] == ["done"] * at + ["current"] + [""] * (len(names) - at - 1)
+        assert all(stage_label(Status(state=RUNNING, stage=name)) in page for name in names)
 
 
 def test_restart_keeps_finished_jobs_and_fails_interrupted_ones(tmp_path, speech, sample_name):

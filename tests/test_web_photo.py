@@ -153,6 +153,29 @@ def test_moving_a_point_moves_the_cartoon_and_is_saved(app, client, draft_url):
     assert etree.fromstring(client.get(draft_url + "/preview.svg").data).find(f"{SVG_NS}g[@id='face']") is not None
 
 
+def test_a_point_somewhere_impossible_is_warned_about_and_asked_again(app, client, draft_url):
+    token = csrf(client)
+    points = page_points(client.get(draft_url).get_data(as_text=True))
+    answer = client.post(draft_url + "/preview", data={"csrf_token": token, "points": json.dumps(points)})
+    assert answer.get_json()["warnings"] == []
+    chin, mouth = np.array(points["2.1"]), np.array(points["8.2"])
+    points["3.6"] = ((chin + mouth) / 2).tolist()  # an iris dragged below the mouth
+    answer = client.post(draft_url + "/preview", data={"csrf_token": token, "points": json.dumps(points)})
+    assert answer.status_code == 200
+    assert [w["point"] for w in answer.get_json()["warnings"]] == ["3.6"]
+    assert "below the mouth" in answer.get_json()["warnings"][0]["message"]
+    page = client.get(draft_url).get_data(as_text=True)  # the editor shows the warning with the saved points
+    assert re.search(r'<li data-point="3.6">point 3.6 \(iris centre', page)
+    assert re.search(r'class="point warn"[^>]*data-name="3.6"', page)
+    saved = client.post(draft_url, data={"csrf_token": token, "points": json.dumps(points)})
+    assert saved.status_code == 400
+    text = saved.get_data(as_text=True)
+    assert 'id="use-anyway"' in text and "below the mouth" in text
+    assert page_points(text)["3.6"] == pytest.approx(points["3.6"], abs=0.01)
+    anyway = client.post(draft_url, data={"csrf_token": token, "points": json.dumps(points), "accept_warnings": "1"})
+    assert anyway.status_code == 303 and "/?photo=" in anyway.headers["Location"]
+
+
 def points_with(points: dict, change) -> str:
     changed = json.loads(json.dumps(points))
     result = change(changed)
@@ -391,6 +414,7 @@ def test_check_drag_and_generate_in_chromium(server, speech, browser, tmp_path):
     page.click("#find-face")
     page.wait_for_url(f"{server}/photos/*")
     start = json.loads(page.input_value("#points"))["2.1"]
+    page.locator('circle.point[data-name="2.1"]').scroll_into_view_if_needed()  # under the cartoon on a phone
     box = page.locator('circle.point[data-name="2.1"]').bounding_box()
     x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     touch = phone.new_cdp_session(page)
@@ -400,6 +424,53 @@ def test_check_drag_and_generate_in_chromium(server, speech, browser, tmp_path):
     touch.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
     page.wait_for_function("() => document.getElementById('editor').hasAttribute('data-updated')", timeout=10_000)
     assert json.loads(page.input_value("#points"))["2.1"][1] > start[1] + 5
+
+    # the cartoon is above the photo; zoom spreads the points, which keep their size on screen
+    cartoon, photo_box = page.locator("#preview").bounding_box(), page.locator("#overlay").bounding_box()
+    assert cartoon["y"] + cartoon["height"] <= photo_box["y"]
+    iris, other = (page.locator(f'circle.point[data-name="{name}"]') for name in ("3.6", "3.5"))
+
+    def apart() -> float:
+        a, b = iris.bounding_box(), other.bounding_box()
+        return abs((a["x"] + a["width"] / 2) - (b["x"] + b["width"] / 2))
+
+    iris.focus()  # selected: drawn larger, and the zoom centres on it
+    size, distance = iris.bounding_box()["width"], apart()
+    page.click("#zoom-in")
+    page.click("#zoom-in")
+    assert float(page.get_attribute("#editor", "data-zoom")) == pytest.approx(2.25)
+    assert apart() == pytest.approx(distance * 2.25, rel=0.05)
+    assert iris.bounding_box()["width"] == pytest.approx(size, rel=0.05)
+    for button in ("#zoom-in", "#zoom-out", "#zoom-fit", "#use-face"):
+        target = page.locator(button).bounding_box()
+        assert target["width"] >= 44 and target["height"] >= 44, button
+    # a touch 20 px beside a point (a 44 px target) takes it
+    page.click("#zoom-fit")
+
+    def swipe(x: float, y: float, to_x: float, to_y: float) -> None:
+        """A finger from (x, y) to (to_x, to_y), then wait for the cartoon of the new points."""
+        seen = page.get_attribute("#editor", "data-updated")
+        touch.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [{"x": x, "y": y}]})
+        for step in range(1, 9):
+            at = {"x": x + (to_x - x) * step / 8, "y": y + (to_y - y) * step / 8}
+            touch.send("Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [at]})
+        touch.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+        page.wait_for_function("(seen) => document.getElementById('editor').getAttribute('data-updated') !== seen",
+                               arg=seen, timeout=10_000)
+
+    chin = page.locator('circle.point[data-name="2.1"]')
+    chin.scroll_into_view_if_needed()
+    start = json.loads(page.input_value("#points"))["2.1"]
+    box = chin.bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2 + 20
+    swipe(x, y, x, y + 6)
+    assert json.loads(page.input_value("#points"))["2.1"][1] > start[1] + 3
+    # an iris dragged below the mouth: warned beside the point and in the list
+    box, chin_box = iris.bounding_box(), chin.bounding_box()
+    swipe(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2, chin_box["x"] - 10, chin_box["y"] - 8)
+    assert page.is_visible("#point-tip") and "point 3.6" in page.inner_text("#point-tip")
+    assert page.locator('#point-warning-list li[data-point="3.6"]').count() == 1
+    assert "warn" in (iris.get_attribute("class") or "")
     phone.close()
 
 

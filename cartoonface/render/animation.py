@@ -78,6 +78,17 @@ STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders sh
 # layers, in steps of this many decimals of a degree: 0.01 degree moves a point 250 px from
 # the centre by 0.04 px.
 ROLL_DECIMALS = 2
+# animation_svg tells its progress every this many frames while it draws them (a new state takes
+# ~1 ms to draw: a report every ~0.1 s at most).
+PROGRESS_FRAMES = 64
+# Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
+# (compact.Writer.finish) ends, when the shared parts are found and when the tracks are
+# written; the rest makes the document's bytes (measured on a 4-minute recording:
+# docs/BENCHMARKS.md, "Web progress").
+DRAWN_SHARE = 0.55
+TIDIED_SHARE = 0.88
+SHARED_SHARE = 0.9
+TRACKED_SHARE = 0.96
 
 
 @dataclass(frozen=True)
@@ -225,7 +236,8 @@ def _lean(neck: etree._Element, leans: Sequence[int], fps: int, pivot: float) ->
 
 
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
-                  clothes: str = "none", wide: bool = False, title: str = "") -> bytes:
+                  clothes: str = "none", wide: bool = False, title: str = "",
+                  progress: Callable[[float], None] | None = None) -> bytes:
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
@@ -234,7 +246,10 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `title` becomes the document's <title> (escaped like every text by lxml).
     The root is `<svg id="cf-face">`; each track is a `<g data-part="...">`;
     mouth frames carry `data-shape`, the dominant basic mouth shape they show.
+    `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
+    drawn (every PROGRESS_FRAMES frames) and tidied, and 1.0 at the end.
     """
+    report = progress or (lambda fraction: None)
     width, height = float(face.width), float(face.height)
     box_height = height * STAGE_DEPTH if wide else height
     box_width = max(width, box_height * WIDE) if wide else width
@@ -257,7 +272,9 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
     # the neck's lean in each frame, in steps of LEAN_DECIMALS: it follows the roll as written
     leans = [round(lean(figure, origin, roll / 10 ** ROLL_DECIMALS) * 10 ** LEAN_DECIMALS) for roll in rolls]
-    for state, roll in zip(states, rolls, strict=True):
+    for index, (state, roll) in enumerate(zip(states, rolls, strict=True)):
+        if index % PROGRESS_FRAMES == 0:
+            report(DRAWN_SHARE * index / len(states))
         parts = by_state.get(state)
         if parts is None:
             # turned back by the roll as written (the two turns cancel exactly)
@@ -271,17 +288,23 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
                 parts = drawn[key] = writer.collect(face_group(face, posed, UID))
             by_state[state] = parts
         frames.append((state, parts))
-    mapping, tidy = writer.finish()
+    mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied))
+    report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
+    report(SHARED_SHARE)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
     _lean(dressed[0], leans, fps, neck_pivot(figure))
     root.append(dressed)
     layer = element(root, "g", id="face")
-    for name, track in tracks.items():
+    for number, (name, track) in enumerate(tracks.items(), 1):
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
+        report(SHARED_SHARE + (TRACKED_SHARE - SHARED_SHARE) * number / len(tracks))
     _roll((hair, layer), rolls, fps,
           f"{origin[0]:.6g} {origin[1]:.6g}")
-    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+    report(TRACKED_SHARE)
+    document = etree.tostring(root, xml_declaration=True, encoding="utf-8")
+    report(1.0)
+    return document

@@ -20,7 +20,7 @@ from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.web import api, photo_views
 from cartoonface.web.config import DEFAULTS, PACKAGE, Settings, secret_key, sample_faces, settings_from
 from cartoonface.web.draft_store import sweep_drafts
-from cartoonface.web.inputs import MAX_FACE_BYTES, MAX_PHOTO_BYTES, Limits
+from cartoonface.web.inputs import MAX_ACTIONS_BYTES, MAX_FACE_BYTES, MAX_PHOTO_BYTES, MAX_TEXTGRID_BYTES, Limits
 from cartoonface.web.runner import Runner
 from cartoonface.web.security import add_headers
 from cartoonface.web.store import apply_retention, fail_interrupted
@@ -76,9 +76,11 @@ def create_app(config: Mapping[str, object] | None = None) -> Flask:
     app, settings = configured_app(config)
     if not app.config.get("SECRET_KEY"):
         app.config["SECRET_KEY"] = secret_key(settings.instance)
-    # A request may hold the recording, a face model, a photo and a transcript file.
+    # A request may hold the recording, a face model, a photo, a transcript file and the edited
+    # TextGrid and actions.json.
     app.config["MAX_CONTENT_LENGTH"] = (settings.upload_bytes + MAX_FACE_BYTES + MAX_PHOTO_BYTES
-                                        + 4 * settings.transcript_chars + 65536)
+                                        + 4 * settings.transcript_chars + MAX_TEXTGRID_BYTES + MAX_ACTIONS_BYTES
+                                        + 65536)
     app.config.update(SESSION_COOKIE_HTTPONLY=True, SESSION_COOKIE_SAMESITE="Lax")
 
     sweep_lock = threading.Lock()

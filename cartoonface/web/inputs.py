@@ -1,7 +1,8 @@
 """Check what the form sent, before a job is stored.
 
 `check_submission(form, files, limits)` returns a `Submission` (the inputs as
-bytes under names chosen here, plus the request as plain values) or a dict of
+bytes under names chosen here, with an edited TextGrid and actions.json when given, plus the
+request as plain values) or a dict of
 field -> message for the form. A photo becomes a face model here
 (photo/model_from_photo.py), so a photo without a usable face is a message in the form. File types are decided from the bytes (magic
 numbers), never from the file name; the user's file name is only ever shown
@@ -26,7 +27,8 @@ from cartoonface.errors import InputError
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import face_from_dict, face_to_dict, json_with_long_numbers
 from cartoonface.photo.model_from_photo import face_from_photo, load_photo
-from cartoonface.pipeline import MAX_TITLE
+from cartoonface.animate.actions import load_actions
+from cartoonface.pipeline import MAX_TITLE, edited_alignment
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.transcript import emotion_marks, parse_transcript
 
@@ -38,6 +40,13 @@ STYLE_CHOICES = {"": "the page's own (audio book: storyteller, announcer: announ
 MOOD_CHOICES = {"": "neutral", **{name: name for name in EMOTIONS}}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
+# An edited TextGrid: a 4-minute recording's is 0.3 MB in UTF-8, so 30 minutes in UTF-16 take ~4.4 MB.
+MAX_TEXTGRID_BYTES = 8 << 20
+# An edited actions.json: a 4-minute recording's is 27 kB, so 30 minutes take ~0.2 MB.
+MAX_ACTIONS_BYTES = 2 << 20
+# The job's names of the edited files (the worker hands them to pipeline.Options).
+TEXTGRID_FILE = "alignment.TextGrid"
+ACTIONS_FILE = "actions.json"
 SHOWN_NAME_CHARS = 80
 # Control characters refused in a title or transcript (tab, line feed and carriage return are kept).
 CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
@@ -77,7 +86,8 @@ class Limits:
 @dataclass(frozen=True)
 class Submission:
     """A checked request: `spec` (JSON-serialisable values for job.json) and `files`
-    (our file name -> bytes: face.json, audio.<ext>, transcript.txt)."""
+    (our file name -> bytes: face.json, audio.<ext>, transcript.txt, and alignment.TextGrid and
+    actions.json when edited ones were given)."""
 
     spec: Mapping[str, object]
     files: Mapping[str, bytes]
@@ -283,6 +293,39 @@ def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     return text
 
 
+def check_edited(files: MultiDict[str, FileStorage], field: str, limit: int, duration: float | None,
+                 errors: dict[str, str]) -> bytes | None:
+    """An edited file of the advanced section (`field` "textgrid_file" or "actions_file"), checked
+    as the pipeline reads it for a recording of `duration` seconds (None: the recording itself
+    was refused, so only the size is checked). Returns its bytes, or None when none was chosen
+    or it is refused (then errors[field] says why, naming the user's file)."""
+    upload = files.get(field)
+    data, too_big = read_upload(upload, limit)
+    if data is None:
+        return None
+    name = shown_name(upload, TEXTGRID_FILE if field == "textgrid_file" else ACTIONS_FILE)
+    if too_big:
+        errors[field] = f"{name}: larger than {megabytes(limit)} MB; expected the file this app made, edited."
+        return None
+    if duration is None:
+        return data
+    with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
+        path = Path(tmp) / (TEXTGRID_FILE if field == "textgrid_file" else ACTIONS_FILE)
+        path.write_bytes(data)
+        try:
+            if field == "textgrid_file":
+                edited_alignment(path, duration)
+            else:
+                load_actions(path, duration)
+        except InputError as exc:
+            errors[field] = str(exc).replace(str(path), name)
+            return None
+        except (ValueError, RecursionError):  # a JSON integer of 4300+ digits, nesting too deep
+            errors[field] = f"{name}: not an actions file: a number is too long or the JSON is nested too deeply."
+            return None
+    return data
+
+
 def check_choice(form: MultiDict[str, str], name: str, allowed: tuple[str, ...] | Mapping[str, str],
                  what: str, errors: dict[str, str]) -> str:
     """A select field whose value must be one of `allowed`."""
@@ -311,6 +354,9 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     face, face_label, face_notes = check_face(form, files, limits, errors, chosen)
     transcript = check_transcript(form, files, limits, errors)
     audio, ext, audio_label, duration = check_audio(files, limits, errors)
+    known = duration if audio is not None else None
+    textgrid = check_edited(files, "textgrid_file", MAX_TEXTGRID_BYTES, known, errors)
+    actions = check_edited(files, "actions_file", MAX_ACTIONS_BYTES, known, errors)
     if errors or face is None or audio is None or transcript is None:
         return errors
     spec = {
@@ -328,4 +374,9 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "transcript_chars": len(transcript),
     }
     files_out = {"face.json": face, f"audio.{ext}": audio, "transcript.txt": transcript.encode("utf-8")}
+    for field, name, data in (("textgrid", TEXTGRID_FILE, textgrid), ("actions", ACTIONS_FILE, actions)):
+        if data is not None:
+            spec[f"{field}_file"] = name
+            spec[f"{field}_label"] = shown_name(files.get(f"{field}_file"), name)
+            files_out[name] = data
     return Submission(spec, files_out)

@@ -7,8 +7,9 @@ POST /photos                    read the photo, find the face, store a draft, 30
 GET  /photos/<id>               the editor: photo with draggable points, cartoon preview, warnings
 GET  /photos/<id>/photo.jpg     the photo the points are drawn on
 GET  /photos/<id>/preview.svg   the cartoon of the current points
-POST /photos/<id>/preview       JSON: the edited points -> the preview SVG (saved), or the error
-POST /photos/<id>               save the edited points, 303 to the form with this face chosen
+POST /photos/<id>/preview       JSON: the edited points -> the preview SVG (saved) and warnings, or the error
+POST /photos/<id>               save the edited points, 303 to the form with this face chosen (asks
+                                again when a point is somewhere impossible)
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from cartoonface.face.model import POINT_NAMES
 from cartoonface.web.draft_store import PHOTO_FILE, Draft, create_draft, load_draft, save_edit, sweep_drafts
 from cartoonface.web.inputs import (DETECT_WAIT, MAX_PHOTO_BYTES, PHOTO_BUSY, megabytes, photo_slot, read_upload, shown_name,
                                     sniff_image)
-from cartoonface.web.point_editor import MAX_POINTS_CHARS, edited_face, parse_points, preview_svg
+from cartoonface.web.point_editor import MAX_POINTS_CHARS, PointWarning, edited_face, implausible, parse_points, preview_svg
 from cartoonface.web.point_labels import POINT_LABELS
 from cartoonface.web.security import CSRF_FIELD, csrf_ok, csrf_token
 from cartoonface.web.store import new_id
@@ -34,6 +35,8 @@ POINT_RADIUS_SHARE = 0.008
 MIN_POINT_RADIUS = 2.0
 
 EXPIRED = "This form has expired or did not come from this page. Please try again."
+# The save form's field that says: use these points despite the warnings.
+ACCEPT_FIELD = "accept_warnings"
 
 bp = Blueprint("photo", __name__)
 
@@ -52,8 +55,10 @@ def render_upload(error: str = "", status: int = 200) -> tuple[str, int]:
                            csrf=csrf_token(), csrf_field=CSRF_FIELD), status
 
 
-def render_editor(draft: Draft, error: str = "", status: int = 200) -> tuple[str, int]:
-    """The editor page of `draft`, with `error` (may be empty) above the points."""
+def render_editor(draft: Draft, error: str = "", status: int = 200, confirm: bool = False) -> tuple[str, int]:
+    """The editor page of `draft`, with `error` (may be empty) above the points and the warnings
+    about points in impossible places; `confirm`: they were just refused on save, so the page
+    offers to use the face anyway."""
     points = [(name, POINT_LABELS[name], float(x), float(y)) for name, (x, y) in zip(POINT_NAMES, draft.points)]
     width, height = draft.size
     radius = max(MIN_POINT_RADIUS, POINT_RADIUS_SHARE * max(width, height))
@@ -62,7 +67,13 @@ def render_editor(draft: Draft, error: str = "", status: int = 200) -> tuple[str
                            points_json=json.dumps(dict(zip(POINT_NAMES, draft.points.round(2).tolist()))),
                            detected_json=json.dumps(dict(zip(POINT_NAMES, draft.detected.round(2).tolist()))),
                            error=error, csrf=csrf_token(), csrf_field=CSRF_FIELD,
-                           max_points_chars=MAX_POINTS_CHARS), status
+                           max_points_chars=MAX_POINTS_CHARS, warnings=implausible(draft.points, draft.detected),
+                           confirm=confirm), status
+
+
+def warnings_json(warnings: tuple[PointWarning, ...]) -> list[dict[str, str]]:
+    """The warnings as JSON for the editor's script: [{"point", "message"}]."""
+    return [{"point": warning.point, "message": warning.message} for warning in warnings]
 
 
 @bp.get("/photos")
@@ -134,13 +145,16 @@ def update_preview(draft_id: str) -> tuple[Response, int]:
     except InputError as exc:
         return jsonify(error=str(exc)), 400
     save_edit(draft, points, obj)
-    return jsonify(svg=preview_svg(face).decode("utf-8")), 200
+    return jsonify(svg=preview_svg(face).decode("utf-8"),
+                   warnings=warnings_json(implausible(points, draft.detected))), 200
 
 
 @bp.post("/photos/<jobid:draft_id>")
 def use_face(draft_id: str) -> BaseResponse | tuple[str, int]:
     """Save the edited points (form field points, as for the preview) and 303 to the
-    form with this face chosen; the editor again with the reason (400) when they are bad."""
+    form with this face chosen; the editor again with the reason (400) when they are bad,
+    or with the warnings and a "use it anyway" button (400) when some point is somewhere
+    impossible (point_editor.implausible) and the form field accept_warnings was not sent."""
     draft = stored_draft(draft_id)
     if not csrf_ok(request.form.get(CSRF_FIELD)):
         return render_editor(draft, EXPIRED, 400)
@@ -150,4 +164,6 @@ def use_face(draft_id: str) -> BaseResponse | tuple[str, int]:
     except InputError as exc:
         return render_editor(draft, str(exc), 400)
     save_edit(draft, points, obj)
+    if implausible(points, draft.detected) and not request.form.get(ACCEPT_FIELD):
+        return render_editor(stored_draft(draft_id), "", 400, confirm=True)
     return redirect(url_for("web.index", photo=draft.id), code=303)

@@ -6,6 +6,7 @@ GET  /jobs/<id>                 progress, error, or the result (player + zip dow
 GET  /jobs/<id>/status          JSON: state, stage, percent, error
 GET  /jobs/<id>/site/<path>     the generated folder's files (shown in an iframe)
 GET  /jobs/<id>/download        the generated folder as a zip
+GET  /samples/<name>.svg        a sample face's thumbnail for the form
 The "face from a photo" routes (/photos...) are in photo_views.py.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 import mimetypes
 import time
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 from flask import (Blueprint, Response, abort, current_app, jsonify, redirect, render_template, request,
@@ -26,14 +28,18 @@ from werkzeug.wrappers import Response as BaseResponse
 from cartoonface.files import remove_folder
 from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.draft_store import draft_choice, load_draft
-from cartoonface.web.inputs import (MAX_PHOTO_BYTES, MAX_TITLE, MOOD_CHOICES, PAGES, STYLE_CHOICES, Limits,
-                                    check_submission, form_values, megabytes)
+from cartoonface.face.model import load_face
+from cartoonface.web.inputs import (ACTIONS_FILE, MAX_ACTIONS_BYTES, MAX_PHOTO_BYTES, MAX_TEXTGRID_BYTES, MAX_TITLE,
+                                    MOOD_CHOICES, PAGES, STYLE_CHOICES, TEXTGRID_FILE, Limits, check_submission,
+                                    form_values, megabytes)
+from cartoonface.web.point_editor import preview_svg
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
 from cartoonface.web.worker import SITE, ZIP_NAME, download_zip
 
 RECENT = 20  # jobs remembered per browser session
+THUMBNAIL_MAX_AGE = 3600  # seconds a browser may keep a sample face's thumbnail
 
 DRAFT_GONE = "The face from your photo is no longer kept (photos are kept for a day); please upload it again."
 
@@ -44,10 +50,12 @@ STAGES = {
     "segment": "Finding the sentences",
     "align": "Timing the syllables",
     "schedule": "Planning blinks and head moves",
-    "frames": "Drawing the frames",
-    "svg": "Writing the animation",
+    "frames": "Posing the face in every frame",
+    "svg": "Drawing the frames",
     "pages": "Writing the pages",
 }
+# The pipeline's stages in order (name, label), listed on the job page with the current one marked.
+STAGE_LIST = tuple((name, label) for name, label in STAGES.items() if name)
 
 # The generated pages (render/pages.py) load their script and CSS from files and hold
 # the SVG inline. They run sandboxed (an opaque origin: no access to this app's cookies
@@ -145,6 +153,7 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     return render_template(
         "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES, styles=STYLE_CHOICES, moods=MOOD_CHOICES, draft=draft,
         max_title=MAX_TITLE, upload_mb=megabytes(limits.upload_bytes), photo_mb=megabytes(MAX_PHOTO_BYTES),
+        textgrid_mb=megabytes(MAX_TEXTGRID_BYTES), actions_mb=megabytes(MAX_ACTIONS_BYTES),
         csrf=csrf_token(),
         csrf_field=CSRF_FIELD, jobs=recent_jobs(),
     ), status
@@ -164,6 +173,24 @@ def index() -> tuple[str, int]:
     if draft_id and load_draft(state().settings.instance, draft_id) is None:
         return render_form({}, {"face_sample": DRAFT_GONE}, 404)
     return render_form({"face_draft": draft_id}, {})
+
+
+@lru_cache(maxsize=32)
+def _thumbnail(path: Path, modified: float) -> bytes:
+    """The cartoon of the face model at `path` (last changed at `modified`, part of the cache
+    key), neutral and still: SVG bytes, drawn once per sample and version."""
+    return preview_svg(load_face(path))
+
+
+@bp.get("/samples/<name>.svg")
+def sample_face(name: str) -> Response:
+    """The thumbnail of the sample face `name` shown in the form (404 for any other name)."""
+    path = state().limits.samples.get(name)
+    if path is None:
+        abort(404, description="No such sample face.")
+    response = Response(_thumbnail(path, path.stat().st_mtime), mimetype="image/svg+xml")
+    response.headers["Cache-Control"] = f"private, max-age={THUMBNAIL_MAX_AGE}"
+    return response
 
 
 @bp.post("/jobs")
@@ -204,7 +231,8 @@ def job_page(job_id: str) -> str:
     """The job's progress, its error, or its player and download link."""
     job = stored_job(job_id)
     return render_template("web/job.html", job=job, status=job.status, stage=job_label(job),
-                           pages=PAGES, done=job.status.state == DONE)
+                           pages=PAGES, done=job.status.state == DONE, stages=STAGE_LIST,
+                           textgrid_name=TEXTGRID_FILE, actions_name=ACTIONS_FILE)
 
 
 @bp.get("/jobs/<jobid:job_id>/status")

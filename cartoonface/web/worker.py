@@ -134,6 +134,8 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
         folder / str(spec["audio_file"]): str(spec.get("audio_label", "recording")),
         folder / "face.json": str(spec.get("face_label", "face model")),
         folder / "transcript.txt": "transcript",
+        **{folder / str(spec[f"{kind}_file"]): str(spec.get(f"{kind}_label", spec[f"{kind}_file"]))
+           for kind in ("textgrid", "actions") if spec.get(f"{kind}_file")},
         folder: "job",
     }
     for path, label in names.items():
@@ -173,7 +175,9 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
                       background=str(spec["background"]), clothes=str(spec["clothes"]),
                       emotion=str(spec.get("mood") or "") or None,
-                      fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))))
+                      fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))),
+                      alignment=folder / str(spec["textgrid_file"]) if spec.get("textgrid_file") else None,
+                      actions=folder / str(spec["actions_file"]) if spec.get("actions_file") else None)
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
