@@ -150,7 +150,7 @@ def test_bad_fields_are_400_naming_the_field(api_app, speech, change, field):
 
 def test_too_large_and_unknown_routes_answer_json(api_app, speech):
     client = api_app.test_client()
-    big = fields(speech, audio=(io.BytesIO(b"\0" * (30 << 20)), "big.wav"))
+    big = fields(speech, audio=(io.BytesIO(b"\0" * (api_app.config["MAX_CONTENT_LENGTH"] + 1)), "big.wav"))
     response = submit(client, big)
     assert response.status_code == 413 and "too large" in response.get_json()["error"]
     for method, path in (("GET", "/api/nothing"), ("DELETE", "/api/jobs"), ("GET", "/api/jobs/short")):
