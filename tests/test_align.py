@@ -264,3 +264,18 @@ def test_word_lengths_cover_every_syllable_and_keep_words_whole():
     ends = set(np.cumsum(lengths))
     assert 1 not in ends and 2 in ends  # 我们 is one word (pypinyin's phrase dictionary)
     assert 8 not in ends  # the "" syllable stays with the token before it
+
+
+def test_an_onset_that_nothing_marks_is_the_least_sure():
+    # five bursts, the third twice as long with no dip inside, given six syllables: one onset
+    # must fall inside that burst, where any position is about as good as another
+    durations = [0.2, 0.22, 0.5, 0.24, 0.2]
+    audio, onsets = bursts_with_dips(durations)
+    span = Span(onsets[0], onsets[0] + sum(durations))
+    timings = align_syllables(audio, span, ["ba1"] * 6)
+    check_shape(timings, span, 6)
+    starts = np.array([t.start for t in timings])
+    inside = int(np.flatnonzero((starts > onsets[2] + 0.05) & (starts < onsets[3] - 0.05))[0])
+    confidence = np.array([t.confidence for t in timings])
+    assert confidence[inside] == confidence.min()
+    assert np.delete(confidence, inside).min() > confidence[inside] + 0.2

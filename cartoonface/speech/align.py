@@ -28,9 +28,11 @@ Otherwise one syllable ends where the next starts. Syllables are ordered, do not
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
 
-Confidence: how much worse the best cut gets when a syllable's onset (or the next one's) is
-forced more than 50 ms away, from a forward and a time-reversed pass of the same dynamic
-programme, times the part's signal quality (its loudness range).
+Confidence: the posterior probability that a syllable's onset lies within 50 ms of where the
+best cut puts it, over all cuts weighted by exp(score / TEMPERATURE) (forward-backward: the same
+dynamic programme summed instead of maximised, forward and on the time-reversed problem), times
+the part's signal quality (its loudness range). It is low where other cuts score nearly as well,
+also when they move a whole stretch by one syllable.
 
 Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
 all give a duration-prior split with low confidence.
@@ -193,10 +195,16 @@ DIP_REACH = 12             # frames (120 ms) either side whose highest level a d
 MINIMUM_REACH = 3          # frames either side within which a dip must be the (near) lowest
 MINIMUM_TOLERANCE_DB = 1.0  # dB above the nearby minimum still counted as the minimum
 MARGIN = 20                # frames of context read on each side of the span
-SURE_DISTANCE = 5          # frames: an onset moved further than this counts as a different answer
-MARGIN_SCALE = 0.5         # score margin (units of evidence) of confidence 1 - 1/e; on Biaobei
-                           # 000001-000035 this makes the mean confidence (0.81) near the share of
-                           # onsets within 50 ms (95 %) without flattening the low end
+SURE_DISTANCE = 5          # frames: an onset within this of the best cut's counts as right (50 ms)
+# Confidence = the posterior probability of the onset lying within SURE_DISTANCE of the best cut's,
+# every cut weighted by exp(score / TEMPERATURE). Chosen on Biaobei 000001-000035 and its tempo, pitch
+# and paragraph copies as the temperature at which the posterior best ranks the onsets more than
+# 50 ms off (average precision 0.208 / 0.223 / 0.243 / 0.254 / 0.250 at 0.7 / 1 / 1.25 / 1.5 / 2;
+# bench/align.py, docs/BENCHMARKS.md). It is not calibrated: lower temperatures give truer
+# probabilities (log loss least near 0.5) but rank worse.
+TEMPERATURE = 1.5
+BAND = 50                  # frames: the posterior sums over cuts ending each syllable within this of
+                           # the best cut's end (0.5 s, two syllables' slip; the whole part cost 3x the time)
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 # Frames by which a class's onset precedes the peak of its evidence (negative: follows it).
 # The dip of a nasal, lateral or r is deepest inside the consonant, about 20 ms after the
@@ -351,28 +359,68 @@ def _best_cut(lattice: _Lattice) -> tuple[np.ndarray, np.ndarray]:
     return starts, ends
 
 
-def _onset_margins(lattice: _Lattice, evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
-                   means: np.ndarray, penalty: np.ndarray, starts: np.ndarray) -> np.ndarray:
-    """(N,) how much worse the best cut gets when syllable i's onset is moved more than
-    SURE_DISTANCE frames from where it is (large: the onset is well determined).
-
-    The best score with onset i at k is the forward score up to k plus the score of the rest,
-    which is the forward score of the time-reversed problem (syllables and frames reversed,
-    pause edges swapped, each boundary keeping its evidence).
-    """
+def _soft_forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray,
+                  penalty: np.ndarray, temperature: float, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The forward pass of `_forward` (same first arguments) summed over cuts instead of maximised:
+    every score divided by `temperature`, the best of the alternatives replaced by their
+    log-sum-exp, over the cuts that end each syllable i within BAND frames of ends[i] (the best
+    cut's ends, (N,)). Returns (after_syllable, after_pause), each (N + 1, T + 1): log of the summed
+    exp(score / temperature) of those cuts with i syllables done, the last ending at k (then a
+    pause ending at k); _NEG where there are none."""
     n, positions = evidence.shape
     total = positions - 1
+    evidence, silence, edges, penalty = (x / temperature for x in (evidence, silence, edges, penalty))
+    cum = np.concatenate([[0.0], np.cumsum(silence)])
+    after_syllable = np.full((n + 1, positions), _NEG)
+    after_pause = np.full((n + 1, positions), _NEG)
+    after_syllable[0, 0] = 0.0
+    k = np.arange(positions)
+    for i in range(n + 1):
+        summed = np.logaddexp.accumulate(after_syllable[i] + edges[0] - cum)
+        gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
+        after_pause[i, gap:] = summed[:-gap] + cum[gap:] - penalty[i] + edges[1, gap:]
+        if i == n:
+            break
+        start_score = np.logaddexp(after_syllable[i] + evidence[i], after_pause[i])
+        longest = min(total, int(LONGEST_SHARE * means[i]) + MIN_FRAMES)
+        d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
+        band = k[max(ends[i] - BAND, 0):ends[i] + BAND + 1]
+        starts = band[:, None] - d[None, :]
+        cand = (np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG)
+                + _duration_score(d, means[i])[None, :] / temperature)
+        after_syllable[i + 1, band] = _log_sum_exp(cand)
+    return after_syllable, after_pause
+
+
+def _log_sum_exp(x: np.ndarray) -> np.ndarray:
+    """(R, C) -> (R,) log of the sum of exp over each row, without overflow."""
+    top = x.max(axis=1)
+    return top + np.log(np.exp(x - top[:, None]).sum(axis=1))
+
+
+def _onset_posteriors(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray,
+                      penalty: np.ndarray, starts: np.ndarray, ends: np.ndarray, temperature: float) -> np.ndarray:
+    """(N,) posterior probability that syllable i's onset lies within SURE_DISTANCE frames of
+    starts[i], given the best cut's (N,) starts and ends, every cut (of those whose syllables
+    end within BAND frames of the best cut's) weighted by exp(score / temperature) (other
+    arguments as `_forward`). The onset's distribution is the forward sum up to k times the sum over the rest,
+    which is the forward sum of the time-reversed problem (syllables and frames reversed, pause
+    edges swapped, each boundary keeping its evidence)."""
+    n, positions = evidence.shape
+    total = positions - 1
+    syllable, pause = _soft_forward(evidence, silence, edges, means, penalty, temperature, ends)
     flipped = np.zeros_like(evidence)
     flipped[1:] = evidence[:0:-1, ::-1]
-    backward = _forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1], penalty[::-1])
+    backward, _ = _soft_forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1], penalty[::-1],
+                                temperature, total - starts[::-1])
     k = np.arange(positions)
-    margins = np.zeros(n)
+    posteriors = np.zeros(n)
     for i in range(n):
-        before = np.maximum(lattice.after_syllable[i] + (evidence[i] if i else 0.0), lattice.after_pause[i])
-        score = before + backward.after_syllable[n - i, total - k]
-        far = np.abs(k - starts[i]) > SURE_DISTANCE
-        margins[i] = score.max() - score[far].max() if far.any() else np.inf
-    return margins
+        before = np.logaddexp(syllable[i] + (evidence[i] / temperature if i else 0.0), pause[i])
+        score = before + backward[n - i, total - k]
+        near = np.abs(k - starts[i]) <= SURE_DISTANCE
+        posteriors[i] = np.exp(_log_sum_exp(score[near][None])[0] - _log_sum_exp(score[None])[0])
+    return posteriors
 
 
 def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> tuple[SyllableTiming, ...]:
@@ -431,9 +479,8 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     penalty = pause_penalties(n, words)
     lattice = _forward(evidence, silence, edges, means, penalty)
     starts, ends = _best_cut(lattice)
-    margins = _onset_margins(lattice, evidence, silence, edges, means, penalty, starts)
     quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
-    confidence = _confidence(margins, quality)
+    confidence = quality * _onset_posteriors(evidence, silence, edges, means, penalty, starts, ends, TEMPERATURE)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
     times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
@@ -475,10 +522,3 @@ def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
     floor = np.percentile(high, FLOOR_PERCENTILE)
     threshold = floor + max(FRICATION_RANGE * (np.percentile(band, LOUD_PERCENTILE) - floor), FRICATION_FLOOR)
     return np.clip((threshold - band) / SILENCE_SCALE, *SILENCE_CLIP)
-
-
-def _confidence(margins: np.ndarray, quality: float) -> np.ndarray:
-    """(N,) confidence 0..1 of each syllable from the onset margins (N,) of it and of the next
-    syllable (see _onset_margins) and the part's signal quality (0..1, from its loudness range)."""
-    worst = np.minimum(margins, np.append(margins[1:], np.inf))
-    return quality * (1.0 - np.exp(-worst / MARGIN_SCALE))

@@ -43,8 +43,8 @@ FAST_RATE = 8.0
 MIN_RATE = 1.0
 # Syllables below this confidence are reported as low-confidence: the threshold of best F1 for
 # "more than 50 ms off" over Biaobei 000001-000035 and its tempo, pitch and paragraph copies (bench/align.py:
-# 0.3 / 0.4 / 0.5 gave F1 27.5 / 31.0 / 25.4 %; docs/BENCHMARKS.md).
-LOW_CONFIDENCE = 0.4
+# 0.25 / 0.3 / 0.35 / 0.4 gave F1 23.5 / 36.5 / 32.5 / 28.6 % for the aligner alone; docs/BENCHMARKS.md).
+LOW_CONFIDENCE = 0.3
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
 # cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
 MAX_JOINT = 60.0
