@@ -32,7 +32,7 @@ from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
-from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, spread_over_peaks, stretches, unfit
+from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, FALLBACK_NOTE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
@@ -223,8 +223,7 @@ def _fall_back(audio: Audio, sentences: list[Sentence]) -> tuple[list[Sentence],
             timed[k] = replace(timed[k], start=onset, end=offset,
                                confidence=min(timed[k].confidence, FALLBACK_CONFIDENCE))
         number = owner[a]
-        notes.append(f"sentence {number + 1} {_quote(sentences[number].text)} {start:.2f}-{end:.2f} s: "
-                     "timing uncertain, syllables spread over loudness peaks")
+        notes.append(f"sentence {number + 1} {_quote(sentences[number].text)} {start:.2f}-{end:.2f} s: {FALLBACK_NOTE}")
     if not notes:
         return sentences, []
     result = []

@@ -37,6 +37,7 @@ SPREAD_WEIGHT = 0.3        # score lost per squared (shift from the even spread 
 DIP_WEIGHT = 1.0           # score per dB of dip between two chosen peaks
 SMOOTH_FRAMES = 5          # frames (50 ms) of smoothing before peaks are picked
 FALLBACK_CONFIDENCE = 0.1  # confidence given to syllables timed by the fallback
+FALLBACK_NOTE = "timing uncertain, syllables spread over loudness peaks"  # ends the note of each such stretch
 
 
 def stretches(starts: np.ndarray, ends: np.ndarray, firsts: set[int]) -> list[tuple[int, int]]:
