@@ -451,9 +451,19 @@ def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_
 
 def pooled_flags(label: str, results: list[Result]) -> None:
     """Print precision / recall / F1 of the low-confidence flag at THRESHOLDS over the onsets of
-    `results` pooled (the threshold is chosen on the tuning half's pool)."""
+    `results` pooled (the threshold is chosen on the tuning half's pool), and how well the
+    confidence ranks the misses whatever the threshold: average precision (mean over the misses
+    of the precision of flagging every onset as unsure as that miss) and AUC (the chance that a
+    miss has a lower confidence than a hit)."""
     errors = np.concatenate([r.errors for r in results])
     confidence = np.concatenate([r.confidence for r in results])
+    miss = errors > 0.05
+    order = np.argsort(confidence, kind="stable")
+    precision_at = np.cumsum(miss[order]) / np.arange(1, errors.size + 1)
+    average_precision = float(np.mean(precision_at[miss[order]]))
+    auc = float(np.mean(confidence[miss][:, None] < confidence[~miss][None, :]))
+    print(f"{label}, pooled: confidence ranks the misses with average precision {100 * average_precision:.1f}%, "
+          f"AUC {100 * auc:.1f}%")
     cells = []
     for threshold in THRESHOLDS:
         flagged, _, precision, recall, f1 = flag_scores(errors, confidence, threshold)
