@@ -378,8 +378,9 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             mean = means[i] * RATES[r]
             longest = min(total, int(LONGEST_SHARE * mean) + MIN_FRAMES)
             d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
-            starts = k[:, None] - d[None, :]
-            cand = np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG) + _duration_score(d, mean)[None, :]
+            # start_score padded with impossible starts before frame 0, so (k - d) needs no check
+            padded = np.concatenate([np.full(d[-1], _NEG), start_score])
+            cand = padded[k[:, None] + (d[-1] - d)[None, :]] + _duration_score(d, mean)[None, :]
             choice = cand.argmax(axis=1)
             after_syllable[i + 1, r] = cand[k, choice]
             length[i, r] = d[choice]
