@@ -190,6 +190,9 @@ INSIDE_WORD_PAUSE = 2.0
 AFTER_WORD_PAUSE = 0.5
 LONG_WORD = 2
 MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
+EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
+MIN_FRAMES = 3             # frames: the shortest syllable
+LONGEST_SHARE = 4          # a syllable lasts at most this many times its expected duration
 # Each stretch between pauses is read at its own rate: its syllables are expected to last one of
 # RATES times their duration at the part's mean rate, the DP choosing the rate per stretch at a cost
 # (log-normal, sd RATE_SPREAD) paid once per stretch. Biaobei 000001-000035 and its copies: within 50 ms
@@ -197,12 +200,9 @@ MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 # sentences read at 0.7x then 1.4x in one part: 30 -> 90 % for all four (tests/test_align.py). The
 # narrowest is kept: with 1.4 / 0.2 one held-out paragraph lost 15 onsets (a stretch read "slower"
 # took a syllable of the next, a "faster" one made up for it; docs/BENCHMARKS.md), so this choice was
-# made after seeing held-out data. Three rates cost about 1.6x the time of one.
+# made after seeing held-out data. Three rates cost about 1.2-1.6x the time of one.
 RATES = np.array([1 / 1.25, 1.0, 1.25])
 RATE_SPREAD = 0.15
-EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
-MIN_FRAMES = 3             # frames: the shortest syllable
-LONGEST_SHARE = 4          # a syllable lasts at most this many times its expected duration
 SMOOTH_FRAMES = 3          # band levels are smoothed over this many frames (30 ms)
 CHANGE_FRAMES = 2          # a fall or rise is measured from this many frames before to as many after
 CHANGE_CAP_DB = 30.0       # larger falls and rises count as this (a step into digital silence is no likelier)
@@ -216,10 +216,11 @@ SURE_DISTANCE = 5          # frames: an onset within this of the best cut's coun
 # and paragraph copies as the temperature at which the posterior best ranks the onsets more than
 # 50 ms off (average precision 0.208 / 0.223 / 0.243 / 0.254 / 0.250 at 0.7 / 1 / 1.25 / 1.5 / 2;
 # bench/align.py, docs/BENCHMARKS.md). It is not calibrated: lower temperatures give truer
-# probabilities (log loss least near 0.5) but rank worse.
+# probabilities (log loss 0.44 at 1.5, 0.20 at 0.7) but rank worse.
 TEMPERATURE = 1.5
 BAND = 50                  # frames: the posterior sums over cuts ending each syllable within this of
-                           # the best cut's end (0.5 s, two syllables' slip; the whole part cost 3x the time)
+                           # the best cut's end (0.5 s, a slip of two syllables; summing over the whole
+                           # part took 2.3-2.9x the time and ranked misses no better)
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 # Frames by which a class's onset precedes the peak of its evidence (negative: follows it).
 # The dip of a nasal, lateral or r is deepest inside the consonant, about 20 ms after the
@@ -453,10 +454,11 @@ def _onset_posteriors(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarr
                       temperature: float) -> np.ndarray:
     """(N,) posterior probability that syllable i's onset lies within SURE_DISTANCE frames of
     starts[i], given the best cut's (N,) starts and ends, every cut (of those whose syllables
-    end within BAND frames of the best cut's) weighted by exp(score / temperature) (other
-    arguments as `_forward`). The onset's distribution is the forward sum up to k times the sum over the rest,
-    which is the forward sum of the time-reversed problem (syllables and frames reversed, pause
-    edges swapped, each boundary keeping its evidence)."""
+    end within BAND frames of the best cut's) weighted by exp(score / temperature); pace: (T + 1,)
+    as `_duration_scores`; other arguments as `_forward`. The onset's distribution is the
+    forward sum up to k times the sum over the rest, which is the forward sum of the
+    time-reversed problem (syllables and frames reversed, pause edges swapped, each boundary
+    keeping its evidence)."""
     n, positions = evidence.shape
     total = positions - 1
     syllable, pause = _soft_forward(evidence, silence, edges, means, penalty, pace, temperature, ends)
