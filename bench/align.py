@@ -22,8 +22,10 @@ with their own leading and trailing silence (the natural pauses) and aligned as 
 the whole analyser (`analyse.analyse`: segmenter, reconciling, aligner) run on each recording
 and on each paragraph with the transcript's punctuation kept or removed. For every set the
 confidence is scored as a detector of misses: of the onsets flagged below
-analyse.LOW_CONFIDENCE, the share more than 50 ms off (precision), and of those off, the share
-flagged (recall).
+analyse.LOW_CONFIDENCE, the share more than 50 ms off (precision), of those off, the share
+flagged (recall), and their F1; with the median signed onset error (a constant lead or lag
+against a reference's convention) and, for the analyser's sets, the number of stretches the
+analyser timed again over loudness peaks (stretches.py).
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ from cartoonface.speech.audio import Audio
 from tests.espeak import synthesize
 from cartoonface.speech.features import HOP, frames
 from cartoonface.speech.sentences import Span, find_speech_parts
+from cartoonface.speech.stretches import FALLBACK_NOTE
 from cartoonface.speech.transcript import parse_transcript
 
 ZH = Path(__file__).resolve().parents[1].parent / "shared" / "bench" / "zh"
@@ -55,6 +58,7 @@ LOOSE = 0.25              # seconds of surrounding silence added to each part in
 PARAGRAPH = 5             # Biaobei recordings joined into one unpunctuated paragraph
 TEMPI = (0.8, 1.25)       # speed factors of the time-stretched copies (issue 17)
 SEMITONES = (-4, 4)       # pitch shifts of the pitch-shifted copies (issue 17)
+THRESHOLDS = (0.2, 0.25, 0.3, 0.35, 0.4)  # low-confidence thresholds scored on the pooled sets
 PUNCTUATION = re.compile(r"[^\w]|_")  # everything but letters and digits (Han characters are letters)
 
 
@@ -278,7 +282,8 @@ class Result:
     espeak+DTW `dtw` (empty when not run), in s rounded to 1 us (references and onsets on a
     10 ms grid give errors of exactly 50 ms that float arithmetic would put either side of
     the limit); `inner` mask (not the first onset of a part); `signed` aligner errors (s);
-    initial `classes`; aligner `confidence`. Aligner CPU `seconds`, `speech` seconds."""
+    initial `classes`; aligner `confidence`. Aligner CPU `seconds`, `speech` seconds; `fallbacks`:
+    stretches the analyser timed again over loudness peaks (0 for the aligner alone)."""
 
     errors: np.ndarray
     base: np.ndarray
@@ -289,6 +294,7 @@ class Result:
     seconds: float
     speech: float
     confidence: np.ndarray
+    fallbacks: int = 0
 
 
 def evaluate(recordings: list[Recording], with_dtw: bool = False, pipeline: str = "") -> Result:
@@ -336,11 +342,13 @@ def evaluate_pipeline(recordings: list[Recording], unpunctuated: bool) -> Result
     inner: list[bool] = []
     confidence: list[float] = []
     seconds = speech = 0.0
+    fallbacks = 0
     for rec in recordings:
         text = PUNCTUATION.sub("", rec.text) if unpunctuated else rec.text
         started = time.process_time()
         alignment = analyse(rec.audio, text)
         elapsed = time.process_time() - started
+        fallbacks += sum(FALLBACK_NOTE in note for note in alignment.notes)
         timed = [s for sentence in alignment.sentences for s in sentence.syllables]
         reference = np.array([o for p in rec.parts for o in p.onsets])
         if len(timed) != reference.size:
@@ -355,18 +363,20 @@ def evaluate_pipeline(recordings: list[Recording], unpunctuated: bool) -> Result
         confidence.extend(s.confidence for s in timed)
     rounded = np.round(np.array(signed), 6)
     return Result(np.abs(rounded), np.round(np.array(base), 6), np.array([]), np.array(inner, dtype=bool),
-                  np.array(signed), np.array(classes), seconds, speech, np.array(confidence))
+                  np.array(signed), np.array(classes), seconds, speech, np.array(confidence), fallbacks)
 
 
-def flag_scores(errors: np.ndarray, confidence: np.ndarray, threshold: float = LOW_CONFIDENCE) -> tuple[int, int, float, float]:
-    """(N,) onset errors (s) and confidences -> (flagged, misses, precision, recall) of
-    'confidence below `threshold`' as a detector of onsets more than 50 ms off (nan when
-    nothing is flagged / nothing is off)."""
+def flag_scores(errors: np.ndarray, confidence: np.ndarray,
+                threshold: float = LOW_CONFIDENCE) -> tuple[int, int, float, float, float]:
+    """(N,) onset errors (s) and confidences -> (flagged, misses, precision, recall, F1) of
+    'confidence below `threshold`' as a detector of onsets more than 50 ms off (precision nan
+    when nothing is flagged, recall nan when nothing is off; F1 0 when there are no hits)."""
     flagged, miss = confidence < threshold, errors > 0.05
     hits = int(np.sum(flagged & miss))
     precision = hits / flagged.sum() if flagged.any() else float("nan")
     recall = hits / miss.sum() if miss.any() else float("nan")
-    return int(flagged.sum()), int(miss.sum()), precision, recall
+    f1 = 2 * hits / (flagged.sum() + miss.sum()) if hits else 0.0
+    return int(flagged.sum()), int(miss.sum()), precision, recall, f1
 
 
 def by_class(result: Result) -> str:
@@ -413,7 +423,8 @@ def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
 
 
 def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_landmarks: bool = False,
-           pipeline: str = "") -> None:
+           pipeline: str = "") -> Result:
+    """Print the figures of one set (module docstring) and return its Result."""
     result = evaluate(recordings, with_dtw, pipeline)
     print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result.speech:.1f} s of speech, "
           f"aligner {result.speech / max(result.seconds, 1e-9):.0f}x real time (CPU time)")
@@ -428,33 +439,63 @@ def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_
     conf = result.confidence
     if bad.any() and (~bad).any():
         print(f"  mean confidence: onsets within 50 ms {conf[~bad].mean():.2f}, beyond {conf[bad].mean():.2f}")
-    flagged, misses, precision, recall = flag_scores(result.errors, conf)
+    flagged, misses, precision, recall, f1 = flag_scores(result.errors, conf)
     print(f"  low confidence (< {LOW_CONFIDENCE}) as a miss detector: {flagged} flagged, {misses} off by > 50 ms,"
-          f" precision {100 * precision:.1f}%, recall {100 * recall:.1f}%")
+          f" precision {100 * precision:.1f}%, recall {100 * recall:.1f}%, F1 {100 * f1:.1f}%")
+    print(f"  median signed onset error (positive: later than the reference): all {1000 * np.median(result.signed):+.1f} ms,"
+          f" inner {1000 * np.median(result.signed[result.inner]):+.1f} ms")
+    if pipeline:
+        print(f"  stretches timed again over loudness peaks: {result.fallbacks}")
+    return result
+
+
+def pooled_flags(label: str, results: list[Result]) -> None:
+    """Print precision / recall / F1 of the low-confidence flag at THRESHOLDS over the onsets of
+    `results` pooled (the threshold is chosen on the tuning half's pool), and how well the
+    confidence ranks the misses whatever the threshold: average precision (mean over the misses
+    of the precision of flagging every onset as unsure as that miss) and AUC (the chance that a
+    miss has a lower confidence than a hit)."""
+    errors = np.concatenate([r.errors for r in results])
+    confidence = np.concatenate([r.confidence for r in results])
+    miss = errors > 0.05
+    order = np.argsort(confidence, kind="stable")
+    precision_at = np.cumsum(miss[order]) / np.arange(1, errors.size + 1)
+    average_precision = float(np.mean(precision_at[miss[order]]))
+    auc = float(np.mean(confidence[miss][:, None] < confidence[~miss][None, :]))
+    print(f"{label}, pooled: confidence ranks the misses with average precision {100 * average_precision:.1f}%, "
+          f"AUC {100 * auc:.1f}%")
+    cells = []
+    for threshold in THRESHOLDS:
+        flagged, _, precision, recall, f1 = flag_scores(errors, confidence, threshold)
+        cells.append(f"{threshold:g}: {flagged} flagged, P {100 * precision:.1f} R {100 * recall:.1f} F1 {100 * f1:.1f}")
+    print(f"{label}, pooled ({int(np.sum(errors > 0.05))} of {errors.size} onsets off by > 50 ms), "
+          f"low-confidence flag at " + "; ".join(cells))
 
 
 def main() -> None:
     records = biaobei()
     tuning = [r for r in records if int(r.name) in TUNING]
     held_out = [r for r in records if int(r.name) not in TUNING]
-    report("Biaobei tuning 000001-000035", tuning, with_dtw=True, with_landmarks=True)
-    report("Biaobei held-out 000036-000070", held_out, with_dtw=True, with_landmarks=True)
+    plain = {"tuning": report("Biaobei tuning 000001-000035", tuning, with_dtw=True, with_landmarks=True),
+             "held-out": report("Biaobei held-out 000036-000070", held_out, with_dtw=True, with_landmarks=True)}
     report("Biaobei tuning, segmenter parts", [segmenter_parts(r) for r in tuning])
     report("Biaobei held-out, segmenter parts", [segmenter_parts(r) for r in held_out])
     report("AISHELL-3 (2 speakers)", aishell3(), with_dtw=True, with_landmarks=True)
     report("Chao 1922, reference parts", chao(loose=False), with_landmarks=True)
     report(f"Chao 1922, parts widened by <= {LOOSE} s", chao(loose=True))
     for label, half in (("tuning", tuning), ("held-out", held_out)):
+        pool = [plain[label]]
         for tempo in TEMPI:
-            report(f"Biaobei {label}, tempo {tempo}x (sox tempo)", stretched(half, tempo))
+            pool.append(report(f"Biaobei {label}, tempo {tempo}x (sox tempo)", stretched(half, tempo)))
         for semitones in SEMITONES:
-            report(f"Biaobei {label}, pitch {semitones:+d} semitones (sox pitch)", pitched(half, semitones))
-        report(f"Biaobei {label}, paragraphs of {PARAGRAPH} recordings as one part", paragraphs(half))
+            pool.append(report(f"Biaobei {label}, pitch {semitones:+d} semitones (sox pitch)", pitched(half, semitones)))
+        pool.append(report(f"Biaobei {label}, paragraphs of {PARAGRAPH} recordings as one part", paragraphs(half)))
         readable = transcribed(half)
         for mode in ("kept", "removed"):
             report(f"Biaobei {label}, analyse, punctuation {mode}", readable, pipeline=mode)
-        report(f"Biaobei {label}, paragraphs of {PARAGRAPH}, analyse, punctuation removed", paragraphs(readable),
-               pipeline="removed")
+        pool.append(report(f"Biaobei {label}, paragraphs of {PARAGRAPH}, analyse, punctuation removed",
+                           paragraphs(readable), pipeline="removed"))
+        pooled_flags(f"Biaobei {label}: plain, tempi, pitches, paragraphs, analysed paragraphs", pool)
 
 
 if __name__ == "__main__":

@@ -4,12 +4,21 @@ libespeak-ng (Debian package libespeak-ng1) is driven through ctypes with the vo
 `cmn-latn-pinyin`, which reads tone-numbered pinyin; the library reports one WORD event per
 syllable (see /work/shared/DEPENDENCIES.md). Tests use it as speech with known syllable
 onsets; bench/align.py as the template of the espeak+DTW baseline (the aligner does not use it).
+
+Each synthesis runs in a fresh process (this file run as a script): the library keeps state
+from one synthesis to the next (the pitch-flutter position, a static counter in its wave
+generator that no call resets), so in one process the same syllables came out differently
+depending on what had been spoken before, and a test passed or failed with the tests run
+before it.
 """
 
 from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import json
+import subprocess
+import sys
 import threading
 from dataclasses import dataclass
 from typing import Sequence
@@ -91,12 +100,9 @@ def _collect(wav: ctypes._Pointer, count: int, events: ctypes._Pointer) -> int:
     return 0
 
 
-def synthesize(syllables: Sequence[str]) -> Synthesis | None:
-    """Speak tone-numbered pinyin syllables; None when espeak-ng is unavailable or does not
-    report exactly one syllable per item (odd spellings it reads as letters)."""
-    text = " ".join(s for s in syllables if s.strip()).encode("utf-8")
-    if not text or len(text.split()) != len(syllables):
-        return None
+def _speak_here(text: bytes) -> tuple[np.ndarray, int, list[int]] | None:
+    """Speak `text` in this process -> (int16 samples, rate, sample of each WORD event), or None
+    when the library or the voice is missing."""
     with _lock:
         lib = _library()
         if lib is None:
@@ -104,7 +110,33 @@ def synthesize(syllables: Sequence[str]) -> Synthesis | None:
         _engine.chunks, _engine.words = [], []
         lib.espeak_Synth(text, len(text) + 1, 0, _CHARACTER, 0, _UTF8, None, None)
         chunks, words, rate = _engine.chunks, _engine.words, _engine.rate
-    if len(words) != len(syllables) or not chunks:
+    samples = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.int16)
+    return samples.astype(np.int16), rate, words
+
+
+def synthesize(syllables: Sequence[str]) -> Synthesis | None:
+    """Speak tone-numbered pinyin syllables (in a fresh process, so the result does not depend
+    on earlier syntheses); None when espeak-ng is unavailable or does not report exactly one
+    syllable per item (odd spellings it reads as letters)."""
+    text = " ".join(s for s in syllables if s.strip())
+    if not text or len(text.split()) != len(syllables):
         return None
-    samples = np.concatenate(chunks).astype(np.float32) / 32768.0
+    done = subprocess.run([sys.executable, __file__, text], capture_output=True, check=False)
+    header, _, raw = done.stdout.partition(b"\n")
+    if done.returncode != 0 or not header:
+        return None
+    head = json.loads(header)
+    words, rate = head["words"], head["rate"]
+    if len(words) != len(syllables) or not raw:
+        return None
+    samples = np.frombuffer(raw, dtype=np.int16).astype(np.float32) / 32768.0
     return Synthesis(samples, rate, tuple(w / rate for w in words))
+
+
+if __name__ == "__main__":
+    # one synthesis: argv[1] the text; stdout a JSON line {"rate", "words"} then the int16 samples
+    spoken = _speak_here(sys.argv[1].encode("utf-8"))
+    if spoken is None:
+        sys.exit(1)
+    pcm, hertz, events = spoken
+    sys.stdout.buffer.write(json.dumps({"rate": hertz, "words": events}).encode() + b"\n" + pcm.tobytes())

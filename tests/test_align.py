@@ -264,3 +264,43 @@ def test_word_lengths_cover_every_syllable_and_keep_words_whole():
     ends = set(np.cumsum(lengths))
     assert 1 not in ends and 2 in ends  # 我们 is one word (pypinyin's phrase dictionary)
     assert 8 not in ends  # the "" syllable stays with the token before it
+
+
+def test_an_onset_that_nothing_marks_is_the_least_sure():
+    # five bursts, the third twice as long with no dip inside, given six syllables: one onset
+    # must fall inside that burst, where any position is about as good as another
+    durations = [0.2, 0.22, 0.5, 0.24, 0.2]
+    audio, onsets = bursts_with_dips(durations)
+    span = Span(onsets[0], onsets[0] + sum(durations))
+    timings = align_syllables(audio, span, ["ba1"] * 6)
+    check_shape(timings, span, 6)
+    starts = np.array([t.start for t in timings])
+    inside = int(np.flatnonzero((starts > onsets[2] + 0.05) & (starts < onsets[3] - 0.05))[0])
+    confidence = np.array([t.confidence for t in timings])
+    assert confidence[inside] == confidence.min()
+    assert np.delete(confidence, inside).min() > confidence[inside] + 0.2
+
+
+def test_a_stretch_read_twice_as_fast_as_the_one_before_keeps_its_syllables():
+    # two espeak sentences in one part, a pause between them: the first slowed to 0.7x, the
+    # second sped up to 1.4x (resampled, so the pitch moves too); one rate for the whole part
+    # expected the first stretch to hold too many syllables, and slipped by up to a second
+    first = ["ni3", "hao3", "wo3", "men5", "jin1", "tian1", "qu4", "gong1", "yuan2", "wan2"]
+    second = ["ta1", "shuo1", "ming2", "tian1", "xia4", "yu3", "ba5", "zai4", "jia1", "li3"]
+    spoken = [synthesize(first), synthesize(second)]
+    if None in spoken:
+        pytest.skip("libespeak-ng or its cmn-latn-pinyin voice is not installed")
+    rate = spoken[0].rate
+    pieces, onsets, now = [np.zeros(int(0.3 * rate))], [], 0.3
+    for speech, speed in zip(spoken, (0.7, 1.4)):
+        resampled = np.interp(np.arange(int(speech.samples.size / speed)) * speed,
+                              np.arange(speech.samples.size), speech.samples)
+        onsets += [now + onset / speed for onset in speech.onsets]
+        pieces += [resampled, np.zeros(int(0.4 * rate))]
+        now += resampled.size / rate + 0.4
+    audio = Audio(np.concatenate(pieces).astype(np.float32), rate, "two rates")
+    span = Span(onsets[0], now - 0.4)
+    timings = align_syllables(audio, span, first + second)
+    check_shape(timings, span, 20)
+    errors = np.abs(np.array([t.start for t in timings]) - np.array(onsets))
+    assert np.mean(errors <= 0.05) >= 0.8 and errors.max() < 0.15

@@ -16,7 +16,7 @@ FIRST = ["ni3", "hao3", "wo3", "men5", "jin1", "tian1", "qu4", "gong1", "yuan2",
 SECOND = ["ta1", "shuo1", "ming2", "tian1", "xia4", "yu3", "ba5", "zai4", "jia1", "li3"]
 TEXT = "你好我们今天去公园玩。他说明天下雨吧在家里。"
 PAUSE = 0.6       # s of silence before, between and after the two sentences
-NOISE = 0.03      # amplitude of white noise over the whole recording: it lowers the aligner's confidence
+NOISE = 0.035     # amplitude of white noise over the whole recording: it lowers the aligner's confidence
 NOTE = re.compile(r"sentence (\d+) «(.+?)» (\d+\.\d\d)-(\d+\.\d\d) s: timing uncertain, syllables spread over loudness peaks")
 
 

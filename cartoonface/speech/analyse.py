@@ -32,7 +32,7 @@ from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
-from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, spread_over_peaks, stretches, unfit
+from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, FALLBACK_NOTE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
@@ -43,8 +43,8 @@ FAST_RATE = 8.0
 MIN_RATE = 1.0
 # Syllables below this confidence are reported as low-confidence: the threshold of best F1 for
 # "more than 50 ms off" over Biaobei 000001-000035 and its tempo, pitch and paragraph copies (bench/align.py:
-# 0.3 / 0.4 / 0.5 gave F1 27.5 / 31.0 / 25.4 %; docs/BENCHMARKS.md).
-LOW_CONFIDENCE = 0.4
+# 0.25 / 0.3 / 0.35 / 0.4 gave F1 23.5 / 36.5 / 32.5 / 28.6 % for the aligner alone; docs/BENCHMARKS.md).
+LOW_CONFIDENCE = 0.3
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
 # cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
 MAX_JOINT = 60.0
@@ -223,8 +223,7 @@ def _fall_back(audio: Audio, sentences: list[Sentence]) -> tuple[list[Sentence],
             timed[k] = replace(timed[k], start=onset, end=offset,
                                confidence=min(timed[k].confidence, FALLBACK_CONFIDENCE))
         number = owner[a]
-        notes.append(f"sentence {number + 1} {_quote(sentences[number].text)} {start:.2f}-{end:.2f} s: "
-                     "timing uncertain, syllables spread over loudness peaks")
+        notes.append(f"sentence {number + 1} {_quote(sentences[number].text)} {start:.2f}-{end:.2f} s: {FALLBACK_NOTE}")
     if not notes:
         return sentences, []
     result = []

@@ -25,8 +25,11 @@ if TYPE_CHECKING:
     from cartoonface.speech.audio import Audio
 
 MIN_GAP = MIN_PAUSE * HOP  # s: a shorter gap between syllables is no pause (the aligner's)
-# Tuned on the tuning half only (bench/align.py, `analyse` sets; docs/BENCHMARKS.md): within 50 ms
-# was the same for a sure-unfit mean of 0.2 / 0.3 / 0.4 / 0.5 and a gate of 0.4 / 0.6.
+# Tuned on the tuning half only (bench/align.py, `analyse` sets with punctuation kept / paragraphs;
+# docs/BENCHMARKS.md), for the aligner's posterior confidence: within 50 ms 96.6 / 97.2 / 97.2 / 94.9 %
+# and 95.2 / 95.2 / 95.2 / 92.7 % for a sure-unfit mean of 0.4 / 0.45 / 0.5 / 0.6 (gate 0.6; a gate
+# of 0.7 or 0.8 changed nothing). 0.45 (one tuning stretch better) also fired on the clean espeak-ng
+# sample samples/speech/story.wav, on a stretch the aligner had right (mean 0.43), so 0.4 is kept.
 UNFIT_CONFIDENCE = 0.6     # mean confidence below which a stretch's durations are checked
 SURE_UNFIT = 0.4           # mean confidence below which a stretch is unfit whatever its durations
 LONGEST_SHARE = 3.0        # a syllable this many times the stretch's mean duration is implausible
@@ -35,6 +38,7 @@ SPREAD_WEIGHT = 0.3        # score lost per squared (shift from the even spread 
 DIP_WEIGHT = 1.0           # score per dB of dip between two chosen peaks
 SMOOTH_FRAMES = 5          # frames (50 ms) of smoothing before peaks are picked
 FALLBACK_CONFIDENCE = 0.1  # confidence given to syllables timed by the fallback
+FALLBACK_NOTE = "timing uncertain, syllables spread over loudness peaks"  # ends the note of each such stretch
 
 
 def stretches(starts: np.ndarray, ends: np.ndarray, firsts: set[int]) -> list[tuple[int, int]]:
