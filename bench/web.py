@@ -704,6 +704,8 @@ def kill_round(work: Path, redis: Redis, sentences: list, db: int) -> None:
             if job["state"] == "running" and job["progress"] >= 20:
                 victim = job["worker"]["pid"]
             time.sleep(0.1)
+        if victim is None:
+            raise RuntimeError("no job reached 20 % within 600 s: nothing to kill")
         killed_at = time.monotonic()
         procs[victim].send_signal(signal.SIGKILL)
         procs[victim].wait(30)
