@@ -83,7 +83,8 @@ def test_key_frames_are_integer_ms_in_order():
         times = [key.t for key in track.keys]
         assert all(isinstance(t, int) for t in times)
         assert times == sorted(times) and times[0] == 0 and times[-1] <= timeline.duration
-    assert {t.name for t in timeline.tracks} == {"mouth", "blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile"}
+    assert {t.name for t in timeline.tracks} == {"mouth", "blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile",
+                                                  "breath"}
 
 
 def test_blink_and_brow_envelopes():

@@ -21,6 +21,9 @@ Kinds and what they drive (Pose is (tilt, turn, roll) about X, Y, Z):
   degrees away from the viewer (towards the image right / down), over
   `duration`; the eyes stay there until the next saccade.
 - ``smile``: a slight smile rises and fades; `amplitude` is the smile 0..1.
+- ``breath``: an inhalation in a pause (over `attack`) and the slow fall of the chest
+  while the next words are spoken (over `release`); `amplitude` is its depth 0..1
+  (render/scenery.py: how far the shoulders rise).
 
 Envelope kinds (blink, brow, nod, smile) rise from 0 to `amplitude` over `attack`
 seconds, hold, and fall back to 0 over `release` seconds, all inside
@@ -41,8 +44,8 @@ from cartoonface.animate.gaze import Saccade, saccades
 from cartoonface.animate.style import ANNOUNCER, Style
 from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model, also the gaze limit
 
-KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile")
-ENVELOPE_KINDS = ("blink", "brow", "nod", "smile")
+KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile", "breath")
+ENVELOPE_KINDS = ("blink", "brow", "nod", "smile", "breath")
 ANGLE_KINDS = ("tilt", "turn", "nod", "gaze_h", "gaze_v")
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
@@ -102,6 +105,24 @@ SMILE_ATTACK = (0.3, 0.5)  # seconds
 SMILE_HOLD = (0.5, 1.5)  # seconds
 SMILE_RELEASE = (0.4, 0.7)  # seconds
 SMILE_GAP = 4.0  # seconds: at least this long between two smiles
+
+# Breaths (docs/animation.md "Breathing"). Readers breathe at grammatical boundaries, at
+# consistent places from one reading to the next (Winkworth, Davis, Ellis and Adams 1994,
+# "Variability and consistency in speech breathing during reading", JSHR 37:535-556), so a
+# breath is taken in every pause between sentences long enough for one, and in the silence
+# before the first sentence. A speech inhalation is quick and the air goes out slowly over
+# the words that follow (Hixon, Goldman and Mead 1973, "Kinematics of the chest wall during
+# speech production", JSHR 16:78-115); it is longer and deeper before a longer utterance
+# (Whalen and Kinsella-Shaw 1997, Phonetica 54:138-152; Winkworth et al. 1994).
+BREATH_PAUSE = 0.25  # seconds: the shortest silence that holds an inhalation (our choice)
+BREATH_INHALE = (0.30, 0.60)  # seconds an inhalation takes, cut to the pause (our choice)
+BREATH_LEAD = 0.05  # seconds: the inhalation ends this long before the speech resumes
+BREATH_EXHALE = 6.0  # seconds: at most this long for the chest to sink back over the words
+BREATH_FULL = 6.0  # seconds of speech after a breath that make it a full one (depth 1)
+BREATH_DEPTH = (0.4, 1.0)  # depth before a short / a long utterance, in between by its length
+BREATH_JITTER = 0.1  # depths drawn up to this much below the length's depth
+# A child of the seed no other random stream uses: schedule uses 0-7, idle.py's sway 8.
+BREATH_STREAM = 16
 
 
 TIME_SLACK = 0.0005  # seconds: times are kept to the ms, so limits (attack + release <= duration, ...) allow this
@@ -196,8 +217,14 @@ def schedule(
         *nods,
         *_gaze(saccades(spans, pauses, gaze_rng, style, head_moves), duration),
         *_smiles(duration, spans, smile_rng, style.smile_share),
+        *_breaths(duration, pauses, spans, _stream(seed, BREATH_STREAM)),
     )
     return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))
+
+
+def _stream(seed: int, child: int) -> np.random.Generator:
+    """The random stream number `child` of `seed` (a PCG64 of SeedSequence(seed)'s child)."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed).spawn(child + 1)[child]))
 
 
 def _gaze(shifts: Sequence[Saccade], duration: float) -> list[Action]:
@@ -386,3 +413,34 @@ def _smiles(
             continue
         smiles.append(Action("smile", start, length, amount, attack, release))
     return smiles
+
+
+def _breaths(
+    duration: float,
+    pauses: Sequence[tuple[float, float]],
+    speech: Sequence[tuple[float, float]],
+    rng: np.random.Generator,
+) -> list[Action]:
+    """A breath in the silence before the first of `speech` (sentence (start, end) seconds)
+    and in each of `pauses` (start, end) of at least BREATH_PAUSE s that speech follows.
+
+    The inhalation (attack, BREATH_INHALE, cut to the silence) ends BREATH_LEAD s before the
+    speech resumes; the exhalation (release) lasts over the words up to the next silence, at
+    most BREATH_EXHALE s; the depth grows with that stretch of speech (BREATH_DEPTH up to
+    BREATH_FULL s of it). So breaths never overlap and stay inside [0, duration].
+    """
+    first = min((start for start, _ in speech), default=duration)
+    silences = sorted([(0.0, first)] + [pause for pause in pauses if pause[1] < duration])
+    breaths: list[Action] = []
+    for (begin, end), after in zip(silences, [*silences[1:], (duration, duration)]):
+        inhale_end = _round_to_ms(end - BREATH_LEAD)
+        inhale = min(_uniform2(rng, BREATH_INHALE), _round_to_ms(inhale_end - begin))
+        talk = after[0] - end
+        if end - begin < BREATH_PAUSE or talk <= 0 or (breaths and inhale_end - inhale < breaths[-1].end - TIME_SLACK):
+            continue
+        exhale = _round_to_ms(min(talk + BREATH_LEAD, BREATH_EXHALE))
+        low, high = BREATH_DEPTH
+        depth = low + (high - low) * min(talk / BREATH_FULL, 1.0) - float(rng.uniform(0.0, BREATH_JITTER))
+        breaths.append(Action("breath", _round_to_ms(inhale_end - inhale), _round_to_ms(inhale + exhale),
+                              round(max(depth, 0.0), 2), inhale, exhale))
+    return breaths

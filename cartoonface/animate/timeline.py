@@ -12,6 +12,7 @@ them. Tracks:
   of the nod in degrees, Pose.tilt): see behaviour.py for the kinds.
 - ``gaze_h``, ``gaze_v``: the eyes' angles away from the viewer, degrees.
 - ``smile``: amount 0..1.
+- ``breath``: depth of the breath 0..1 (the chest and shoulders; frames.breaths_at).
 """
 
 from __future__ import annotations
@@ -51,6 +52,7 @@ CLOSURE_KEEP = 0.5
 MOUTH_EASING = "smoothstep"
 AMOUNT_EASING = "smoothstep"
 ANGLE_EASING = "cosine"
+BREATH_EASING = "smoothstep"  # the chest eases in and out of each inhalation like the amounts
 
 
 @dataclass(frozen=True)
@@ -93,7 +95,7 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
     """Key frames for an Alignment (speech/records.py) and behaviour `actions`.
 
     Returns a Timeline of alignment.duration (rounded to ms) with the tracks
-    mouth, blink, brow, tilt, turn, nod, gaze_h, gaze_v and smile.
+    mouth, blink, brow, tilt, turn, nod, gaze_h, gaze_v, smile and breath.
     """
     duration = round(alignment.duration * 1000)
     syllables = sorted((syl for sentence in alignment.sentences for syl in sentence.syllables), key=lambda s: s.start)
@@ -110,6 +112,7 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
             Track("gaze_h", move_keys(by_kind["gaze_h"]), ANGLE_EASING),
             Track("gaze_v", move_keys(by_kind["gaze_v"]), ANGLE_EASING),
             Track("smile", envelope_keys(by_kind["smile"]), AMOUNT_EASING),
+            Track("breath", envelope_keys(by_kind["breath"]), BREATH_EASING),
         ),
     )
 
