@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cartoonface.animate.actions import actions_from_json, actions_to_json
-from cartoonface.animate.behaviour import BREATH_LEAD, BREATH_PAUSE, Action, schedule
+from cartoonface.animate.behaviour import BREATH_INTERVAL, BREATH_LEAD, BREATH_PAUSE, Action, schedule
 from cartoonface.animate.frames import breaths_at, sample_breaths
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import ActionsError
@@ -46,6 +46,7 @@ def test_a_breath_in_every_pause_long_enough_and_none_while_speaking():
     breaths = _breaths()
     long_enough = [s for s in _silences(speech) if s[1] - s[0] >= BREATH_PAUSE]
     assert len(long_enough) < len(_silences(speech))  # the short pauses are left out
+    assert all(b[1] - a[1] >= BREATH_INTERVAL for a, b in zip(long_enough, long_enough[1:]))  # none spoken through
     assert len(breaths) == len(long_enough)
     for breath, (begin, end) in zip(breaths, long_enough, strict=True):
         inhaled = breath.start + breath.attack
@@ -54,10 +55,10 @@ def test_a_breath_in_every_pause_long_enough_and_none_while_speaking():
 
 
 def test_deeper_breaths_before_longer_stretches_of_speech():
-    speech = _speech()
     breaths = _breaths()
-    talk = [next(s[1] - s[0] for s in speech if s[0] > b.start) for b in breaths]
-    assert np.corrcoef(talk, [b.amplitude for b in breaths])[0, 1] > 0.8
+    resumes = [b.start + b.attack + BREATH_LEAD for b in breaths]  # the speech after each breath starts
+    talk = [later.start - resume for later, resume in zip(breaths[1:], resumes)]  # to the next breath
+    assert np.corrcoef(talk, [b.amplitude for b in breaths[:-1]])[0, 1] > 0.8
     assert all(0 < b.amplitude <= 1 for b in breaths)
 
 
@@ -116,3 +117,23 @@ def test_the_chest_rises_in_the_pause_and_sinks_over_the_words():
     assert len(depths) == 240
     rising = np.diff(depths[60:75])  # 2.0-2.5 s
     assert (rising >= 0).all() and rising.sum() > 0.7
+
+
+def test_breaths_are_also_taken_in_the_pauses_inside_sentences():
+    from cartoonface.animate.behaviour import silences_of
+    from cartoonface.speech.records import Syllable
+
+    def syllables(*times):
+        return tuple(Syllable("你", "ni3", ("n", "i"), start, end, 1.0) for start, end in times)
+
+    sentences = (Sentence("a", 0.5, 9.0, syllables((0.5, 4.0), (4.1, 5.0), (5.6, 9.0))),
+                 Sentence("b", 9.5, 12.0, syllables((9.5, 12.0))))
+    alignment = Alignment(sentences, 13.0, ())
+    silences = silences_of(alignment)
+    assert silences == ((5.0, 5.6), (9.0, 9.5), (12.0, 13.0))  # the 0.1 s gap is too short to breathe
+    speech = ((0.5, 9.0), (9.5, 12.0))
+    plan = schedule(13.0, ((9.0, 9.5), (12.0, 13.0)), 1, speech=speech, breath_pauses=silences)
+    inhaled = [a.start + a.attack for a in plan if a.kind == "breath"]
+    assert len(inhaled) == 3 and 5.0 < inhaled[1] < 5.6  # before the sentence, at its inner pause, between
+    close = schedule(13.0, ((9.0, 9.5), (12.0, 13.0)), 1, speech=speech, breath_pauses=((5.0, 5.6), (6.5, 7.0)))
+    assert len([a for a in close if a.kind == "breath"]) == 2  # 6.5-7.0 comes too soon after 5.0-5.6

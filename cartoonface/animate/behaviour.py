@@ -117,6 +117,7 @@ SMILE_GAP = 4.0  # seconds: at least this long between two smiles
 BREATH_PAUSE = 0.25  # seconds: the shortest silence that holds an inhalation (our choice)
 BREATH_INHALE = (0.30, 0.60)  # seconds an inhalation takes, cut to the pause (our choice)
 BREATH_LEAD = 0.05  # seconds: the inhalation ends this long before the speech resumes
+BREATH_INTERVAL = 2.0  # seconds: a pause this soon after the last breath's is spoken through (our choice)
 BREATH_EXHALE = 6.0  # seconds: at most this long for the chest to sink back over the words
 BREATH_FULL = 6.0  # seconds of speech after a breath that make it a full one (depth 1)
 BREATH_DEPTH = (0.4, 1.0)  # depth before a short / a long utterance, in between by its length
@@ -183,6 +184,7 @@ def schedule(
     style: Style = ANNOUNCER,
     peaks: Sequence[float] = (),
     speech: Sequence[tuple[float, float]] | None = None,
+    breath_pauses: Sequence[tuple[float, float]] | None = None,
 ) -> tuple[Action, ...]:
     """Draw the behaviour of a face talking for `duration` seconds.
 
@@ -194,6 +196,9 @@ def schedule(
     `peaks`: seconds of pitch peaks (prosody.py): brow raises move onto them,
     and the style's share of them gets a beat nod. `speech`: (start, end) of the
     sentences (default: the stretches between `pauses`), for gaze and smiles.
+    `breath_pauses`: (start, end) of the silences a breath may be taken in
+    (default: `pauses`; the pipeline gives silences_of(alignment), the pauses
+    inside sentences too).
     Returns every action sorted by start, all inside [0, duration]; no tilt or
     turn overlaps a nod; actions of one kind never overlap.
     """
@@ -217,7 +222,7 @@ def schedule(
         *nods,
         *_gaze(saccades(spans, pauses, gaze_rng, style, head_moves), duration),
         *_smiles(duration, spans, smile_rng, style.smile_share),
-        *_breaths(duration, pauses, spans, _stream(seed, BREATH_STREAM)),
+        *_breaths(duration, pauses if breath_pauses is None else breath_pauses, spans, _stream(seed, BREATH_STREAM)),
     )
     return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))
 
@@ -263,6 +268,17 @@ def speech_pauses(alignment) -> tuple[tuple[float, float], ...]:
     ends = [s.end for s in sentences]
     starts = [s.start for s in sentences[1:]] + [alignment.duration]
     return tuple((end, nxt) for end, nxt in zip(ends, starts, strict=True) if nxt > end)
+
+
+def silences_of(alignment, shortest: float = BREATH_PAUSE) -> tuple[tuple[float, float], ...]:
+    """(start, end) seconds of every silence of at least `shortest` s between two syllables of an
+    Alignment (inside sentences and between them) and after the last one: where a reader may
+    breathe (Winkworth et al. 1994: at grammatical boundaries, which the pauses of read
+    speech mark)."""
+    syllables = sorted((s for sentence in alignment.sentences for s in sentence.syllables), key=lambda s: s.start)
+    ends = [s.end for s in syllables]
+    starts = [s.start for s in syllables[1:]] + [alignment.duration]
+    return tuple((end, nxt) for end, nxt in zip(ends, starts, strict=True) if nxt - end >= shortest)
 
 
 def blink_interval(rng: np.random.Generator) -> float:
@@ -422,25 +438,30 @@ def _breaths(
     rng: np.random.Generator,
 ) -> list[Action]:
     """A breath in the silence before the first of `speech` (sentence (start, end) seconds)
-    and in each of `pauses` (start, end) of at least BREATH_PAUSE s that speech follows.
+    and in each of `pauses` (start, end) of at least BREATH_PAUSE s that speech follows and
+    that ends BREATH_INTERVAL s or more after the last silence breathed in.
 
     The inhalation (attack, BREATH_INHALE, cut to the silence) ends BREATH_LEAD s before the
-    speech resumes; the exhalation (release) lasts over the words up to the next silence, at
-    most BREATH_EXHALE s; the depth grows with that stretch of speech (BREATH_DEPTH up to
+    speech resumes; the exhalation (release) lasts over the words up to the next breath's
+    silence, at most BREATH_EXHALE s; the depth grows with that stretch of speech (BREATH_DEPTH up to
     BREATH_FULL s of it). So breaths never overlap and stay inside [0, duration].
     """
     first = min((start for start, _ in speech), default=duration)
-    silences = sorted([(0.0, first)] + [pause for pause in pauses if pause[1] < duration])
+    chosen: list[tuple[float, float]] = []
+    for begin, end in sorted([(0.0, first)] + [pause for pause in pauses if pause[1] < duration]):
+        if end - begin >= BREATH_PAUSE and (not chosen or end - chosen[-1][1] >= BREATH_INTERVAL):
+            chosen.append((begin, end))
     breaths: list[Action] = []
-    for (begin, end), after in zip(silences, [*silences[1:], (duration, duration)]):
+    for (begin, end), after in zip(chosen, [*chosen[1:], (duration, duration)]):
         inhale_end = _round_to_ms(end - BREATH_LEAD)
-        inhale = min(_uniform2(rng, BREATH_INHALE), _round_to_ms(inhale_end - begin))
+        start = math.ceil(max(inhale_end - _uniform2(rng, BREATH_INHALE), begin) * 1000) / 1000
+        # whole ms, a ms before the next breath's silence (or the end): breaths never touch
+        exhale_end = (math.floor(min(after[0], inhale_end + BREATH_EXHALE) * 1000) - 1) / 1000
         talk = after[0] - end
-        if end - begin < BREATH_PAUSE or talk <= 0 or (breaths and inhale_end - inhale < breaths[-1].end - TIME_SLACK):
+        if talk <= 0 or start >= inhale_end or (breaths and start < breaths[-1].end):
             continue
-        exhale = _round_to_ms(min(talk + BREATH_LEAD, BREATH_EXHALE))
+        inhale, exhale = _round_to_ms(inhale_end - start), _round_to_ms(exhale_end - inhale_end)
         low, high = BREATH_DEPTH
         depth = low + (high - low) * min(talk / BREATH_FULL, 1.0) - float(rng.uniform(0.0, BREATH_JITTER))
-        breaths.append(Action("breath", _round_to_ms(inhale_end - inhale), _round_to_ms(inhale + exhale),
-                              round(max(depth, 0.0), 2), inhale, exhale))
+        breaths.append(Action("breath", start, _round_to_ms(exhale_end - start), round(max(depth, 0.0), 2), inhale, exhale))
     return breaths
