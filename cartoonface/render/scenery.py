@@ -58,8 +58,8 @@ COLOURS = {"wall": "#f3efe6", "classroom wall": "#efe6d2", "board frame": "#8b5a
            "desk accent": "#38bdf8", "softbox": "#1f2937", "softbox face": "#f8fafc", "stand": "#374151",
            "jaw shadow": "#000", "collar": "#ffffff", "collar line": "#b6c2cf", "lapel": "#151d31",
            "lapel edge": "#3d4d70", "suit seam": "#070b14", "button": "#0b0f1a", "shirt collar": "#dbeafe",
-           "shirt collar line": "#7ea6d8", "placket": "#6f98cc", "shirt button": "#f8fafc", "rib": "#125c30",
-           "rib line": "#0b3d1f"}
+           "shirt collar line": "#7ea6d8", "placket": "#6f98cc", "shirt button": "#f8fafc", "rib": "#27a85c",
+           "rib line": "#157a3c"}
 
 # Backgrounds, in fractions of the picture's width w and height h.
 CORNER = 0.01  # corner radius of panels, screens and frames
@@ -83,7 +83,7 @@ CHART = (0.2, 0.45, 0.7, 0.35, 0.55)  # bar heights on the last screen, of the s
 CHART_OPACITY = "0.6"
 # The news desk, in front of the anchor: its top DESK_DROP fw below the shoulder line, the top
 # edge DESK_EDGE h thick, DESK_SPAN of w wide; an accent line and a logo plate on its front.
-DESK_DROP, DESK_EDGE, DESK_SPAN = 0.62, 0.025, (0.06, 0.94)
+DESK_DROP, DESK_EDGE, DESK_SPAN = 0.55, 0.03, (0.06, 0.94)
 DESK_ACCENT, DESK_ACCENT_LINE = 0.03, 0.004  # below the top edge, of h
 DESK_PLATE = (0.1, 0.05, 0.05)  # the logo plate: width of w, height of h, top below the edge of h
 # Studio: a paper backdrop lit behind the head, sweeping into the floor, a softbox on a stand

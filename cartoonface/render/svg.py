@@ -37,7 +37,7 @@ from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
-                                        figure_of, lean, lean_transform, neck_middle)
+                                        desk_layer, figure_of, lean, lean_transform, neck_middle)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -284,6 +284,9 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     dressed = clothes_layer(clothes, figure, defs)
     dressed[0].set("transform", lean_transform(figure, leaning))  # the neck leans with the head
     root.append(dressed)
+    desk = desk_layer(background, figure, defs)  # the newsroom's desk, in front of the body
+    if desk is not None:
+        root.append(desk)
     group.set("id", "face")
     root.append(group)
     return root
