@@ -28,13 +28,12 @@ from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState
 from cartoonface.render.animation import STAGE_DEPTH, WIDE, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.scenery import BACKGROUNDS, CLOTHES, TORSO, figure_of, neck_pivot
+from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 
 SCALE = 0.2  # of the stage's size: one tile of the sheet
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--mute-audio", "--no-first-run"]
 ZOOM = 2  # device scale factor of the breathing screenshots
-SHOULDER = TORSO[2][-1]  # (u, v) of the shoulder's top in the torso's outline (scenery.TORSO)
 CROP = (1.35, 0.15, 0.3, 0.2)  # the breathing tiles (the image-left shoulder and the neck): left and right of
 # the chin, above and below the shoulder's top, of the face width
 STEPS = 3  # seconds of the exhalation shown, one tile a second
@@ -67,6 +66,10 @@ def breath(site: Path) -> Image.Image:
     """The breathing strip of a generated announcer page (see the module's docstring)."""
     from playwright.sync_api import sync_playwright
 
+    from cartoonface.render.scenery import TORSO, figure_of, neck_pivot  # here: `sheet` runs on older checkouts too
+
+    shoulder = TORSO[2][-1]  # (u, v) of the shoulder's top in the torso's outline
+
     actions = json.loads((site / "actions.json").read_text(encoding="utf-8"))["actions"]
     deepest = max((a for a in actions if a["kind"] == "breath"), key=lambda a: a["amplitude"])
     top = deepest["start"] + deepest["attack"]
@@ -78,7 +81,7 @@ def breath(site: Path) -> Image.Image:
     left = (face.width - width) / 2
     figure = figure_of(face, (left, 0.0, width, height))
     fw = figure.face_width
-    shoulder_y = neck_pivot(figure) + fw * SHOULDER[1]
+    shoulder_y = neck_pivot(figure) + fw * shoulder[1]
     box = [(figure.chin_x - fw * CROP[0] - left) * ZOOM, (shoulder_y - fw * CROP[2]) * ZOOM,
            (figure.chin_x + fw * CROP[1] - left) * ZOOM, (shoulder_y + fw * CROP[3]) * ZOOM]
     tiles: list[Image.Image] = []
