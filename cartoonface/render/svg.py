@@ -265,8 +265,8 @@ def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: s
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
     """`face` in `state` as a whole SVG document root, canvas-sized, with the layers
-    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order;
-    the clothes layer's neck leans to stay under the posed chin (render/scenery.py's lean).
+    `<g id="background">`, `<g id="hair">`, `<g id="clothes">`, `<g id="desk">` (newsroom only) and
+    `<g id="face">` in that order; the clothes layer's neck leans to stay under the posed chin (render/scenery.py's lean).
 
     `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
     """
