@@ -233,7 +233,8 @@ def _lean(neck: etree._Element, leans: Sequence[int], fps: int, pivot: float) ->
 def _shifts(dx: Sequence[float] | np.ndarray, dy: Sequence[float] | np.ndarray) -> tuple[list[int], Callable[[int], str], bool]:
     """Per-frame shifts (`dx`, `dy` pixels) in MOTION_STEP steps as numbers of distinct shifts
     (keys for _steps), the translate value of each number, and whether any frame is shifted."""
-    pairs = [(round(x / MOTION_STEP), round(y / MOTION_STEP)) for x, y in zip(dx, dy, strict=True)]
+    steps_x, steps_y = (np.round(np.asarray(v, dtype=float) / MOTION_STEP).astype(int).tolist() for v in (dx, dy))
+    pairs = list(zip(steps_x, steps_y, strict=True))
     distinct = list(dict.fromkeys(pairs))
     number = {pair: index for index, pair in enumerate(distinct)}
 
