@@ -4,6 +4,9 @@ transforms of the clothes layer, the news desk, and the neck joined to the head 
 from __future__ import annotations
 
 import itertools
+import json
+import shutil
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -14,9 +17,10 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import load_face
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
+from cartoonface.pipeline import Options, generate
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES, NECK_TOP, figure_of, neck_pivot
-from tests.conftest import ROOT
+from tests.conftest import ROOT, spoken_inputs
 from tests.test_scenery import polygon
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -125,3 +129,24 @@ def test_the_neck_joins_the_head_at_every_pose_while_breathing(face):
         top, foot = corners[:, 1].min() + neck_dy[frame], corners[:, 1].max() + neck_dy[frame]
         assert top <= chin[1] - NECK_TOP * fw / 3, (state.pose, frame)  # its top behind the jaw
         assert foot >= collar + torso_dy[frame], (state.pose, frame)  # its foot inside the collar
+
+
+@pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
+def test_a_generated_announcer_breathes_and_its_breaths_are_editable(tmp_path):
+    speech, transcript = spoken_inputs(tmp_path, "今天天气很好。我们去公园。", speed=160)
+    options = Options(page="announcer", background="newsroom", clothes="suit", seed=2)
+    site = generate(ROOT / "samples" / "faces" / "male.json", speech, transcript, tmp_path / "site", options).out_dir
+    document = json.loads((site / "actions.json").read_text(encoding="utf-8"))
+    assert [a for a in document["actions"] if a["kind"] == "breath"]
+    root = etree.fromstring((site / "animation.svg").read_bytes())
+    torso = _layer(root, "clothes").find(f"{SVG}g[@class='torso']")
+    rises = {v[1] for v in _at_frames(torso.find(f"{SVG}animateTransform[@type='translate']"), 100)}
+    assert min(rises) < 0  # the shoulders rise
+    assert _layer(root, "desk") is not None
+    document["actions"] = [a for a in document["actions"] if a["kind"] != "breath"]
+    (tmp_path / "edited.json").write_text(json.dumps(document), encoding="utf-8")
+    edited = generate(ROOT / "samples" / "faces" / "male.json", speech, transcript, tmp_path / "edited",
+                      replace(options, actions=tmp_path / "edited.json")).out_dir
+    layer = _layer(etree.fromstring((edited / "animation.svg").read_bytes()), "clothes")
+    shifts = layer.findall(f".//{SVG}animateTransform[@type='translate']")
+    assert all(float(v.split()[1]) == 0 for shift in shifts for v in shift.get("values").split(";"))  # no breathing
