@@ -85,7 +85,8 @@ def test_the_clothes_layer_breathes_and_follows_the_head(face, clothes):
     assert min(dy) < 2 * min(neck_dy) < 0  # the shoulders rise more than the neck
     assert int(np.argmin(dy)) == pytest.approx(int(np.argmax(breaths)), abs=3)  # highest at the deepest breath
     assert shift[-1][0] > 0 and lean[-1][0] > 0  # towards the head's turn (image right) and roll
-    assert shift[20][0] < 0.1 * shift[-1][0] and lean[20][0] < 0.1 * lean[-1][0]  # ... but late
+    for values in (shift, lean):  # ... but late: halfway a tenth of a second or more after the head moved
+        assert next(i for i, v in enumerate(values) if v[0] >= values[-1][0] / 2) - 20 >= 0.1 * FPS
     drawn = {element.tag for element in torso.iter()}
     assert f"{SVG}path" in drawn  # the garment is inside the moving group, drawn once
 

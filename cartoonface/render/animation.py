@@ -80,9 +80,9 @@ STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders sh
 # the centre by 0.04 px.
 ROLL_DECIMALS = 2
 # The body's motion (animate/body.py) is written in steps of MOTION_STEP px (the torso's and
-# the neck's shift) and of 0.1 degree (the torso's lean, TORSO_DECIMALS): finer steps would
-# add values to the transforms' lists that no one sees move.
-MOTION_STEP = 0.2
+# the neck's shift) and of 0.1 degree (the torso's lean, TORSO_DECIMALS): each change makes the
+# browser repaint the torso, so no finer than a viewer sees (a full breath, ~4 px, in ~9 steps).
+MOTION_STEP = 0.5
 TORSO_DECIMALS = 1
 
 
