@@ -84,6 +84,10 @@ ROLL_DECIMALS = 2
 # browser repaint the torso, so no finer than a viewer sees (a full breath, ~4 px, in ~9 steps).
 MOTION_STEP = 0.5
 TORSO_DECIMALS = 1
+# ... and changes at most BODY_RATE times a second (each value held over fps / BODY_RATE
+# frames): the body moves slowly, and a torso repainted in every frame of a breath cost the
+# browser's playback frames (docs/BENCHMARKS.md, "Body"); animators draw such motion on threes.
+BODY_RATE = 10
 
 
 @dataclass(frozen=True)
@@ -261,10 +265,13 @@ def _body(dressed: etree._Element, body: BodyMotion, figure: Figure, fps: int) -
     (the neck, leaned by _lean) rises with the breath; the rest, the torso, goes into a
     `<g class="torso">` shifted (breath, turn) by one translation, inside it a group leaned
     about scenery's torso_pivot by one rotation, each a discrete `<animateTransform>` (_steps)
-    in MOTION_STEP / 0.1 degree steps. A motion that never moves adds nothing."""
-    dx, dy, neck_dy = torso_shift(figure, body.turn, body.breath)
+    in MOTION_STEP / 0.1 degree steps, changing at most BODY_RATE times a second. A motion that
+    never moves adds nothing."""
+    hold = max(1, round(fps / BODY_RATE))
+    held = np.arange(len(body.breath)) // hold * hold  # the frame whose value each frame shows
+    dx, dy, neck_dy = (values[held] for values in torso_shift(figure, body.turn, body.breath))
     torso = list(dressed)[1:]
-    angles = np.round(np.asarray(body.roll) * 10 ** TORSO_DECIMALS).astype(int).tolist()
+    angles = np.round(np.asarray(body.roll)[held] * 10 ** TORSO_DECIMALS).astype(int).tolist()
     keys, text, moving = _shifts(dx, dy)
     outer = None
     if torso and any(angles):
