@@ -8,13 +8,16 @@ newsroom, suit, female sample face, seed 0.
 - animation.svg bytes per minute of audio (raw) per style, with the body's motion and with a
   still body (`pipeline.body_motion` replaced by one that never moves: the drawing is the same);
 - Chromium playback of the 1-minute page with and without the motion, interleaved RUNS times:
-  requestAnimationFrame callbacks a second over PLAY_MS of play, frames over 50 ms, and the
-  main thread's busy share (DevTools Performance.getMetrics TaskDuration per second of play).
+  requestAnimationFrame callbacks a second over PLAY_MS of play, frames over 50 ms, the
+  main thread's busy share (DevTools Performance.getMetrics TaskDuration per second of play)
+  and the CPU time of the browser's processes per animation frame (from /proc; the wall-time
+  figures swing with the machine's load, the CPU time much less).
 """
 
 from __future__ import annotations
 
 import json
+import os
 import statistics
 import tempfile
 from pathlib import Path
@@ -37,6 +40,33 @@ MEASURE = """ms => new Promise(done => { const a = document.getElementById('cf-a
   requestAnimationFrame(tick); })"""
 
 
+def _cpu_seconds() -> float:
+    """CPU seconds (user + system) used so far by this process's descendants (the Playwright driver
+    and Chromium's processes), from /proc: less sensitive than wall time to a busy machine."""
+    parents, times = {}, {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", encoding="ascii", errors="replace") as handle:
+                fields = handle.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parents[int(entry)] = int(fields[1])  # fields after the name: state, ppid, ..., utime (12th), stime (13th)
+        times[int(entry)] = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    mine, total = {os.getpid()}, 0.0
+    changed = True
+    while changed:
+        changed = False
+        for pid, parent in parents.items():
+            if parent in mine and pid not in mine:
+                mine.add(pid)
+                changed = True
+    for pid in mine - {os.getpid()}:
+        total += times[pid]
+    return total
+
+
 def _still(states, breaths, fps) -> BodyMotion:
     """A body that never moves (the same drawing, no transforms)."""
     return BodyMotion(*(np.zeros(len(states)) for _ in range(3)))
@@ -56,11 +86,12 @@ def _sites(folder: Path, audio: Path, transcript: Path, style: str) -> tuple[Pat
     return moving, still
 
 
-def _playback(sites: dict[str, Path]) -> dict[str, list[tuple[float, int, float]]]:
-    """(rAF per second, frames over SLOW_FRAME_MS, main-thread busy share) per run of each site's page."""
+def _playback(sites: dict[str, Path]) -> dict[str, list[tuple[float, int, float, float]]]:
+    """(rAF per second, frames over SLOW_FRAME_MS, main-thread busy share, CPU ms of the browser per
+    animation frame) per run of each site's page."""
     from playwright.sync_api import sync_playwright
 
-    results: dict[str, list[tuple[float, int, float]]] = {name: [] for name in sites}
+    results: dict[str, list[tuple[float, int, float, float]]] = {name: [] for name in sites}
     with sync_playwright() as play:
         browser = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
         for _ in range(RUNS):
@@ -70,11 +101,14 @@ def _playback(sites: dict[str, Path]) -> dict[str, list[tuple[float, int, float]
                 cdp = page.context.new_cdp_session(page)
                 cdp.send("Performance.enable")
                 before = {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
+                cpu = _cpu_seconds()
                 times = np.array(page.evaluate(MEASURE, PLAY_MS))
+                cpu = _cpu_seconds() - cpu
                 after = {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
                 seconds = (times[-1] - times[0]) / 1000
                 results[name].append((len(times) / seconds, int((np.diff(times) > SLOW_FRAME_MS).sum()),
-                                      (after["TaskDuration"] - before["TaskDuration"]) / seconds))
+                                      (after["TaskDuration"] - before["TaskDuration"]) / seconds,
+                                      cpu * 1000 / len(times)))
                 page.close()
         browser.close()
     return results
@@ -102,7 +136,8 @@ def main() -> None:
         moving, still = _sites(folder / "short", short_audio, short_text, "announcer")
         results = _playback({"moving": moving, "still": still})
         for name, runs in results.items():
-            print(f"Chromium, {short:.0f} s page, body {name}: rAF {statistics.median(r for r, _, _ in runs):.1f}/s "
-                  f"(runs {', '.join(f'{r:.1f}' for r, _, _ in runs)}), frames over {SLOW_FRAME_MS} ms "
-                  f"{', '.join(str(d) for _, d, _ in runs)}, main thread busy {statistics.median(b for _, _, b in runs):.2f} "
-                  f"(runs {', '.join(f'{b:.2f}' for _, _, b in runs)}) of {RUNS} interleaved runs")
+            rates, slow, busy, cpu = zip(*runs, strict=True)
+            print(f"Chromium, {short:.0f} s page, body {name}, {RUNS} interleaved runs: rAF median {statistics.median(rates):.1f}/s "
+                  f"({', '.join(f'{r:.1f}' for r in rates)}), frames over {SLOW_FRAME_MS} ms {', '.join(map(str, slow))}, "
+                  f"main thread busy median {statistics.median(busy):.2f} ({', '.join(f'{b:.2f}' for b in busy)}), "
+                  f"browser CPU per frame median {statistics.median(cpu):.1f} ms ({', '.join(f'{c:.1f}' for c in cpu)})")
