@@ -151,3 +151,11 @@ def test_a_generated_announcer_breathes_and_its_breaths_are_editable(tmp_path):
     layer = _layer(etree.fromstring((edited / "animation.svg").read_bytes()), "clothes")
     shifts = layer.findall(f".//{SVG}animateTransform[@type='translate']")
     assert all(float(v.split()[1]) == 0 for shift in shifts for v in shift.get("values").split(";"))  # no breathing
+
+
+def test_a_desk_below_the_picture_is_left_out(face):
+    from cartoonface.render.svg import face_svg
+
+    portrait = face_svg(face, FaceState(), background="newsroom", clothes="suit")  # the canvas ends above the desk
+    assert _layer(portrait, "desk") is None
+    assert _layer(portrait, "clothes") is not None

@@ -350,14 +350,15 @@ def _classroom(layer: etree._Element, box: tuple[float, float, float, float], de
 def desk_layer(background: str, figure: Figure, defs: etree._Element) -> etree._Element | None:
     """The news desk in front of the body as a `<g id="desk">` for the "newsroom" background
     (None for the others): a lit top edge DESK_DROP fw below the shoulder line across
-    DESK_SPAN of the picture, its front with an accent line and a logo plate."""
-    if background != "newsroom":
-        return None
+    DESK_SPAN of the picture, its front with an accent line and a logo plate; None when that
+    is below the picture."""
     x, y, w, h = figure.box
     top = neck_pivot(figure) + figure.face_width * DESK_DROP
+    if background != "newsroom" or top >= y + h:  # none, or below the picture (a portrait's)
+        return None
     left, right = x + w * DESK_SPAN[0], x + w * DESK_SPAN[1]
     layer = element(None, "g", id="desk")
-    element(layer, "rect", x=left, y=top + h * DESK_EDGE, width=right - left, height=max(y + h - top, 0.0),
+    element(layer, "rect", x=left, y=top + h * DESK_EDGE, width=right - left, height=y + h - top,
             fill=_gradient(defs, "bg-desk"))
     element(layer, "rect", x=left, y=top, width=right - left, height=h * DESK_EDGE, rx=h * DESK_EDGE / 2,
             fill=_gradient(defs, "bg-desk-top"))
