@@ -93,7 +93,7 @@ def breath(site: Path) -> Image.Image:
             page.evaluate("t => { const s = document.documentElement; s.pauseAnimations(); s.setCurrentTime(t); }",
                           seconds)
             page.wait_for_timeout(60)
-            shot = Image.open(io.BytesIO(page.screenshot())).convert("RGB").crop([round(v) for v in box])
+            shot = Image.open(io.BytesIO(page.screenshot())).convert("RGB").crop((box[0], box[1], box[2], box[3]))
             tiles.append(shot.resize((shot.width // ZOOM, shot.height // ZOOM), Image.Resampling.LANCZOS))
         browser.close()
     font = ImageFont.truetype(FONT, FONT_SIZE)
