@@ -81,11 +81,11 @@ GLOBE = (0.5, 0.5, 0.3)  # on the first screen: centre and radius, of the screen
 GLOBE_LINE, GLOBE_OPACITY = 0.003, "0.6"  # of w
 CHART = (0.2, 0.45, 0.7, 0.35, 0.55)  # bar heights on the last screen, of the screen's height
 CHART_OPACITY = "0.6"
-# The news desk, in front of the anchor: its top DESK_DROP fw below the shoulder line, the top
-# edge DESK_EDGE h thick, DESK_SPAN of w wide; an accent line and a logo plate on its front.
-DESK_DROP, DESK_EDGE, DESK_SPAN = 0.55, 0.03, (0.06, 0.94)
+# The news desk, in front of the anchor: its top DESK_DROP fw below the shoulder line (above the
+# announcer page's caption, which then sits on the desk's front), the top edge DESK_EDGE h
+# thick, DESK_SPAN of w wide; an accent line on its front.
+DESK_DROP, DESK_EDGE, DESK_SPAN = 0.4, 0.03, (0.06, 0.94)
 DESK_ACCENT, DESK_ACCENT_LINE = 0.03, 0.004  # below the top edge, of h
-DESK_PLATE = (0.1, 0.05, 0.05)  # the logo plate: width of w, height of h, top below the edge of h
 # Studio: a paper backdrop lit behind the head, sweeping into the floor, a softbox on a stand
 # at each side.
 SPOT = (0.35, 0.55)  # radii of the light on the backdrop, of w and h, centred above the chin
@@ -350,8 +350,8 @@ def _classroom(layer: etree._Element, box: tuple[float, float, float, float], de
 def desk_layer(background: str, figure: Figure, defs: etree._Element) -> etree._Element | None:
     """The news desk in front of the body as a `<g id="desk">` for the "newsroom" background
     (None for the others): a lit top edge DESK_DROP fw below the shoulder line across
-    DESK_SPAN of the picture, its front with an accent line and a logo plate; None when that
-    is below the picture."""
+    DESK_SPAN of the picture, its front with an accent line; None when that is below the
+    picture."""
     x, y, w, h = figure.box
     top = neck_pivot(figure) + figure.face_width * DESK_DROP
     if background != "newsroom" or top >= y + h:  # none, or below the picture (a portrait's)
@@ -364,9 +364,6 @@ def desk_layer(background: str, figure: Figure, defs: etree._Element) -> etree._
             fill=_gradient(defs, "bg-desk-top"))
     element(layer, "rect", x=left, y=top + h * (DESK_EDGE + DESK_ACCENT), width=right - left, height=h * DESK_ACCENT_LINE,
             fill=COLOURS["desk accent"])
-    width, height, below = DESK_PLATE
-    element(layer, "rect", x=x + w * (0.5 - width / 2), y=top + h * (DESK_EDGE + below), width=w * width,
-            height=h * height, rx=w * CORNER, fill=COLOURS["band"])
     return layer
 
 
