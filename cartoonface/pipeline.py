@@ -18,8 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.animate.actions import actions_to_json, load_actions
-from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedule, speech_pauses, speech_spans
-from cartoonface.animate.frames import FPS_RANGE, sample_frames
+from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedule, silences_of, speech_pauses, speech_spans
+from cartoonface.animate.body import body_motion
+from cartoonface.animate.frames import FPS_RANGE, sample_breaths, sample_frames
 from cartoonface.animate.idle import with_sway
 from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import PAGE_STYLES, STYLES
@@ -190,7 +191,8 @@ def generate(
         actions = load_actions(options.actions, duration)
     else:
         actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
-                           peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment))
+                           peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment),
+                           breath_pauses=silences_of(alignment))
         spans = marked_spans(alignment, marks)
         if spans is None:
             alignment = dataclasses.replace(alignment, notes=alignment.notes + (
@@ -198,11 +200,12 @@ def generate(
         default = None if options.emotion is None else (options.emotion, options.intensity)
         actions += emotion_actions(spans or (), duration, default)
     report("frames")
-    states = sample_frames(build_timeline(alignment, actions), options.fps)
-    states = with_sway(states, options.fps, options.seed, style.sway_peak)
+    timeline = build_timeline(alignment, actions)
+    states = with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak)
+    body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
     report("svg")
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
-                        wide=options.page == "announcer", title=options.title,
+                        wide=options.page == "announcer", title=options.title, body=body,
                         progress=lambda done: report("svg", done))
     report("pages")
     try:

@@ -85,7 +85,7 @@ def test_key_frames_are_integer_ms_in_order():
         assert all(isinstance(t, int) for t in times)
         assert times == sorted(times) and times[0] == 0 and times[-1] <= timeline.duration
     assert {t.name for t in timeline.tracks} == {"mouth", "blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v",
-                                                 "smile", "lips", *(f"emotion:{name}" for name in EMOTIONS)}
+                                                 "smile", "lips", "breath", *(f"emotion:{name}" for name in EMOTIONS)}
 
 
 def test_blink_and_brow_envelopes():

@@ -27,8 +27,11 @@ Kinds and what they drive (Pose is (tilt, turn, roll) about X, Y, Z):
   a default mood), `schedule` draws none. Emotions of different names may
   overlap (one fades into the next); `adapt_to_emotions` thins the blinks and
   scales the brow raises and smiles drawn during one (EMOTION_ADAPT).
+- ``breath``: an inhalation in a pause (over `attack`) and the slow fall of the chest
+  while the next words are spoken (over `release`); `amplitude` is its depth 0..1
+  (render/scenery.py: how far the shoulders rise).
 
-Envelope kinds (blink, brow, nod, smile) rise from 0 to `amplitude` over `attack`
+Envelope kinds (blink, brow, nod, smile, emotion, breath) rise from 0 to `amplitude` over `attack`
 seconds, hold, and fall back to 0 over `release` seconds, all inside
 `duration`. Amplitudes are docs/animation.md's announcer-like choices; a
 `Style` (style.py) scales them and adds the performer's behaviour on the voice:
@@ -48,8 +51,8 @@ from cartoonface.animate.style import ANNOUNCER, Style
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.state import MAX_ANGLE  # degrees: the pose limit of the face model, also the gaze limit
 
-KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile", "emotion")
-ENVELOPE_KINDS = ("blink", "brow", "nod", "smile", "emotion")
+KINDS = ("blink", "brow", "tilt", "turn", "nod", "gaze_h", "gaze_v", "smile", "emotion", "breath")
+ENVELOPE_KINDS = ("blink", "brow", "nod", "smile", "emotion", "breath")
 ANGLE_KINDS = ("tilt", "turn", "nod", "gaze_h", "gaze_v")
 
 # Blinks: intervals Gamma(alpha=2, theta=1.48 s), thesis 002, section 4.3 (Lin and Tsai [3]).
@@ -109,6 +112,25 @@ SMILE_ATTACK = (0.3, 0.5)  # seconds
 SMILE_HOLD = (0.5, 1.5)  # seconds
 SMILE_RELEASE = (0.4, 0.7)  # seconds
 SMILE_GAP = 4.0  # seconds: at least this long between two smiles
+
+# Breaths (docs/animation.md "Breathing"). Readers breathe at grammatical boundaries, at
+# consistent places from one reading to the next (Winkworth, Davis, Ellis and Adams 1994,
+# "Variability and consistency in speech breathing during reading", JSHR 37:535-556), so a
+# breath is taken in every pause between sentences long enough for one, and in the silence
+# before the first sentence. A speech inhalation is quick and the air goes out slowly over
+# the words that follow (Hixon, Goldman and Mead 1973, "Kinematics of the chest wall during
+# speech production", JSHR 16:78-115); it is longer and deeper before a longer utterance
+# (Whalen and Kinsella-Shaw 1997, Phonetica 54:138-152; Winkworth et al. 1994).
+BREATH_PAUSE = 0.25  # seconds: the shortest silence that holds an inhalation (our choice)
+BREATH_INHALE = (0.30, 0.60)  # seconds an inhalation takes, cut to the pause (our choice)
+BREATH_LEAD = 0.05  # seconds: the inhalation ends this long before the speech resumes
+BREATH_INTERVAL = 2.0  # seconds: a pause this soon after the last breath's is spoken through (our choice)
+BREATH_EXHALE = 6.0  # seconds: at most this long for the chest to sink back over the words
+BREATH_FULL = 6.0  # seconds of speech after a breath that make it a full one (depth 1)
+BREATH_DEPTH = (0.4, 1.0)  # depth before a short / a long utterance, in between by its length
+BREATH_JITTER = 0.1  # depths drawn up to this much below the length's depth
+# A child of the seed no other random stream uses: schedule uses 0-7, idle.py's sway 8.
+BREATH_STREAM = 16
 
 
 # How an emotion at intensity 1 changes the drawn behaviour (our choice, after the
@@ -189,6 +211,7 @@ def schedule(
     style: Style = ANNOUNCER,
     peaks: Sequence[float] = (),
     speech: Sequence[tuple[float, float]] | None = None,
+    breath_pauses: Sequence[tuple[float, float]] | None = None,
 ) -> tuple[Action, ...]:
     """Draw the behaviour of a face talking for `duration` seconds.
 
@@ -200,6 +223,9 @@ def schedule(
     `peaks`: seconds of pitch peaks (prosody.py): brow raises move onto them,
     and the style's share of them gets a beat nod. `speech`: (start, end) of the
     sentences (default: the stretches between `pauses`), for gaze and smiles.
+    `breath_pauses`: (start, end) of the silences a breath may be taken in
+    (default: `pauses`; the pipeline gives silences_of(alignment), the pauses
+    inside sentences too).
     Returns every action sorted by start, all inside [0, duration]; no tilt or
     turn overlaps a nod; actions of one kind never overlap.
     """
@@ -223,8 +249,14 @@ def schedule(
         *nods,
         *_gaze(saccades(spans, pauses, gaze_rng, style, head_moves), duration),
         *_smiles(duration, spans, smile_rng, style.smile_share),
+        *_breaths(duration, pauses if breath_pauses is None else breath_pauses, spans, _stream(seed, BREATH_STREAM)),
     )
     return tuple(sorted(actions, key=lambda a: (a.start, KINDS.index(a.kind))))
+
+
+def _stream(seed: int, child: int) -> np.random.Generator:
+    """The random stream number `child` of `seed` (a PCG64 of SeedSequence(seed)'s child)."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed).spawn(child + 1)[child]))
 
 
 def _gaze(shifts: Sequence[Saccade], duration: float) -> list[Action]:
@@ -263,6 +295,17 @@ def speech_pauses(alignment) -> tuple[tuple[float, float], ...]:
     ends = [s.end for s in sentences]
     starts = [s.start for s in sentences[1:]] + [alignment.duration]
     return tuple((end, nxt) for end, nxt in zip(ends, starts, strict=True) if nxt > end)
+
+
+def silences_of(alignment, shortest: float = BREATH_PAUSE) -> tuple[tuple[float, float], ...]:
+    """(start, end) seconds of every silence of at least `shortest` s between two syllables of an
+    Alignment (inside sentences and between them) and after the last one: where a reader may
+    breathe (Winkworth et al. 1994: at grammatical boundaries, which the pauses of read
+    speech mark)."""
+    syllables = sorted((s for sentence in alignment.sentences for s in sentence.syllables), key=lambda s: s.start)
+    ends = [s.end for s in syllables]
+    starts = [s.start for s in syllables[1:]] + [alignment.duration]
+    return tuple((end, nxt) for end, nxt in zip(ends, starts, strict=True) if nxt - end >= shortest)
 
 
 def blink_interval(rng: np.random.Generator) -> float:
@@ -523,3 +566,39 @@ def _ramp(length: float) -> float:
     """The ease of a default mood's stretch of `length` s next to its own emotion: EMOTION_EASE
     or a third of the stretch, whichever is shorter (ms)."""
     return _round_to_ms(min(EMOTION_EASE, max(length, 0.0) / 3))
+
+
+def _breaths(
+    duration: float,
+    pauses: Sequence[tuple[float, float]],
+    speech: Sequence[tuple[float, float]],
+    rng: np.random.Generator,
+) -> list[Action]:
+    """A breath in the silence before the first of `speech` (sentence (start, end) seconds)
+    and in each of `pauses` (start, end) of at least BREATH_PAUSE s that speech follows and
+    that ends BREATH_INTERVAL s or more after the last silence breathed in.
+
+    The inhalation (attack, BREATH_INHALE, cut to the silence) ends BREATH_LEAD s before the
+    speech resumes; the exhalation (release) lasts over the words up to the next breath's
+    silence, at most BREATH_EXHALE s; the depth grows with that stretch of speech (BREATH_DEPTH up to
+    BREATH_FULL s of it). So breaths never overlap and stay inside [0, duration].
+    """
+    first = min((start for start, _ in speech), default=duration)
+    chosen: list[tuple[float, float]] = []
+    for begin, end in sorted([(0.0, first)] + [pause for pause in pauses if pause[1] < duration]):
+        if end - begin >= BREATH_PAUSE and (not chosen or end - chosen[-1][1] >= BREATH_INTERVAL):
+            chosen.append((begin, end))
+    breaths: list[Action] = []
+    for (begin, end), after in zip(chosen, [*chosen[1:], (duration, duration)]):
+        inhale_end = _round_to_ms(end - BREATH_LEAD)
+        start = math.ceil(max(inhale_end - _uniform2(rng, BREATH_INHALE), begin) * 1000) / 1000
+        # whole ms, a ms before the next breath's silence (or the end): breaths never touch
+        exhale_end = (math.floor(min(after[0], inhale_end + BREATH_EXHALE) * 1000) - 1) / 1000
+        talk = after[0] - end
+        if talk <= 0 or start >= inhale_end or (breaths and start < breaths[-1].end):
+            continue
+        inhale, exhale = _round_to_ms(inhale_end - start), _round_to_ms(exhale_end - inhale_end)
+        low, high = BREATH_DEPTH
+        depth = low + (high - low) * min(talk / BREATH_FULL, 1.0) - float(rng.uniform(0.0, BREATH_JITTER))
+        breaths.append(Action("breath", start, _round_to_ms(exhale_end - start), round(max(depth, 0.0), 2), inhale, exhale))
+    return breaths

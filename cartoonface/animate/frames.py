@@ -84,6 +84,17 @@ def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float]
             for column in zip(*amounts, strict=True)] if names else [()] * len(t)
 
 
+def breaths_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> np.ndarray:
+    """(n,) depth of the breath 0..1 (to 0.01) at each of `times` ((n,) seconds): the body's
+    track, beside the face's states (animate/body.py)."""
+    return _amount(timeline.track("breath"), np.asarray(times, dtype=float) * 1000.0)
+
+
+def sample_breaths(timeline: Timeline, fps: int) -> np.ndarray:
+    """(n,) depth of the breath at each frame of sample_frames(timeline, fps) (frame i at i / fps s)."""
+    return breaths_at(timeline, np.arange(-(-timeline.duration * int(fps) // 1000)) / fps)
+
+
 def _segments(track: Track, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For times `t` (ms): index of the key before, index of the key after, eased share 0..1.
 

@@ -17,6 +17,7 @@ them. Tracks:
   behaviour to them).
 - ``lips``: gamma of seed 000 eq. 18, the share of the emotions' lip
   displacement shown: 1 at rest, LIPS_SPEAKING while a sentence is spoken.
+- ``breath``: depth of the breath 0..1 (the chest and shoulders; frames.breaths_at).
 """
 
 from __future__ import annotations
@@ -65,6 +66,7 @@ LIPS_EASE_MS = 200
 MOUTH_EASING = "smoothstep"
 AMOUNT_EASING = "smoothstep"
 ANGLE_EASING = "cosine"
+BREATH_EASING = "smoothstep"  # the chest eases in and out of each inhalation like the amounts
 
 
 @dataclass(frozen=True)
@@ -113,8 +115,8 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
 
     Returns a Timeline of alignment.duration (rounded to ms) with the tracks
     mouth, blink, brow, tilt, turn, nod, gaze_h, gaze_v, smile, emotion:NAME for
-    each emotion and lips. The blinks, brow raises and smiles are first fitted to
-    the emotions (behaviour.adapt_to_emotions).
+    each emotion, lips and breath. The blinks, brow raises and smiles are first
+    fitted to the emotions (behaviour.adapt_to_emotions).
     """
     duration = round(alignment.duration * 1000)
     syllables = sorted((syl for sentence in alignment.sentences for syl in sentence.syllables), key=lambda s: s.start)
@@ -137,6 +139,7 @@ def build_timeline(alignment, actions: Sequence[Action]) -> Timeline:
             Track("smile", envelope_keys(by_kind["smile"]), AMOUNT_EASING),
             *feelings,
             Track("lips", lips_keys([(s.start, s.end) for s in alignment.sentences]), AMOUNT_EASING),
+            Track("breath", envelope_keys(by_kind["breath"]), BREATH_EASING),
         ),
     )
 

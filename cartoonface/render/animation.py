@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
+from cartoonface.animate.body import BodyMotion
 from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll, unrolled
@@ -56,7 +57,8 @@ from cartoonface.face.state import FaceState
 from cartoonface.render.compact import Writer, share
 from cartoonface.render.elements import DECIMALS, element, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.scenery import LEAN_DECIMALS, background_layer, clothes_layer, figure_of, lean, neck_pivot
+from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
+                                        neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import face_defs, face_group
 
 # The track of each part of render/svg.py's face_group (by its class), in drawing order.
@@ -89,6 +91,15 @@ DRAWN_SHARE = 0.55
 TIDIED_SHARE = 0.88
 SHARED_SHARE = 0.9
 TRACKED_SHARE = 0.96
+# The body's motion (animate/body.py) is written in steps of MOTION_STEP px (the torso's and
+# the neck's shift) and of 0.1 degree (the torso's lean, TORSO_DECIMALS): each change makes the
+# browser repaint the torso, so no finer than a viewer sees (a full breath, ~4 px, in ~9 steps).
+MOTION_STEP = 0.5
+TORSO_DECIMALS = 1
+# ... and changes at most BODY_RATE times a second (each value held over fps / BODY_RATE
+# frames): the body moves slowly, and a torso repainted in every frame of a breath cost the
+# browser's playback frames (docs/BENCHMARKS.md, "Body"); animators draw such motion on threes.
+BODY_RATE = 10
 
 
 @dataclass(frozen=True)
@@ -235,15 +246,71 @@ def _lean(neck: etree._Element, leans: Sequence[int], fps: int, pivot: float) ->
     neck.set("transform", f"translate(0 -{at})")
 
 
+def _shifts(dx: Sequence[float] | np.ndarray, dy: Sequence[float] | np.ndarray) -> tuple[list[int], Callable[[int], str], bool]:
+    """Per-frame shifts (`dx`, `dy` pixels) in MOTION_STEP steps as numbers of distinct shifts
+    (keys for _steps), the translate value of each number, and whether any frame is shifted."""
+    steps_x, steps_y = (np.round(np.asarray(v, dtype=float) / MOTION_STEP).astype(int).tolist() for v in (dx, dy))
+    pairs = list(zip(steps_x, steps_y, strict=True))
+    distinct = list(dict.fromkeys(pairs))
+    number = {pair: index for index, pair in enumerate(distinct)}
+
+    def text(key: int) -> str:
+        x, y = distinct[key]
+        return f"{decimal_text(x * MOTION_STEP, DECIMALS)} {decimal_text(y * MOTION_STEP, DECIMALS)}"
+
+    return [number[pair] for pair in pairs], text, distinct != [(0, 0)]
+
+
+def _move(parts: Sequence[etree._Element], keys: Sequence[int], fps: int, kind: str,
+          value: Callable[[int], str]) -> etree._Element:
+    """Wrap `parts` (consecutive children of one parent) in a `<g>` moved by a discrete
+    `<animateTransform>` of `kind` (_steps of `keys` and `value`); return the group."""
+    holder = element(None, "g")
+    parts[0].addprevious(holder)
+    holder.append(_steps(keys, fps, kind, value))
+    holder.extend(parts)
+    return holder
+
+
+def _body(dressed: etree._Element, body: BodyMotion, figure: Figure, fps: int) -> None:
+    """Move the clothes layer `dressed` with the `body` (one value per frame): its first child
+    (the neck, leaned by _lean) rises with the breath; the rest, the torso, goes into a
+    `<g class="torso">` shifted (breath, turn) by one translation, inside it a group leaned
+    about scenery's torso_pivot by one rotation, each a discrete `<animateTransform>` (_steps)
+    in MOTION_STEP / 0.1 degree steps, changing at most BODY_RATE times a second. A motion that
+    never moves adds nothing."""
+    hold = max(1, round(fps / BODY_RATE))
+    held = np.arange(len(body.breath)) // hold * hold  # the frame whose value each frame shows
+    dx, dy, neck_dy = (values[held] for values in torso_shift(figure, body.turn, body.breath))
+    torso = list(dressed)[1:]
+    angles = np.round(np.asarray(body.roll)[held] * 10 ** TORSO_DECIMALS).astype(int).tolist()
+    keys, text, moving = _shifts(dx, dy)
+    outer = None
+    if torso and any(angles):
+        x, y = torso_pivot(figure)
+        centre = f"{decimal_text(x, DECIMALS)} {decimal_text(y, DECIMALS)}"
+        outer = _move(torso, angles, fps, "rotate",
+                      lambda angle: f"{decimal_text(-angle / 10 ** TORSO_DECIMALS, TORSO_DECIMALS)} {centre}")
+    if torso and moving:
+        outer = _move([outer] if outer is not None else torso, keys, fps, "translate", text)
+    if outer is not None:
+        outer.set("class", "torso")
+    keys, text, moving = _shifts([0.0] * len(neck_dy), neck_dy)
+    if moving:
+        _move([dressed[0]], keys, fps, "translate", text)
+
+
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
-                  progress: Callable[[float], None] | None = None) -> bytes:
+                  body: BodyMotion | None = None, progress: Callable[[float], None] | None = None) -> bytes:
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
     `wide` makes the picture a 16:9 stage around the face, deep enough for the shoulders
     (the announcer's);
-    `title` becomes the document's <title> (escaped like every text by lxml).
+    `title` becomes the document's <title> (escaped like every text by lxml);
+    `body` (animate/body.py, one value per state) moves the clothes layer: the shoulders
+    follow the head and breathe (None: a still body).
     The root is `<svg id="cf-face">`; each track is a `<g data-part="...">`;
     mouth frames carry `data-shape`, the dominant basic mouth shape they show.
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
@@ -297,7 +364,12 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     hair = element(root, "g", id="hair")
     dressed = clothes_layer(clothes, figure, defs)
     _lean(dressed[0], leans, fps, neck_pivot(figure))
+    if body is not None:
+        _body(dressed, body, figure, fps)
     root.append(dressed)
+    desk = desk_layer(background, figure, defs)
+    if desk is not None:
+        root.append(desk)
     layer = element(root, "g", id="face")
     for number, (name, track) in enumerate(tracks.items(), 1):
         _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)

@@ -39,7 +39,7 @@ from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
-                                        figure_of, lean, lean_transform, neck_middle)
+                                        desk_layer, figure_of, lean, lean_transform, neck_middle)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -275,8 +275,8 @@ def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: s
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
     """`face` in `state` as a whole SVG document root, canvas-sized, with the layers
-    `<g id="background">`, `<g id="hair">`, `<g id="clothes">` and `<g id="face">` in that order;
-    the clothes layer's neck leans to stay under the posed chin (render/scenery.py's lean).
+    `<g id="background">`, `<g id="hair">`, `<g id="clothes">`, `<g id="desk">` (newsroom only) and
+    `<g id="face">` in that order; the clothes layer's neck leans to stay under the posed chin (render/scenery.py's lean).
 
     `background` / `clothes` name the scenery of render/scenery.py (OptionError if unknown).
     """
@@ -294,6 +294,9 @@ def face_svg(face: FaceModel, state: FaceState, background: str = "plain", cloth
     dressed = clothes_layer(clothes, figure, defs)
     dressed[0].set("transform", lean_transform(figure, leaning))  # the neck leans with the head
     root.append(dressed)
+    desk = desk_layer(background, figure, defs)  # the newsroom's desk, in front of the body
+    if desk is not None:
+        root.append(desk)
     group.set("id", "face")
     root.append(group)
     return root
