@@ -5,7 +5,9 @@ in that order; the face's gradients live once in `<defs>`. A part's clip path
 (the eye outline clipping the eyeball, the mouth opening clipping the teeth)
 is written just before the part, inside the same frame: its children inherit
 the frame's visibility, so the clip is whole exactly while the part is shown,
-and gzip finds the clip's outline next to the same outline drawn by the part.
+and gzip finds the clip's outline next to the same outline drawn by the part. A clip path
+that several drawings hold alike (an eye's outline under different gazes of a still head) is
+written once in the document's `<defs>` instead, where nothing hides it (render/compact.py).
 
 Temporal domain (6.3.2): the thesis shows each frame as
 `<g visibility="hidden"><set attributeName="visibility" to="visible" begin=".." dur=".."/>...</g>`.
@@ -356,6 +358,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
             by_state[state] = parts
         frames.append((state, parts))
     mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied))
+    defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)

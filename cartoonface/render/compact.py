@@ -64,6 +64,7 @@ class Writer:
         self.raw_ids: dict[bytes, int] = {}
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
+        self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
 
     def collect(self, group: etree._Element) -> tuple[int, ...]:
         """Take one face_group drawing; return the raw part numbers, in drawing order."""
@@ -85,7 +86,10 @@ class Writer:
     def finish(self, progress: Callable[[float], None] | None = None) -> tuple[list[int], list[list[etree._Element]]]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
         and the tidy drawings (each a list of elements). `progress(fraction)`, when given, is
-        told the share 0..1 of the parts tidied every PROGRESS_PARTS parts."""
+        told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. A definition that
+        several tidy drawings hold alike (an eye's clip path under different gazes) is taken out
+        of them into `self.definitions` (ids "v0", "v1", ...: for the document's `<defs>`), which
+        they refer to."""
         compact = compact_paths(_text(d) for part in self.raw
                                 for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
@@ -100,8 +104,11 @@ class Writer:
             number = tidy_ids.get(key)
             if number is None:
                 number = tidy_ids[key] = len(tidy)
-                tidy.append(_own_ids(elements, short_id("k", number)))
+                tidy.append(elements)
             mapping.append(number)
+        self.definitions = _hoist(tidy)
+        for number, elements in enumerate(tidy):
+            _own_ids(elements, short_id("k", number))
         self._short_classes(tidy)
         return mapping, tidy
 
@@ -188,6 +195,48 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
         if node.get("class"):
             use.set("class", node.get("class"))
         elements[index] = use
+
+
+def _content(definition: etree._Element) -> bytes:
+    """`definition` serialized without the ids of its nodes: equal for definitions that define alike."""
+    copy = etree.fromstring(etree.tostring(definition))
+    for node in copy.iter():
+        node.attrib.pop("id", None)
+    return etree.tostring(copy)
+
+
+def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
+    """Take the definitions that two or more of the `tidy` drawings (local ids "c0", "c0_", ...)
+    hold alike out of them, in place, pointing their references at one shared copy; return the
+    shared copies, ids "v0", "v1", ... (a clip path's only path "v0_", for its `<use>`s)."""
+    keys = [[_content(node) if node.tag in DEFINITIONS else None for node in elements] for elements in tidy]
+    counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
+    names: dict[bytes, str] = {}
+    shared: list[etree._Element] = []
+    for elements, drawing in zip(tidy, keys, strict=True):
+        local: dict[str, str] = {}
+        for node, key in zip(list(elements), drawing, strict=True):
+            if key is None or counts[key] < 2:
+                continue
+            name = names.get(key)
+            if name is None:
+                name = names[key] = short_id("v", len(names))
+                copy = etree.fromstring(key)
+                copy.set("id", name)
+                if len(copy) == 1:
+                    copy[0].set("id", name + "_")
+                shared.append(copy)
+            local[node.get("id")] = name
+            elements.remove(node)
+        if local:
+            for top in elements:
+                for node in top.iter():
+                    for attribute, value in node.attrib.items():
+                        if value.startswith("url(#") and value[5:-1] in local:
+                            node.set(attribute, f"url(#{local[value[5:-1]]})")
+                        elif attribute == "href" and value.endswith("_") and value[1:-1] in local:
+                            node.set(attribute, f"#{local[value[1:-1]]}_")
+    return shared
 
 
 def _letters(number: int) -> str:
