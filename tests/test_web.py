@@ -26,7 +26,7 @@ from cartoonface.web import create_app
 from cartoonface.web.inputs import MAX_PHOTO_BYTES
 from cartoonface.web.runner import STOPPED, QueueFull, Runner
 from cartoonface.web.views import stage_label
-from cartoonface.web.worker import JobLimits
+from cartoonface.web.worker import JobLimits, out_of_memory
 from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, FILE_MODE, FOLDER_MODE, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, space_problem, valid_id,
@@ -709,6 +709,20 @@ def test_a_job_over_its_memory_limit_fails_alone_with_a_clear_message(tmp_path, 
     assert status.state == FAILED
     assert status.error == JobLimits(300 << 20, 600).memory_message()
     assert "0.293 GB of memory" in status.error
+
+
+def test_a_library_error_from_a_failed_allocation_counts_as_out_of_memory():
+    def chained(inner: BaseException, outer: Exception) -> Exception:
+        try:
+            raise outer from inner
+        except Exception as exc:
+            return exc
+
+    assert out_of_memory(MemoryError())
+    assert out_of_memory(RuntimeError("std::bad_alloc"))  # parselmouth's C++ allocation failure
+    assert out_of_memory(chained(MemoryError(), ValueError("could not read the recording")))
+    assert not out_of_memory(ValueError("could not read the recording"))
+    assert not out_of_memory(chained(KeyError("x"), RuntimeError("a bug")))
 
 
 def test_the_queue_is_capped_and_tells_a_waiting_job_its_place(tmp_path, speech):

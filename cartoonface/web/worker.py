@@ -206,27 +206,49 @@ def _stage(folder: Path) -> str:
 def main(folder: Path, server_alive: Callable[[], bool], limits: JobLimits | None = None) -> int:
     """Run the job in `folder` (under `limits`, for the messages, when given); return the exit
     code: 0 once the status is final, 3 when the server went away, 4 when the job hit a limit
-    of `limits`, 1 after an internal error (traceback on stderr)."""
+    of `limits`, 1 after an internal error (traceback on stderr). The failed status is written
+    after the except clause, when the traceback's frames (and the job's arrays) are freed: at
+    the memory limit there would be no room to write it inside."""
     try:
         run_job(folder, server_alive)
+        return 0
     except Orphaned:
         print("worker: the server went away; stopping", file=sys.stderr)
         return 3
     except (MemoryError, OverCpu) as exc:
         if limits is None:
             raise
-        message = limits.memory_message() if isinstance(exc, MemoryError) else limits.cpu_message()
-        print(f"worker: {message}", file=sys.stderr)
-        write_status(folder, Status(state=FAILED, stage=_stage(folder), updated=time.time(), error=message))
-        return 4
-    except Exception:  # a bug: keep the details for the log, tell the user briefly
-        traceback.print_exc()
-        stage = _stage(folder)
-        write_status(folder, Status(state=FAILED, stage=stage, updated=time.time(),
-                                    error=f"Internal error while generating (stage {stage or 'start'}); "
-                                          "the job's worker.log on the server has the details."))
-        return 1
-    return 0
+        message, code = (limits.memory_message() if isinstance(exc, MemoryError) else limits.cpu_message()), 4
+    except Exception as exc:  # a bug, or a library's own error for a failed allocation
+        if limits is not None and out_of_memory(exc):
+            message, code = limits.memory_message(), 4
+        else:  # a bug: keep the details for the log, tell the user briefly
+            traceback.print_exc()
+            message, code = "", 1
+    stage = _stage(folder)
+    message = message or (f"Internal error while generating (stage {stage or 'start'}); "
+                          "the job's worker.log on the server has the details.")
+    print(f"worker: {message}", file=sys.stderr)
+    write_status(folder, Status(state=FAILED, stage=stage, updated=time.time(), error=message))
+    return code
+
+
+# What libraries say instead of raising MemoryError when an allocation fails (C++ std::bad_alloc
+# through parselmouth, errno ENOMEM through the OS, ...).
+OUT_OF_MEMORY_WORDS = ("bad_alloc", "cannot allocate memory", "out of memory", "memoryerror")
+
+
+def out_of_memory(exc: BaseException) -> bool:
+    """Whether `exc`, or an exception it was raised from or while handling, is a failed
+    allocation: a MemoryError, or a message of OUT_OF_MEMORY_WORDS."""
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        if isinstance(current, MemoryError) or any(word in str(current).lower() for word in OUT_OF_MEMORY_WORDS):
+            return True
+        current = current.__cause__ or current.__context__
+    return False
 
 
 def forked_main(folder: str, limits: JobLimits | None = None, given_up: str | None = None) -> None:
