@@ -219,9 +219,11 @@ def main(folder: Path, server_alive: Callable[[], bool], limits: JobLimits | Non
         if limits is None:
             raise
         message, code = (limits.memory_message() if isinstance(exc, MemoryError) else limits.cpu_message()), 4
-    except Exception as exc:  # a bug, or a library's own error for a failed allocation
+    except Exception as exc:  # a bug, or a library's own error for a failed allocation or the CPU limit
         if limits is not None and out_of_memory(exc):
             message, code = limits.memory_message(), 4
+        elif limits is not None and any(isinstance(link, OverCpu) for link in _chain(exc)):
+            message, code = limits.cpu_message(), 4
         else:  # a bug: keep the details for the log, tell the user briefly
             traceback.print_exc()
             message, code = "", 1
@@ -241,14 +243,18 @@ OUT_OF_MEMORY_WORDS = ("bad_alloc", "cannot allocate memory", "out of memory", "
 def out_of_memory(exc: BaseException) -> bool:
     """Whether `exc`, or an exception it was raised from or while handling, is a failed
     allocation: a MemoryError, or a message of OUT_OF_MEMORY_WORDS."""
-    seen: set[int] = set()
+    return any(isinstance(link, MemoryError) or any(word in str(link).lower() for word in OUT_OF_MEMORY_WORDS)
+               for link in _chain(exc))
+
+
+def _chain(exc: BaseException) -> list[BaseException]:
+    """`exc` and the exceptions it was raised from or while handling, innermost last."""
+    links: list[BaseException] = []
     current: BaseException | None = exc
-    while current is not None and id(current) not in seen:
-        seen.add(id(current))
-        if isinstance(current, MemoryError) or any(word in str(current).lower() for word in OUT_OF_MEMORY_WORDS):
-            return True
+    while current is not None and all(current is not link for link in links):
+        links.append(current)
         current = current.__cause__ or current.__context__
-    return False
+    return links
 
 
 def forked_main(folder: str, limits: JobLimits | None = None, given_up: str | None = None) -> None:
