@@ -150,6 +150,14 @@ TRANSCRIPT = "你好，世界。"
 SPOKEN = "ni3 hao3, shi4 jie4."
 
 
+@pytest.fixture(scope="session")
+def spoken(tmp_path_factory: pytest.TempPathFactory) -> bytes:
+    """SPOKEN said by espeak-ng: a short Mandarin recording (WAV bytes)."""
+    path = tmp_path_factory.mktemp("spoken") / "speech.wav"
+    speak(SPOKEN, path)
+    return path.read_bytes()
+
+
 def csrf(client) -> str:
     """The CSRF token of the client's session, read from the form."""
     page = client.get("/").get_data(as_text=True)

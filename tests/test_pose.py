@@ -14,6 +14,7 @@ from cartoonface.face.lift import FRONT_NAMES, LIFTED_INDEX, LIFTED_NAMES, lift
 from cartoonface.face.model import POINT_NAMES, face_from_dict, face_to_dict, load_face
 from cartoonface.face.pose import pose_face, rotate, rotation_matrix
 from cartoonface.face.state import FaceState, Pose
+from cartoonface.render.geometry import inside
 
 # Left-right partner of every lifted point (docs/face-model.md); unlisted points lie on the midline.
 PAIRS = [
@@ -210,15 +211,6 @@ def test_eyes_keep_gazing_at_the_focus(face):
     assert np.all(turned > base)
 
 
-def _inside(point, polygon):
-    x, y = point
-    inside = False
-    for (x1, y1), (x2, y2) in zip(polygon, np.roll(polygon, -1, axis=0)):
-        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
-            inside = not inside
-    return inside
-
-
 def _distance_to_outline(point, polygon):
     a, b = polygon, np.roll(polygon, -1, axis=0)
     t = np.clip(np.einsum("ij,ij->i", point - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0, 1)
@@ -233,7 +225,7 @@ def test_irises_show_in_the_open_eyes(face, angles):
     eyes = (("3.12", "3.2", "3.8", "3.4"), ("3.7", "3.1", "3.11", "3.3"))
     for pupil, radius, names in zip(posed.pupils, posed.iris_r, eyes):
         outline = np.array([posed.p(n) for n in names])
-        assert _inside(pupil, outline) or _distance_to_outline(pupil, outline) < radius
+        assert inside(pupil, outline) or _distance_to_outline(pupil, outline) < radius
         corners = outline[[0, 2]]
         along = (pupil - corners[0]) @ (corners[1] - corners[0]) / np.sum((corners[1] - corners[0]) ** 2)
         assert 0.2 < along < 0.8
@@ -241,8 +233,8 @@ def test_irises_show_in_the_open_eyes(face, angles):
 
 def test_frontal_pupils_are_inside_the_eyes(face):
     posed = pose_face(lift(face), FaceState())
-    assert _inside(posed.pupils[0], np.array([posed.p(n) for n in ("3.12", "3.2", "3.8", "3.4")]))
-    assert _inside(posed.pupils[1], np.array([posed.p(n) for n in ("3.7", "3.1", "3.11", "3.3")]))
+    assert inside(posed.pupils[0], np.array([posed.p(n) for n in ("3.12", "3.2", "3.8", "3.4")]))
+    assert inside(posed.pupils[1], np.array([posed.p(n) for n in ("3.7", "3.1", "3.11", "3.3")]))
 
 
 def test_each_call_returns_fresh_arrays(face):

@@ -13,7 +13,7 @@ from cartoonface.face.lift import FRONT_NAMES, lift
 from cartoonface.face.model import load_face
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.geometry import FACE_CONTOUR, contour
+from cartoonface.render.geometry import FACE_CONTOUR, contour, inside
 from cartoonface.render.svg import OUTLINE
 
 ANGLES = (-15.0, -7.5, 0.0, 10.0, 15.0)
@@ -73,15 +73,6 @@ def _face_outline(posed: PosedFace) -> list[np.ndarray]:
     return out
 
 
-def _inside(point: np.ndarray, polygon: np.ndarray) -> bool:
-    x, y = point
-    inside = False
-    for (x1, y1), (x2, y2) in zip(polygon, np.roll(polygon, -1, axis=0)):
-        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
-            inside = not inside
-    return inside
-
-
 def test_jaw_is_a_smooth_convex_curve(posed_grid):
     """From the right temple down round the chin to the left temple the drawn contour lies
     on its convex hull, within the width of the outline drawn over it (no dent a viewer can
@@ -118,7 +109,7 @@ def test_far_ear_goes_behind_the_cheek(posed_grid):
             continue
         outline = np.concatenate([arc[:-1] for arc in _face_outline(posed)])
         for name in ("10.1", "10.7") if pose.turn > 0 else ("10.2", "10.8"):
-            assert _inside(posed.p(name), outline), (pose, name)
+            assert inside(posed.p(name), outline), (pose, name)
 
 
 def test_far_half_of_the_face_is_narrower(posed_grid):
@@ -146,7 +137,7 @@ def test_nose_stays_between_the_eyes_and_above_the_mouth(posed_grid):
         assert left_eye < tip @ right < right_eye, pose
         eyes = _height(posed, posed.pupils.mean(axis=0))
         assert 0 < _height(posed, tip) < eyes, pose
-        assert _inside(tip, np.concatenate([arc[:-1] for arc in _face_outline(posed)])), pose
+        assert inside(tip, np.concatenate([arc[:-1] for arc in _face_outline(posed)])), pose
 
 
 def test_hair_covers_the_top_of_the_head(posed_grid):
@@ -159,7 +150,7 @@ def test_hair_covers_the_top_of_the_head(posed_grid):
     for pose, _mouth, posed in grid:
         polygon = np.vstack([posed.front[crown], posed.p("11.3")[None], posed.front[hairline], posed.p("11.2")[None]])
         for name in ("11.2a", "11.1", "11.3a"):
-            assert _inside(posed.p(name), polygon), (pose, name)
+            assert inside(posed.p(name), polygon), (pose, name)
         up, _, _ = _axes(posed)
         above = np.max((np.vstack([posed.hair, posed.front]) - posed.p("11.1")) @ up)
         assert above > 0.1 * face.fapu.d, pose

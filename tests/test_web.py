@@ -31,7 +31,7 @@ from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, FILE_MODE, FOLDER_MODE, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, space_problem, valid_id,
                                    write_status)
-from tests.conftest import ROOT, SPOKEN, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli, speak
+from tests.conftest import ROOT, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli
 from tests.synthetic import wav_bytes
 
 SAMPLES = ROOT / "samples" / "faces"
@@ -39,11 +39,9 @@ XSS = "<script>alert('x')</script>"
 
 
 @pytest.fixture(scope="module")
-def speech(tmp_path_factory: pytest.TempPathFactory) -> bytes:
-    """A short Mandarin recording made with espeak-ng (WAV bytes)."""
-    path = tmp_path_factory.mktemp("speech") / "speech.wav"
-    speak(SPOKEN, path)
-    return path.read_bytes()
+def speech(spoken: bytes) -> bytes:
+    """A short Mandarin recording (WAV bytes): conftest's `spoken`."""
+    return spoken
 
 
 @pytest.fixture(scope="module")

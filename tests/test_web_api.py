@@ -11,7 +11,7 @@ import zipfile
 import pytest
 
 from cartoonface.web.api import owner_of
-from tests.conftest import ROOT, SPOKEN, TRANSCRIPT, make_app, speak
+from tests.conftest import ROOT, TRANSCRIPT, make_app
 
 SAMPLES = ROOT / "samples" / "faces"
 TOKEN = "test-token-0123456789abcdef"
@@ -20,10 +20,9 @@ TITLE = "API <book> & co"
 
 
 @pytest.fixture(scope="module")
-def speech(tmp_path_factory: pytest.TempPathFactory) -> bytes:
-    path = tmp_path_factory.mktemp("speech") / "speech.wav"
-    speak(SPOKEN, path)
-    return path.read_bytes()
+def speech(spoken: bytes) -> bytes:
+    """A short Mandarin recording (WAV bytes): conftest's `spoken`."""
+    return spoken
 
 
 @pytest.fixture(scope="module")

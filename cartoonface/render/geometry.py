@@ -199,6 +199,16 @@ def _polygon(rows: list[np.ndarray], points: np.ndarray) -> str:
     return "M%s %s" + "L%s %s" * (len(points) - 1) + "Z"
 
 
+def inside(point: np.ndarray, polygon: np.ndarray) -> bool:
+    """Whether `point` (2,) lies inside `polygon` ((n, 2), in order), by the even-odd rule."""
+    x, y = point
+    result = False
+    for (x1, y1), (x2, y2) in zip(polygon, np.roll(polygon, -1, axis=0)):
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            result = not result
+    return result
+
+
 def chaikin_closed_operator(count: int, rounds: int = CHAIKIN_ROUNDS) -> scipy.sparse.csr_array:
     """The sparse matrix of `chaikin(points, rounds, closed=True)` for `count` points.
 

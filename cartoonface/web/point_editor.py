@@ -24,6 +24,7 @@ import numpy as np
 from cartoonface.errors import FaceModelError, InputError
 from cartoonface.face.model import POINT_INDEX, POINT_NAMES, FaceModel, face_from_dict, face_to_dict
 from cartoonface.face.state import FaceState
+from cartoonface.render.geometry import inside
 from cartoonface.render.elements import svg_bytes
 from cartoonface.render.svg import face_svg
 from cartoonface.web.draft_store import Draft, model_points, named_points
@@ -135,16 +136,6 @@ def _frame(detected: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     return origin, np.stack([across, down]), float(np.linalg.norm(right - left))
 
 
-def _inside(point: np.ndarray, polygon: np.ndarray) -> bool:
-    """Whether `point` (2,) lies inside `polygon` ((n, 2), in order), by the even-odd rule."""
-    x, y = point
-    inside = False
-    for (x1, y1), (x2, y2) in zip(polygon, np.roll(polygon, -1, axis=0)):
-        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
-            inside = not inside
-    return inside
-
-
 def _outline_order(face: np.ndarray) -> np.ndarray:
     """The OUTLINE points' indices sorted by angle around their centre in `face` ((49, 2))."""
     indices = np.array([POINT_INDEX[name] for name in OUTLINE])
@@ -163,7 +154,7 @@ def _broken(points: np.ndarray, detected: np.ndarray) -> list[tuple[tuple[str, .
     broken: list[tuple[tuple[str, ...], dict[str, str]]] = []
     ring = points[_outline_order(detected)]
     for name in INSIDE:
-        if not _inside(points[POINT_INDEX[name]], ring):
+        if not inside(points[POINT_INDEX[name]], ring):
             pulled = f"{{name}} leaves point {name} ({POINT_LABELS[name]}) outside the face outline"
             broken.append((("outline", name), {name: "{name} is outside the face outline",
                                                **{edge: pulled for edge in OUTLINE}}))
