@@ -116,11 +116,12 @@ ON_SURFACE: dict[str, str] = {"3.7": "11.3", "3.12": "11.2", "4.5": "11.3", "4.6
 # the way from the temples (11.2, 11.3) up to 11.2a / 11.3a, resampled to CROWN_POINTS
 # points evenly along it; the hairline is the forehead contour 11.3a, 11.1, 11.2a moved
 # down towards the eyebrows by FRINGE_DROP d (a fringe over the forehead that keeps the
-# forehead's arch: dropping the middle further made a straight, helmet-like edge).
+# forehead's arch: dropping the middle further made a straight, helmet-like edge; a lower
+# hairline, 0.16 d, hid the raised brows of surprise and fear under the fringe).
 CROWN_CUT = 0.5
 CROWN_POINTS = 9
 HAIRLINE = ("11.3a", "11.1", "11.2a")  # image right to left, as drawn
-FRINGE_DROP = 0.16
+FRINGE_DROP = 0.05
 FRONT_NAMES: tuple[str, ...] = (tuple(f"crown{i}" for i in range(CROWN_POINTS))
                                 + tuple(f"hairline{i}" for i in range(len(HAIRLINE))))
 # The hair's volume: at and above EyeMid its frontal outline lies beside the temples, at
