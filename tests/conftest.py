@@ -17,6 +17,7 @@ from flask.testing import FlaskClient
 from PIL import Image
 
 from cartoonface.web import create_app
+from cartoonface.web.store import DONE, FAILED
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -189,3 +190,16 @@ def png_bytes(width: int, height: int, colour: tuple[int, int, int]) -> bytes:
     buffer = io.BytesIO()
     Image.new("RGB", (width, height), colour).save(buffer, format="PNG")
     return buffer.getvalue()
+
+
+def wait_done(client, url: str, timeout: float = 240) -> list[dict]:
+    """Poll the status endpoint until the job ends; return every status seen."""
+    seen = []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        status = client.get(f"{url}/status").get_json()
+        seen.append(status)
+        if status["state"] in (DONE, FAILED):
+            return seen
+        time.sleep(0.2)
+    raise AssertionError(f"job {url} did not finish: {seen[-1]}")

@@ -21,7 +21,7 @@ from cartoonface.pipeline import Options, generate
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES, NECK_TOP, figure_of, neck_pivot
 from tests.conftest import ROOT, spoken_inputs
-from tests.test_scenery import polygon
+from tests.shapes import polygon
 
 SVG = "{http://www.w3.org/2000/svg}"
 FPS = 30

@@ -19,7 +19,7 @@ from cartoonface.face.rbf import WIDTHS, clusters, deform, leave_one_out
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.mouth import ROWS, mouth_outlines
 from tests.conftest import ROOT
-from tests.test_mouth_drawing import area, crossings, sample
+from tests.shapes import area, crossings, sample
 
 POSES = (Pose(),) + tuple(Pose(*corner) for corner in itertools.product((-15, 15), repeat=3))
 EYES = (("3.12", "3.2", "3.8", "3.4"), ("3.7", "3.1", "3.11", "3.3"))

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import itertools
-import re
 
 import numpy as np
 import pytest
@@ -17,9 +16,9 @@ from cartoonface.render.animation import animation_svg
 from cartoonface.render.scenery import CLOTHES
 from cartoonface.render.svg import face_svg
 from tests.conftest import ROOT
+from tests.shapes import NUMBER, polygon
 
 SVG = "{http://www.w3.org/2000/svg}"
-NUMBER = re.compile(r"-?(?:\d+\.?\d*|\.\d+)")
 ANGLES = (-15.0, 0.0, 15.0)
 POSES = [Pose(tilt, turn, roll) for tilt, turn, roll in itertools.product(ANGLES, ANGLES, ANGLES)]
 NEAR = 0.05  # of the FAPU d: how far the shadow's centre may lie from the posed chin
@@ -28,11 +27,6 @@ NEAR = 0.05  # of the FAPU d: how far the shadow's centre may lie from the posed
 @pytest.fixture(params=("female", "male"), scope="module")
 def face(request):
     return load_face(ROOT / "samples" / "faces" / f"{request.param}.json")
-
-
-def polygon(d: str) -> np.ndarray:
-    """The corners (n, 2) of an absolute M/L/Z polygon's path data."""
-    return np.array([float(v) for v in NUMBER.findall(d)]).reshape(-1, 2)
 
 
 def shadow_outline(group) -> np.ndarray:

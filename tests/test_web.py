@@ -31,7 +31,7 @@ from cartoonface.web.security import download_name
 from cartoonface.web.store import (DONE, FAILED, FILE_MODE, FOLDER_MODE, INTERRUPTED, QUEUED, RUNNING, Status, apply_retention,
                                    create_job, list_jobs, load_job, new_id, space_problem, valid_id,
                                    write_status)
-from tests.conftest import ROOT, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli
+from tests.conftest import ROOT, TRANSCRIPT, Client, csrf, form, make_app, png_bytes, post, run_cli, wait_done
 from tests.synthetic import wav_bytes
 
 SAMPLES = ROOT / "samples" / "faces"
@@ -51,19 +51,6 @@ def sample_name() -> str:
 
 
 
-
-
-def wait_done(client, url: str, timeout: float = 240) -> list[dict]:
-    """Poll the status endpoint until the job ends; return every status seen."""
-    seen = []
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        status = client.get(f"{url}/status").get_json()
-        seen.append(status)
-        if status["state"] in (DONE, FAILED):
-            return seen
-        time.sleep(0.2)
-    raise AssertionError(f"job {url} did not finish: {seen[-1]}")
 
 
 @pytest.fixture(scope="module")

@@ -13,9 +13,8 @@ from lxml import etree
 
 from cartoonface.speech.textgrid import read_textgrid
 from cartoonface.web.inputs import MAX_ACTIONS_BYTES
-from tests.conftest import ROOT, make_app, post
+from tests.conftest import ROOT, make_app, post, wait_done
 from tests.conftest import form as full_form
-from tests.test_web import wait_done
 
 STORY = ROOT / "samples" / "speech"
 TRANSCRIPT = (STORY / "story.txt").read_text(encoding="utf-8")
