@@ -25,8 +25,11 @@ from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
+from cartoonface.exports.captions import CAPTIONS_NAME, captions_vtt
+from cartoonface.exports.cues import FORMATS as CUE_FORMATS
+from cartoonface.exports.cues import cues_name, cues_text, mouth_cues
 from cartoonface.face.model import FaceModel, load_face
-from cartoonface.files import atomic_directory, folder_size, read_user_text
+from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
@@ -60,6 +63,7 @@ class Options:
     alignment: Path | None = None  # edited TextGrid: skips alignment
     pause: tuple[float, float] | None = None  # thesis mode of Alg. 3.1
     links: tuple[tuple[str, str], ...] = ()  # (label, url) for the audio-book page
+    cues: tuple[str, ...] = ()  # Rhubarb mouth-cue files to add: "tsv", "json", "xml" (exports/cues.py)
 
 
 @dataclass(frozen=True)
@@ -95,6 +99,9 @@ def check_options(options: Options) -> None:
         start, end = options.pause
         if not 0 <= start < end:
             raise OptionError(f"pause {start},{end}: expected START,END seconds with 0 <= START < END")
+    for fmt in options.cues:
+        if fmt not in CUE_FORMATS:
+            raise OptionError(f"cues {fmt!r}: expected one of {', '.join(CUE_FORMATS)}")
     check_links(options.links)
 
 
@@ -192,9 +199,13 @@ def generate(
         with atomic_directory(target) as folder:
             sources = copy_audio(audio, folder)
             html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
-                             fps=options.fps, links=options.links)
+                             fps=options.fps, links=options.links, captions=CAPTIONS_NAME)
             write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
                        actions=actions_to_json(actions))
+            write_text_atomic(folder / CAPTIONS_NAME, captions_vtt(alignment))
+            cues = mouth_cues(alignment)
+            for fmt in options.cues:
+                write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))
             size = folder_size(folder)
     except OSError as exc:  # the place given for the output cannot be written (permissions, full disk, ...)
         raise OptionError(f"{target}: cannot write the output folder ({exc.strerror or exc})") from None

@@ -24,6 +24,7 @@ HELP = "make the talking-face pages from a face, a recording and its transcript"
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `generate` subcommand."""
+    from cartoonface.exports.cues import FORMATS as CUE_FORMATS
     from cartoonface.pipeline import Options
     from cartoonface.render.pages import PAGES
     from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
@@ -59,6 +60,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "segmentation then uses the thesis's threshold from it (Alg. 3.1)")
     parser.add_argument("--link", action="append", default=[], metavar="LABEL=URL",
                         help="a link under the audio-book text (repeatable)")
+    parser.add_argument("--cues", action="append", default=[], choices=CUE_FORMATS,
+                        help="also write the mouth cues as mouth-cues.FORMAT in Rhubarb Lip Sync's format "
+                             "(repeatable; docs/exports.md)")
     parser.set_defaults(func=run)
 
 
@@ -83,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
-        links=tuple(parse_link(link) for link in args.link),
+        links=tuple(parse_link(link) for link in args.link), cues=tuple(dict.fromkeys(args.cues)),
     )
     bar = ProgressBar(sys.stderr)
     try:

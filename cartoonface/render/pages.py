@@ -111,12 +111,14 @@ def page_html(
     fps: int,
     links: Sequence[tuple[str, str]] = (),
     lang: str = "zh",
+    captions: str | None = None,
 ) -> str:
     """The HTML of the `page` ("audiobook" or "announcer") as a string.
 
     `alignment` gives the sentences (text, start and end in seconds) that the
     page highlights as they are spoken; `svg` is the animation document, put
-    inline; `audio` the sources of the `<audio>` clock, best first.
+    inline; `audio` the sources of the `<audio>` clock, best first; `captions` the name of
+    the WebVTT file of the sentences in the folder, the audio's `<track>` (None: no track).
     """
     if page not in PAGES:
         raise OptionError(f"page {page!r}: expected one of {', '.join(PAGES)}")
@@ -129,6 +131,7 @@ def page_html(
         fps=fps,
         links=check_links(links) if page == "audiobook" else (),
         lang=lang,
+        captions=captions,
         version=__version__,
     )
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cartoonface.errors import InputError
+from cartoonface.exports.cues import FORMATS as CUE_FORMATS
 from cartoonface.files import write_bytes_atomic
 from cartoonface.pipeline import Options, generate
 from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, write_status
@@ -146,7 +147,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
-                      background=str(spec["background"]), clothes=str(spec["clothes"]))
+                      background=str(spec["background"]), clothes=str(spec["clothes"]), cues=CUE_FORMATS)
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
