@@ -63,6 +63,7 @@ class Options:
     alignment: Path | None = None  # edited TextGrid: skips alignment
     pause: tuple[float, float] | None = None  # thesis mode of Alg. 3.1
     links: tuple[tuple[str, str], ...] = ()  # (label, url) for the audio-book page
+    keep_original: bool = False  # also put the recording as given into the folder (recording.<ext>)
     cues: tuple[str, ...] = ()  # Rhubarb mouth-cue files to add: "tsv", "json", "xml" (exports/cues.py)
 
 
@@ -197,7 +198,7 @@ def generate(
     report("pages")
     try:
         with atomic_directory(target) as folder:
-            sources = copy_audio(audio, folder)
+            sources = copy_audio(audio, folder, keep_original=options.keep_original)
             html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
                              fps=options.fps, links=options.links, captions=CAPTIONS_NAME)
             write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),

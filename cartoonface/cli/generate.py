@@ -60,6 +60,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "segmentation then uses the thesis's threshold from it (Alg. 3.1)")
     parser.add_argument("--link", action="append", default=[], metavar="LABEL=URL",
                         help="a link under the audio-book text (repeatable)")
+    parser.add_argument("--keep-original", action="store_true",
+                        help="also put the recording as given into the folder (recording.EXT); the page "
+                             "plays a compressed copy, audio.m4a")
     parser.add_argument("--cues", action="append", default=[], choices=CUE_FORMATS,
                         help="also write the mouth cues as mouth-cues.FORMAT in Rhubarb Lip Sync's format "
                              "(repeatable; docs/exports.md)")
@@ -88,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
         links=tuple(parse_link(link) for link in args.link), cues=tuple(dict.fromkeys(args.cues)),
+        keep_original=args.keep_original,
     )
     bar = ProgressBar(sys.stderr)
     try:

@@ -24,7 +24,7 @@ from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import browser_copy
+from cartoonface.speech.audio import page_copy
 
 PAGES = ("audiobook", "announcer")
 # Inside the package (a symlink to the top-level folders in a source checkout,
@@ -33,6 +33,8 @@ PACKAGE = Path(__file__).resolve().parent.parent
 TEMPLATES = PACKAGE / "templates"
 STATIC = PACKAGE / "static"
 AUDIO_STEM = "audio"
+# The recording as given, kept beside the page audio on request (copy_audio keep_original).
+ORIGINAL_STEM = "recording"
 MEDIA_TYPES = {
     ".wav": "audio/wav",
     ".mp3": "audio/mpeg",
@@ -136,21 +138,19 @@ def page_html(
     )
 
 
-def copy_audio(source: str | os.PathLike[str], folder: str | os.PathLike[str]) -> tuple[AudioSource, ...]:
-    """Put the recording `source` into `folder` as audio.<suffix>, plus a browser copy if needed.
+def copy_audio(source: str | os.PathLike[str], folder: str | os.PathLike[str],
+               keep_original: bool = False) -> tuple[AudioSource, ...]:
+    """Put the recording `source` into `folder` compressed for the page (audio.m4a, speech/audio.py
+    page_copy) and, when `keep_original`, byte for byte as recording.<suffix>.
 
-    Returns the page's audio sources, the browser-friendly one first.
+    Returns the page's audio sources (the compressed one).
     """
     original = Path(source)
     target = Path(folder)
-    playable = browser_copy(original, target, stem=AUDIO_STEM)
-    sources = [AudioSource(playable.name, MEDIA_TYPES.get(playable.suffix, "audio/mpeg"))]
-    suffix = original.suffix.lower()
-    if suffix != playable.suffix:
-        kept = write_bytes_atomic(target / f"{AUDIO_STEM}{suffix or '.original'}", original.read_bytes())
-        if suffix in MEDIA_TYPES:
-            sources.append(AudioSource(kept.name, MEDIA_TYPES[suffix]))
-    return tuple(sources)
+    playable = page_copy(original, target, stem=AUDIO_STEM)
+    if keep_original:
+        write_bytes_atomic(target / f"{ORIGINAL_STEM}{original.suffix.lower() or '.original'}", original.read_bytes())
+    return (AudioSource(playable.name, MEDIA_TYPES[playable.suffix]),)
 
 
 def write_site(

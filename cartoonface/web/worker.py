@@ -12,7 +12,6 @@ stops at the next progress report; the restarted server marks the job failed.
 
 from __future__ import annotations
 
-import filecmp
 import io
 import json
 import multiprocessing
@@ -117,17 +116,6 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
     return message
 
 
-def share_recording(recording: Path, site: Path) -> None:
-    """Store the job's `recording` once: when the generated folder `site` holds a byte-identical
-    copy of it (render/pages.py copy_audio), the job's input becomes a hard link to that copy."""
-    copy = site / recording.name
-    if not copy.is_file() or not filecmp.cmp(recording, copy, shallow=False):
-        return
-    linked = recording.with_name(f".{recording.name}.link")
-    os.link(copy, linked)
-    os.replace(linked, recording)
-
-
 def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     """Generate the job stored in `folder`, writing status.json as it goes; stop
     (Orphaned) at a progress report when `server_alive()` is False."""
@@ -152,7 +140,6 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
-        share_recording(folder / str(spec["audio_file"]), folder / SITE)
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
                                     updated=time.time()))
