@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 import soundfile
@@ -30,7 +32,7 @@ def alignment(*texts: str) -> Alignment:
 
 def render(page: str = "audiobook", **changes) -> html.HtmlElement:
     """Render `page` with hostile user text everywhere unless `changes` say otherwise; parse it."""
-    args = dict(title=HOSTILE, alignment=alignment("你好。", HOSTILE), svg=small_svg(),
+    args: dict[str, Any] = dict(title=HOSTILE, alignment=alignment("你好。", HOSTILE), svg=small_svg(),
                 audio=(AudioSource("audio.wav", "audio/wav"),), fps=25, links=((HOSTILE, "https://example.org/?a=1&b=2"),))
     args.update(changes)
     return html.document_fromstring(page_html(page, **args))
