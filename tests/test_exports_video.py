@@ -56,7 +56,7 @@ def test_the_file_plays_back_as_h264_and_aac_as_long_as_the_speech(made):
     info = probe(video)
     assert re.search(r"Video: h264 .*yuv420p.*\b400x480\b.*\b24 fps", info), info
     assert re.search(r"Audio: aac", info), info
-    h, m, s = re.search(r"Duration: (\d+):(\d+):([\d.]+)", info).groups()  # type: ignore[union-attr]
+    h, m, s = re.search(r"Duration: (\d+):(\d+):([\d.]+)", info).groups()
     assert abs(int(h) * 3600 + int(m) * 60 + float(s) - result.duration) < 0.1
     assert 1 < drawn < result.frames  # still stretches are drawn once
     assert reports == sorted(reports) and reports[-1] == 1.0
