@@ -199,11 +199,12 @@ def generate(
     try:
         with atomic_directory(target) as folder:
             sources = copy_audio(audio, folder, keep_original=options.keep_original)
+            captions = captions_vtt(alignment)
             html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
-                             fps=options.fps, links=options.links, captions=CAPTIONS_NAME)
+                             fps=options.fps, links=options.links, captions=captions)
             write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
                        actions=actions_to_json(actions))
-            write_text_atomic(folder / CAPTIONS_NAME, captions_vtt(alignment))
+            write_text_atomic(folder / CAPTIONS_NAME, captions)
             cues = mouth_cues(alignment)
             for fmt in options.cues:
                 write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))

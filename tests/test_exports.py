@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 import random
 import re
@@ -150,7 +151,9 @@ def test_generate_writes_cues_and_captions_and_the_page_tracks_them(inputs, tmp_
     lines = (out / "mouth-cues.tsv").read_text(encoding="utf-8").splitlines()
     assert {line.split("\t")[1] for line in lines} > {"X"}
     assert len(parse_vtt((out / "captions.vtt").read_text(encoding="utf-8"))) == 2
-    assert '<track kind="captions" src="captions.vtt"' in (out / "index.html").read_text(encoding="utf-8")
+    track = re.search(r'<track kind="captions" src="data:text/vtt;base64,([^"]+)"',
+                      (out / "index.html").read_text(encoding="utf-8"))
+    assert track and base64.b64decode(track[1]) == (out / "captions.vtt").read_bytes()
 
 
 @needs_espeak

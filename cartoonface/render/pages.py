@@ -11,6 +11,7 @@ and actions.json. docs/output.md describes the folder and the page behaviour.
 
 from __future__ import annotations
 
+import base64
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -119,8 +120,9 @@ def page_html(
 
     `alignment` gives the sentences (text, start and end in seconds) that the
     page highlights as they are spoken; `svg` is the animation document, put
-    inline; `audio` the sources of the `<audio>` clock, best first; `captions` the name of
-    the WebVTT file of the sentences in the folder, the audio's `<track>` (None: no track).
+    inline; `audio` the sources of the `<audio>` clock, best first; `captions` the WebVTT
+    text of the sentences, the audio's `<track>` (None: no track). The track is a data: URL:
+    from `file://` Chromium refuses to load a track file beside the page (another origin).
     """
     if page not in PAGES:
         raise OptionError(f"page {page!r}: expected one of {', '.join(PAGES)}")
@@ -133,7 +135,8 @@ def page_html(
         fps=fps,
         links=check_links(links) if page == "audiobook" else (),
         lang=lang,
-        captions=captions,
+        captions_url=None if captions is None else "data:text/vtt;base64," + base64.b64encode(
+            captions.encode("utf-8")).decode("ascii"),
         version=__version__,
     )
 

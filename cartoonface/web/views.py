@@ -53,7 +53,7 @@ STAGES = {
 # the SVG inline. They run sandboxed (an opaque origin: no access to this app's cookies
 # or pages even if a page were ever wrong), so their files must be loadable from there.
 SITE_CSP = ("sandbox allow-scripts; default-src 'none'; script-src 'self'; "
-            "style-src 'self' 'unsafe-inline'; img-src 'self' data:; media-src 'self'; font-src 'self'; "
+            "style-src 'self' 'unsafe-inline'; img-src 'self' data:; media-src 'self' data:; font-src 'self'; "
             "form-action 'none'; base-uri 'none'; frame-ancestors 'self'")
 
 SITE_TYPES = {
