@@ -138,10 +138,16 @@ class Runner:
 
     def _died(self, code: int | None) -> str:
         """The user message for a worker process that ended with exit code `code` before its
-        job's status was final: stopped by the CPU limit, killed (the hard CPU limit, or the
-        system out of memory), or else died."""
+        job's status was final: stopped by the CPU limit, out of its address space (a
+        segmentation fault under the memory limit), killed (the hard CPU limit, or the system
+        out of memory), or else died."""
         if self._limits is not None and code == -signal.SIGXCPU:
             return self._limits.cpu_message()
+        # Under the address-space limit a stack that cannot grow is a segmentation fault, not a
+        # MemoryError (seen in tests/test_web.py's over-memory job: SIGSEGV inside numpy's mean
+        # while decoding, about every other run once the worker's imports grew a little).
+        if self._limits is not None and code == -signal.SIGSEGV:
+            return self._limits.memory_message()
         if code == -signal.SIGKILL:
             return ("The job was stopped by the system (killed), most likely for using too much memory "
                     "or processor time. A shorter recording needs less.")
