@@ -26,9 +26,12 @@ from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
+from cartoonface.exports.captions import CAPTIONS_NAME, captions_vtt
+from cartoonface.exports.cues import FORMATS as CUE_FORMATS
+from cartoonface.exports.cues import cues_name, cues_text, mouth_cues
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
-from cartoonface.files import atomic_directory, folder_size, read_user_text
+from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
@@ -65,6 +68,8 @@ class Options:
     links: tuple[tuple[str, str], ...] = ()  # (label, url) for the audio-book page
     emotion: str | None = None  # default mood (face/emotion.py EMOTIONS) where the transcript marks none
     intensity: float = 1.0  # of the default mood, 0..1
+    keep_original: bool = False  # also put the recording as given into the folder (recording.<ext>)
+    cues: tuple[str, ...] = ()  # Rhubarb mouth-cue files to add: "tsv", "json", "xml" (exports/cues.py)
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,9 @@ def check_options(options: Options) -> None:
         start, end = options.pause
         if not 0 <= start < end:
             raise OptionError(f"pause {start},{end}: expected START,END seconds with 0 <= START < END")
+    for fmt in options.cues:
+        if fmt not in CUE_FORMATS:
+            raise OptionError(f"cues {fmt!r}: expected one of {', '.join(CUE_FORMATS)}")
     check_links(options.links)
     if options.emotion is not None and options.emotion not in EMOTIONS:
         raise OptionError(f"emotion {options.emotion!r}: expected one of {', '.join(EMOTIONS)}")
@@ -210,11 +218,16 @@ def generate(
     report("pages")
     try:
         with atomic_directory(target) as folder:
-            sources = copy_audio(audio, folder)
+            sources = copy_audio(audio, folder, keep_original=options.keep_original)
+            captions = captions_vtt(alignment)
             html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
-                             fps=options.fps, links=options.links)
+                             fps=options.fps, links=options.links, captions=captions)
             write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
                        actions=actions_to_json(actions))
+            write_text_atomic(folder / CAPTIONS_NAME, captions)
+            cues = mouth_cues(alignment)
+            for fmt in options.cues:
+                write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))
             size = folder_size(folder)
     except OSError as exc:  # the place given for the output cannot be written (permissions, full disk, ...)
         raise OptionError(f"{target}: cannot write the output folder ({exc.strerror or exc})") from None

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 import soundfile
@@ -30,7 +32,7 @@ def alignment(*texts: str) -> Alignment:
 
 def render(page: str = "audiobook", **changes) -> html.HtmlElement:
     """Render `page` with hostile user text everywhere unless `changes` say otherwise; parse it."""
-    args = dict(title=HOSTILE, alignment=alignment("你好。", HOSTILE), svg=small_svg(),
+    args: dict[str, Any] = dict(title=HOSTILE, alignment=alignment("你好。", HOSTILE), svg=small_svg(),
                 audio=(AudioSource("audio.wav", "audio/wav"),), fps=25, links=((HOSTILE, "https://example.org/?a=1&b=2"),))
     args.update(changes)
     return html.document_fromstring(page_html(page, **args))
@@ -96,19 +98,15 @@ def tone(path, seconds: float = 0.5, rate: int = 16000) -> None:
     soundfile.write(path, (0.3 * np.sin(2 * np.pi * 220 * t)).astype(np.float32), rate)
 
 
-def test_browser_friendly_audio_is_kept_as_is(tmp_path):
-    tone(tmp_path / "speech.wav")
-    sources = copy_audio(tmp_path / "speech.wav", tmp_path / "out")
-    assert sources == (AudioSource("audio.wav", "audio/wav"),)
-    assert (tmp_path / "out" / "audio.wav").read_bytes() == (tmp_path / "speech.wav").read_bytes()
-
-
-def test_other_audio_is_kept_and_copied_for_browsers(tmp_path):
-    tone(tmp_path / "speech.flac")
-    sources = copy_audio(tmp_path / "speech.flac", tmp_path / "out")
-    assert sources[0].type == "audio/mpeg" and sources[0].name == "audio.mp3"
-    assert (tmp_path / "out" / "audio.flac").read_bytes() == (tmp_path / "speech.flac").read_bytes()
-    assert (tmp_path / "out" / "audio.mp3").stat().st_size > 0
+@pytest.mark.parametrize("suffix", [".wav", ".flac"])
+def test_page_audio_is_compressed_and_the_original_kept_on_request(suffix, tmp_path):
+    tone(tmp_path / f"speech{suffix}", seconds=5.0)
+    original = (tmp_path / f"speech{suffix}").read_bytes()
+    sources = copy_audio(tmp_path / f"speech{suffix}", tmp_path / "out")
+    assert sources == (AudioSource("audio.m4a", "audio/mp4"),)
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["audio.m4a"]
+    copy_audio(tmp_path / f"speech{suffix}", tmp_path / "kept", keep_original=True)
+    assert (tmp_path / "kept" / f"recording{suffix}").read_bytes() == original
 
 
 def test_site_files_are_written(tmp_path):

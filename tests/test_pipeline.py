@@ -42,7 +42,7 @@ def made(inputs, tmp_path_factory):
 def test_folder_has_every_file_and_result_adds_up(made):
     result, _ = made
     names = {p.relative_to(result.out_dir).as_posix() for p in result.out_dir.rglob("*") if p.is_file()}
-    assert {"index.html", "animation.svg", "audio.wav", "alignment.TextGrid", "actions.json",
+    assert {"index.html", "animation.svg", "audio.m4a", "alignment.TextGrid", "actions.json",
             "static/cartoonface.js", "static/cartoonface.css"} <= names
     assert result.size == sum(p.stat().st_size for p in result.out_dir.rglob("*") if p.is_file())
     assert result.frames == math.ceil(round(result.duration * 1000) * 30 / 1000)

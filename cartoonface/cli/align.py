@@ -26,6 +26,8 @@ HELP = "time the sentences, syllables and mouth shapes of a recording (Praat Tex
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `align` subcommand."""
+    from cartoonface.exports.cues import FORMATS as CUE_FORMATS
+
     parser = subparsers.add_parser(
         "align", help=HELP,
         description="Find when every sentence and syllable of the transcript is spoken in the recording and "
@@ -37,6 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="what is said, UTF-8 text (Chinese; sentences end with punctuation)")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.TextGrid", help="TextGrid to write")
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="also write the alignment as JSON")
+    parser.add_argument("--cues", action="append", default=[], choices=CUE_FORMATS,
+                        help="also write the mouth cues in Rhubarb Lip Sync's format beside the TextGrid "
+                             "(OUT.tsv, OUT.json or OUT.xml; repeatable; docs/exports.md)")
     parser.add_argument("--pause", metavar="START,END",
                         help="seconds of the first pause between sentences: segment with the thesis's "
                              "thresholds learned from it (Alg. 3.1) instead of the automatic ones")
@@ -81,6 +86,7 @@ def _count(number: int, noun: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Align the recording with its transcript and write the outputs; returns 0."""
+    from cartoonface.exports.cues import cues_text, mouth_cues
     from cartoonface.speech.analyse import analyse
     from cartoonface.speech.audio import load_audio
     from cartoonface.speech.records import alignment_to_dict
@@ -91,6 +97,12 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.output, "-o")
     if args.json is not None:
         check_output(args.json, "--json")
+    cue_files = {fmt: args.output.with_suffix(f".{fmt}") for fmt in dict.fromkeys(args.cues)}
+    for path in cue_files.values():
+        check_output(path, "--cues")
+        if path in (args.output, args.json):
+            raise OptionError(f"--cues {path.suffix[1:]}: would write {path}, which is already an output; "
+                              "give -o a name ending in .TextGrid")
     text = read_user_text(args.transcript, TranscriptError, "transcript file")
     shown = ProgressBar(sys.stderr)
     try:
@@ -102,6 +114,9 @@ def run(args: argparse.Namespace) -> int:
     write_text_atomic(args.output, write_textgrid(alignment))
     if args.json is not None:
         write_text_atomic(args.json, json.dumps(alignment_to_dict(alignment), ensure_ascii=False, indent=1) + "\n")
+    cues = mouth_cues(alignment)
+    for fmt, path in cue_files.items():
+        write_text_atomic(path, cues_text(cues, alignment.duration, fmt, args.audio.name))
     for note in alignment.notes:
         print(f"note: {note}", file=sys.stderr)
     print(summary(alignment, args.output, time.perf_counter() - started))

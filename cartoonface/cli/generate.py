@@ -24,6 +24,7 @@ HELP = "make the talking-face pages from a face, a recording and its transcript"
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `generate` subcommand."""
+    from cartoonface.exports.cues import FORMATS as CUE_FORMATS
     from cartoonface.face.emotion import EMOTIONS
     from cartoonface.pipeline import Options
     from cartoonface.render.pages import PAGES
@@ -64,6 +65,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "segmentation then uses the thesis's threshold from it (Alg. 3.1)")
     parser.add_argument("--link", action="append", default=[], metavar="LABEL=URL",
                         help="a link under the audio-book text (repeatable)")
+    parser.add_argument("--video", type=Path, metavar="OUT.mp4",
+                        help="also render the animation with its sound as an MP4 video (H.264 + AAC) at --fps")
+    parser.add_argument("--size", default="1280x720", metavar="WxH",
+                        help="the video's size in pixels (default %(default)s); the picture is centred on it")
+    parser.add_argument("--keep-original", action="store_true",
+                        help="also put the recording as given into the folder (recording.EXT); the page "
+                             "plays a compressed copy, audio.m4a")
+    parser.add_argument("--cues", action="append", default=[], choices=CUE_FORMATS,
+                        help="also write the mouth cues as mouth-cues.FORMAT in Rhubarb Lip Sync's format "
+                             "(repeatable; docs/exports.md)")
     parser.set_defaults(func=run)
 
 
@@ -75,6 +86,14 @@ def parse_link(text: str) -> tuple[str, str]:
     return label, url
 
 
+def check_video_path(path: Path) -> None:
+    """OptionError unless `path` names an .mp4 file that can be written (its folder exists)."""
+    if path.suffix.lower() != ".mp4":
+        raise OptionError(f"--video {path}: expected a file name ending in .mp4")
+    if path.is_dir() or not path.absolute().parent.is_dir():
+        raise OptionError(f"--video {path}: expected an .mp4 file name in an existing folder")
+
+
 def summary(result: Result) -> str:
     """The one-line report of a finished run."""
     return (f"{result.out_dir}: {result.duration:.1f} s of audio, {result.frames} frames, "
@@ -83,16 +102,24 @@ def summary(result: Result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Generate the folder; print the summary and any notes. Returns 0."""
+    from cartoonface.exports.video import parse_size, write_video
     from cartoonface.pipeline import Options, generate
 
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
         links=tuple(parse_link(link) for link in args.link), emotion=args.emotion, intensity=args.intensity,
+        cues=tuple(dict.fromkeys(args.cues)), keep_original=args.keep_original,
     )
+    size = parse_size(args.size)
+    if args.video is not None:
+        check_video_path(args.video)
     bar = ProgressBar(sys.stderr)
     try:
         result = generate(args.face, args.audio, args.transcript, args.output, options, bar)
+        if args.video is not None:
+            write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration, args.audio,
+                        args.video, size, bar)
     finally:
         bar.close()
     for note in result.notes:

@@ -11,6 +11,7 @@ and actions.json. docs/output.md describes the folder and the page behaviour.
 
 from __future__ import annotations
 
+import base64
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -24,7 +25,7 @@ from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import browser_copy
+from cartoonface.speech.audio import page_copy
 
 PAGES = ("audiobook", "announcer")
 # Inside the package (a symlink to the top-level folders in a source checkout,
@@ -33,6 +34,8 @@ PACKAGE = Path(__file__).resolve().parent.parent
 TEMPLATES = PACKAGE / "templates"
 STATIC = PACKAGE / "static"
 AUDIO_STEM = "audio"
+# The recording as given, kept beside the page audio on request (copy_audio keep_original).
+ORIGINAL_STEM = "recording"
 MEDIA_TYPES = {
     ".wav": "audio/wav",
     ".mp3": "audio/mpeg",
@@ -111,12 +114,15 @@ def page_html(
     fps: int,
     links: Sequence[tuple[str, str]] = (),
     lang: str = "zh",
+    captions: str | None = None,
 ) -> str:
     """The HTML of the `page` ("audiobook" or "announcer") as a string.
 
     `alignment` gives the sentences (text, start and end in seconds) that the
     page highlights as they are spoken; `svg` is the animation document, put
-    inline; `audio` the sources of the `<audio>` clock, best first.
+    inline; `audio` the sources of the `<audio>` clock, best first; `captions` the WebVTT
+    text of the sentences, the audio's `<track>` (None: no track). The track is a data: URL:
+    from `file://` Chromium refuses to load a track file beside the page (another origin).
     """
     if page not in PAGES:
         raise OptionError(f"page {page!r}: expected one of {', '.join(PAGES)}")
@@ -129,25 +135,25 @@ def page_html(
         fps=fps,
         links=check_links(links) if page == "audiobook" else (),
         lang=lang,
+        captions_url=None if captions is None else "data:text/vtt;base64," + base64.b64encode(
+            captions.encode("utf-8")).decode("ascii"),
         version=__version__,
     )
 
 
-def copy_audio(source: str | os.PathLike[str], folder: str | os.PathLike[str]) -> tuple[AudioSource, ...]:
-    """Put the recording `source` into `folder` as audio.<suffix>, plus a browser copy if needed.
+def copy_audio(source: str | os.PathLike[str], folder: str | os.PathLike[str],
+               keep_original: bool = False) -> tuple[AudioSource, ...]:
+    """Put the recording `source` into `folder` compressed for the page (audio.m4a, speech/audio.py
+    page_copy) and, when `keep_original`, byte for byte as recording.<suffix>.
 
-    Returns the page's audio sources, the browser-friendly one first.
+    Returns the page's audio sources (the compressed one).
     """
     original = Path(source)
     target = Path(folder)
-    playable = browser_copy(original, target, stem=AUDIO_STEM)
-    sources = [AudioSource(playable.name, MEDIA_TYPES.get(playable.suffix, "audio/mpeg"))]
-    suffix = original.suffix.lower()
-    if suffix != playable.suffix:
-        kept = write_bytes_atomic(target / f"{AUDIO_STEM}{suffix or '.original'}", original.read_bytes())
-        if suffix in MEDIA_TYPES:
-            sources.append(AudioSource(kept.name, MEDIA_TYPES[suffix]))
-    return tuple(sources)
+    playable = page_copy(original, target, stem=AUDIO_STEM)
+    if keep_original:
+        write_bytes_atomic(target / f"{ORIGINAL_STEM}{original.suffix.lower() or '.original'}", original.read_bytes())
+    return (AudioSource(playable.name, MEDIA_TYPES[playable.suffix]),)
 
 
 def write_site(

@@ -48,10 +48,11 @@ GRID_CHUNK = 1 << 16   # samples checked at a time
 # A mean (DC offset) larger than this (-60 dBFS) is subtracted from the samples when reading:
 # a faulty converter or sound card adds it; smaller means are what speech itself averages to.
 DC_OFFSET = 1e-3
+# The page's audio (page_copy): AAC at this bit rate, mono, is 0.48 MB per minute, so a 3-minute
+# book's sound stays far under issue 14's 3 MB; speech at 64 kbit/s AAC sounds like the recording.
+PAGE_BITRATE = "64k"
 # Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
 _SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
-# Formats every current browser plays in an <audio> element, kept as they are by browser_copy.
-_BROWSER_SUFFIXES = (".wav", ".mp3", ".m4a", ".aac")
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,26 +229,22 @@ def _ffmpeg_reason(stderr: str) -> str:
     return reason[:200]
 
 
-def browser_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], stem: str = "audio") -> Path:
-    """Put a copy of the recording at `path` that browsers play into `out_dir`; return its path.
+def page_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], stem: str = "audio") -> Path:
+    """Put the recording at `path` into `out_dir` compressed for the page; return the file's path.
 
-    WAV, MP3 and M4A/AAC are copied as they are (named `stem` + suffix);
-    anything else (OGG, Opus, FLAC, ...) is converted to MP3 (128 kbit/s)
-    with the bundled ffmpeg. Raises AudioError when the conversion fails.
+    Any format ffmpeg reads becomes `stem`.m4a: AAC-LC, mono, PAGE_BITRATE (every browser plays it;
+    the MP4 edit list tells players to skip the encoder's priming, so times stay those of the
+    recording). Raises AudioError when the conversion fails.
     """
     source = Path(path)
-    folder = Path(out_dir)
-    suffix = source.suffix.lower()
-    if suffix in _BROWSER_SUFFIXES:
-        return write_bytes_atomic(folder / f"{stem}{suffix}", source.read_bytes())
     with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as tmp:
-        mp3 = Path(tmp) / "copy.mp3"
+        m4a = Path(tmp) / "page.m4a"
         command = [
             ffmpeg_exe(), "-nostdin", "-v", "error", "-i", str(source),
-            "-map", "0:a:0", "-vn", "-c:a", "libmp3lame", "-b:a", "128k", str(mp3),
+            "-map", "0:a:0", "-vn", "-ac", "1", "-c:a", "aac", "-b:a", PAGE_BITRATE,
+            "-movflags", "+faststart", str(m4a),
         ]  # fmt: skip
         done = subprocess.run(command, capture_output=True, text=True, errors="replace")
-        if done.returncode != 0 or not mp3.is_file():
-            raise AudioError(f"{source}: cannot convert for the browser ({_ffmpeg_reason(done.stderr)})")
-        return write_bytes_atomic(folder / f"{stem}.mp3", mp3.read_bytes())
-
+        if done.returncode != 0 or not m4a.is_file():
+            raise AudioError(f"{source}: cannot compress for the page ({_ffmpeg_reason(done.stderr)})")
+        return write_bytes_atomic(Path(out_dir) / f"{stem}.m4a", m4a.read_bytes())

@@ -25,7 +25,7 @@ from cartoonface.web.runner import QueueFull, current_lease, reaped_path
 from cartoonface.web.security import download_name
 from cartoonface.web.store import DONE, Job, create_job, list_jobs, load_job, space_problem
 from cartoonface.web.views import busy_message, job_label, state
-from cartoonface.web.worker import ZIP_NAME, download_zip
+from cartoonface.web.worker import ZIP_NAME
 
 bp = Blueprint("api", __name__, url_prefix="/api")
 
@@ -201,7 +201,7 @@ def result_zip(job_id: str) -> Response | tuple[Response, int]:
         return api_error(404, "No such job for this token. It may have been removed by the retention limit.")
     if found.status.state != DONE or not (found.folder / ZIP_NAME).is_file():
         return api_error(404, f"The job has no result (it is {job_json(found)['state']}).")
-    return send_file(download_zip(found.folder, found.spec), mimetype="application/zip", as_attachment=True,
+    return send_file(found.folder / ZIP_NAME, mimetype="application/zip", as_attachment=True,
                      download_name=download_name(found.title, found.id))
 
 

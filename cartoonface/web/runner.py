@@ -295,13 +295,15 @@ class Runner:
 
     def _died(self, code: int | None) -> str:
         """The user message for a worker process that ended with exit code `code` before its
-        job's status was final: stopped by the CPU limit, crashed at the memory limit, killed
-        (the hard CPU limit, or the system out of memory), or else died."""
+        job's status was final: stopped by the CPU limit, out of its address space (a
+        segmentation fault under the memory limit), killed (the hard CPU limit, or the system
+        out of memory), or else died."""
         if self._limits is not None and code == -signal.SIGXCPU:
             return self._limits.cpu_message()
+        # Under the address-space limit C code that does not check a failed allocation, or a
+        # stack that cannot grow, crashes with a segmentation fault instead of raising
+        # MemoryError (seen in tests/test_web.py's over-memory job inside numpy while decoding).
         if self._limits is not None and code == -signal.SIGSEGV:
-            # C code that does not check a failed allocation (numpy's reductions among them)
-            # crashes instead of raising MemoryError when the job reaches its address-space limit
             return self._limits.memory_message()
         if code == -signal.SIGKILL:
             return ("The job was stopped by the system (killed), most likely for using too much memory "

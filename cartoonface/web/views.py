@@ -36,7 +36,7 @@ from cartoonface.web.point_editor import preview_svg
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
-from cartoonface.web.worker import SITE, ZIP_NAME, download_zip
+from cartoonface.web.worker import SITE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
 THUMBNAIL_MAX_AGE = 3600  # seconds a browser may keep a sample face's thumbnail
@@ -61,7 +61,7 @@ STAGE_LIST = tuple((name, label) for name, label in STAGES.items() if name)
 # the SVG inline. They run sandboxed (an opaque origin: no access to this app's cookies
 # or pages even if a page were ever wrong), so their files must be loadable from there.
 SITE_CSP = ("sandbox allow-scripts; default-src 'none'; script-src 'self'; "
-            "style-src 'self' 'unsafe-inline'; img-src 'self' data:; media-src 'self'; font-src 'self'; "
+            "style-src 'self' 'unsafe-inline'; img-src 'self' data:; media-src 'self' data:; font-src 'self'; "
             "form-action 'none'; base-uri 'none'; frame-ancestors 'self'")
 
 SITE_TYPES = {
@@ -264,7 +264,7 @@ def download(job_id: str) -> Response:
     job = stored_job(job_id)
     if job.status.state != DONE or not (job.folder / ZIP_NAME).is_file():
         abort(404, description="This job has no result to download (yet).")
-    return send_file(download_zip(job.folder, job.spec), mimetype="application/zip", as_attachment=True,
+    return send_file(job.folder / ZIP_NAME, mimetype="application/zip", as_attachment=True,
                      download_name=download_name(job.title, job.id))
 
 

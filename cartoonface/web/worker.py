@@ -14,25 +14,22 @@ progress report.
 
 from __future__ import annotations
 
-import filecmp
 import io
 import json
 import multiprocessing
 import os
 import resource
-import shutil
 import signal
 import sys
-import tempfile
 import time
 import traceback
 import zipfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
 
 from cartoonface.errors import InputError
+from cartoonface.exports.cues import FORMATS as CUE_FORMATS
 from cartoonface.files import write_bytes_atomic
 from cartoonface.pipeline import Options, generate
 from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, write_status
@@ -92,33 +89,14 @@ def apply_limits(limits: JobLimits) -> None:
     signal.signal(signal.SIGXCPU, _over_cpu)
 
 
-def zip_folder(folder: Path, top: str, leave_out: tuple[str, ...] = ()) -> bytes:
-    """Return a zip (bytes) of every file under `folder` but the top-level names in `leave_out`,
-    stored under the folder name `top`/."""
+def zip_folder(folder: Path, top: str) -> bytes:
+    """Return a zip (bytes) of every file under `folder`, stored under the folder name `top`/."""
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         for path in sorted(folder.rglob("*")):
-            if path.is_file() and path.relative_to(folder).as_posix() not in leave_out:
+            if path.is_file():
                 archive.write(path, f"{top}/{path.relative_to(folder).as_posix()}")
     return buffer.getvalue()
-
-
-def download_zip(folder: Path, spec: Mapping[str, object]) -> IO[bytes]:
-    """The job's download, an unnamed temporary file (read from 0): the stored site.zip (which
-    leaves out the recording, so that it is stored once) with the recording added, stored
-    uncompressed (audio does not deflate). The copy is made beside the job (same disk)."""
-    stored = folder / ZIP_NAME
-    recording = folder / SITE / str(spec["audio_file"])
-    out = tempfile.TemporaryFile(dir=folder.parent)
-    with stored.open("rb") as source:
-        shutil.copyfileobj(source, out)
-    out.seek(0)
-    with zipfile.ZipFile(out, "a") as archive:
-        name = f"{zip_top_name(spec)}/{recording.name}"
-        if recording.is_file() and name not in archive.namelist():
-            archive.write(recording, name, compress_type=zipfile.ZIP_STORED)
-    out.seek(0)
-    return out
 
 
 def zip_top_name(spec: Mapping[str, object]) -> str:
@@ -143,17 +121,6 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
     return message
 
 
-def share_recording(recording: Path, site: Path) -> None:
-    """Store the job's `recording` once: when the generated folder `site` holds a byte-identical
-    copy of it (render/pages.py copy_audio), the job's input becomes a hard link to that copy."""
-    copy = site / recording.name
-    if not copy.is_file() or not filecmp.cmp(recording, copy, shallow=False):
-        return
-    linked = recording.with_name(f".{recording.name}.link")
-    os.link(copy, linked)
-    os.replace(linked, recording)
-
-
 def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     """Generate the job stored in `folder`, writing status.json as it goes; stop
     (Orphaned) at a progress report when `server_alive()` is False."""
@@ -173,7 +140,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
-                      background=str(spec["background"]), clothes=str(spec["clothes"]),
+                      background=str(spec["background"]), clothes=str(spec["clothes"]), cues=CUE_FORMATS,
                       emotion=str(spec.get("mood") or "") or None,
                       fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))),
                       alignment=folder / str(spec["textgrid_file"]) if spec.get("textgrid_file") else None,
@@ -181,8 +148,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
                           folder / "transcript.txt", folder / SITE, options, progress)
-        write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec), (str(spec["audio_file"]),)))
-        share_recording(folder / str(spec["audio_file"]), folder / SITE)
+        write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
                                     updated=time.time()))
