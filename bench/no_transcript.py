@@ -37,7 +37,7 @@ def frame_classes(alignment: Alignment, duration: float) -> np.ndarray:
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
     keys = mouth_keys(syllables, round(duration * 1000))
     times = np.array([key.t for key in keys])
-    values = np.array([CLASSES.index(MOUTH_CLASSES[key.value]) for key in keys])
+    values = np.array([CLASSES.index(MOUTH_CLASSES[str(key.value)]) for key in keys])
     frames = np.arange(int(duration * FPS)) * 1000 / FPS
     return values[np.searchsorted(times, frames, side="right") - 1]
 

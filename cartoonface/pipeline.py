@@ -145,7 +145,7 @@ def check_out_dir(out_dir: Path) -> None:
 def generate(
     face: Path | FaceModel,
     audio: Path,
-    transcript: Path | str,
+    transcript: Path | str | None,
     out_dir: Path,
     options: Options = Options(),
     progress: Callable[[str, float], None] | None = None,
@@ -154,7 +154,8 @@ def generate(
 
     `face`: a FaceModel or the path of its JSON. `audio`: the recording's path.
     `transcript`: a path (Path or os.PathLike) to a UTF-8 text file, or the text
-    itself as a str. `progress(stage, fraction)` is told when each stage of
+    itself as a str; None: no transcript, the lip sync from the audio alone (speech/audio_only.py)
+    and a page without text. `progress(stage, fraction)` is told when each stage of
     STAGES starts (and as segmentation and alignment go on) with the fraction
     0..1 of the whole job, and once more at ("pages", 1.0). Raises InputError (a
     subclass) for any bad input; then nothing is left at `out_dir`.
@@ -173,9 +174,10 @@ def generate(
     target = Path(out_dir)
     check_out_dir(target)
     model = face if isinstance(face, FaceModel) else load_face(face)
-    text = transcript if isinstance(transcript, str) else read_user_text(transcript, TranscriptError, "transcript file")
-    source = "transcript" if isinstance(transcript, str) else str(transcript)
-    marks = emotion_marks(text, source)
+    text = (transcript if transcript is None or isinstance(transcript, str)
+            else read_user_text(transcript, TranscriptError, "transcript file"))
+    source = "transcript" if transcript is None or isinstance(transcript, str) else str(transcript)
+    marks = () if text is None else emotion_marks(text, source)
     report("decode")
     recording = load_audio(audio)
     duration = recording.duration

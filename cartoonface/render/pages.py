@@ -24,6 +24,7 @@ from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
 from cartoonface.speech.records import Alignment
+from cartoonface.speech.audio_only import transcribed
 from cartoonface.speech.audio import browser_copy
 
 PAGES = ("audiobook", "announcer")
@@ -115,7 +116,8 @@ def page_html(
     """The HTML of the `page` ("audiobook" or "announcer") as a string.
 
     `alignment` gives the sentences (text, start and end in seconds) that the
-    page highlights as they are spoken; `svg` is the animation document, put
+    page highlights as they are spoken (none, and no text panel, for one made from the audio
+    alone: speech/audio_only.py); `svg` is the animation document, put
     inline; `audio` the sources of the `<audio>` clock, best first.
     """
     if page not in PAGES:
@@ -123,7 +125,7 @@ def page_html(
     template = _environment().get_template(f"{page}.html")
     return template.render(
         title=title or "cartoonface",
-        sentences=alignment.sentences,
+        sentences=alignment.sentences if transcribed(alignment) else (),
         svg=inline_svg(svg),
         audio=tuple(audio),
         fps=fps,

@@ -10,7 +10,9 @@
   within EDGE_DB of the nucleus);
 - closures: a dip of the whole band's energy at least CLOSURE_DB below the quieter of the
   two nuclei around it (a stop or nasal closure, not a fricative, which keeps its energy)
-  starts the next syllable with the closed shape m;
+  is left out of both syllables, a gap of CLOSURE_GAP around the dip, so the timeline closes
+  the mouth there (animate/timeline.py: a gap of SHORT_PAUSE_MS or more closes it; the
+  thesis's closed-shape onset would hold a leading m over 81 % of a two-shape syllable);
 - vowel class: the first two formants at the nucleus (Burg, parselmouth), normalised per
   recording (z-scores over all nuclei, Lobanov), give open (high F1), rounded (low F2),
   spread (high F2) or mid. VOWEL_SHAPES maps each class onto the 12 mouth shapes.
@@ -25,6 +27,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.signal import find_peaks
 
+from cartoonface.animate.timeline import SHORT_PAUSE_MS
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.features import HOP, frames, smooth
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -38,6 +41,7 @@ MIN_SYLLABLE = 0.1           # s between two nuclei at least (Mandarin: 3-7 syll
 NUCLEUS_RANGE_DB = 30.0      # peaks this far below the part's loudest frame are noise, not nuclei
 EDGE_DB = 20.0               # a part's first/last syllable starts/ends where the band is this far below its nucleus
 CLOSURE_DB = 15.0            # energy dip (dB below the quieter neighbouring nucleus) taken as a lip closure
+CLOSURE_GAP = SHORT_PAUSE_MS / 1000  # s left out around a closure (the shortest gap that closes the mouth)
 FORMANT_STEP = HOP           # s between formant measurements
 MAX_FORMANT_HZ = 5500.0      # Burg's ceiling (Praat's default for a female voice; fine for male voices too)
 FORMANT_FRAMES = 2           # nucleus +- this many formant frames are averaged (median)
@@ -52,7 +56,6 @@ VOWEL_SHAPES: dict[str, tuple[str, str]] = {
     "spread": ("e", "i"),
     "mid": ("h", "h"),       # the mid central vowel (Mandarin e, er)
 }
-CLOSED = "m"                 # thesis 002 5.2.2: lips closed
 # The four mouth classes the lip sync without a transcript is measured in (bench/no_transcript.py):
 # each of the 12 shapes of thesis 002 5.2.2 by its lips (m, f: closed or lower lip at the teeth;
 # u, o, r: rounded or protruded; i, e, z: spread corners; a, h, h', n: open).
@@ -93,24 +96,24 @@ def analyse_audio(
         report("align", index / len(parts))
         timed.append(_syllables(low, energy, part))
     report("align", 1.0)
-    nuclei = [nucleus for part in timed for _, _, nucleus, _ in part]
+    nuclei = [nucleus for found in timed for _, _, nucleus in found]
     vowels = vowel_classes(audio, np.array(nuclei, dtype=float) * HOP)
     sentences, k = [], 0
-    for part in timed:
+    for found in timed:
         syllables = []
-        for start, end, _, closed in part:
+        for start, end, _ in found:
             label, shape = vowels[k]
             k += 1
-            shapes = (CLOSED, shape) if closed else (shape,)
-            syllables.append(Syllable("", label, shapes, start, end, AUDIO_ONLY_CONFIDENCE))
+            syllables.append(Syllable("", label, (shape,), start, end, AUDIO_ONLY_CONFIDENCE))
         if syllables:
             sentences.append(Sentence(UNTRANSCRIBED, syllables[0].start, syllables[-1].end, tuple(syllables)))
     return Alignment(tuple(sentences), audio.duration, tuple(notes))
 
 
-def _syllables(low: np.ndarray, energy: np.ndarray, part: Span) -> list[tuple[float, float, int, bool]]:
+def _syllables(low: np.ndarray, energy: np.ndarray, part: Span) -> list[tuple[float, float, int]]:
     """(T,) smoothed dB of the 100-1000 Hz band and of the whole band (10 ms frames), one speaking part ->
-    (start s, end s, nucleus frame, starts with a closure) of each syllable in it, in order."""
+    (start s, end s, nucleus frame) of each syllable in it, in order; CLOSURE_GAP left between two
+    syllables around a closure."""
     first = max(int(part.start / HOP), 0)
     last = min(int(np.ceil(part.end / HOP)), len(low))
     if last - first < 3:
@@ -127,14 +130,16 @@ def _syllables(low: np.ndarray, energy: np.ndarray, part: Span) -> list[tuple[fl
     offset = int(peaks[-1])
     while offset + 1 < len(band) and band[offset + 1] >= band[peaks[-1]] - EDGE_DB:
         offset += 1
-    bounds = [onset, *dips, offset + 1]
     loud = energy[first:last]
-    result = []
-    for k, nucleus in enumerate(peaks):
-        closed = k > 0 and min(loud[peaks[k - 1]], loud[nucleus]) - loud[dips[k - 1]] >= CLOSURE_DB
-        start, end = (first + bounds[k]) * HOP, (first + bounds[k + 1]) * HOP
-        result.append((round(start, 3), round(end, 3), first + int(nucleus), bool(closed)))
-    return result
+    half = round(CLOSURE_GAP / HOP / 2)
+    ends, starts = [], [onset]
+    for k, dip in enumerate(dips):
+        closed = min(loud[peaks[k]], loud[peaks[k + 1]]) - loud[dip] >= CLOSURE_DB
+        ends.append(max(dip - half, peaks[k] + 1) if closed else dip)
+        starts.append(min(dip + half, peaks[k + 1]) if closed else dip)
+    ends.append(offset + 1)
+    return [(round((first + a) * HOP, 3), round((first + b) * HOP, 3), first + int(nucleus))
+            for a, b, nucleus in zip(starts, ends, peaks)]
 
 
 def vowel_classes(audio: Audio, times: np.ndarray) -> list[tuple[str, str]]:
