@@ -68,9 +68,10 @@ def report(name: str, recordings: list[Recording]) -> None:
     refs = references(recordings)
     pooled, median, speed, confusion = score(recordings, refs)
     base = float(np.max(confusion.sum(axis=1)) / confusion.sum())
+    closed_or_not = float((confusion[0, 0] + confusion[1:, 1:].sum()) / confusion.sum())
     print(f"{name}: {len(recordings)} recordings, same mouth class {100 * pooled:.1f} % of frames "
           f"(median per recording {100 * median:.1f} %; always the commonest class: {100 * base:.1f} %), "
-          f"{speed:.0f}x real time")
+          f"closed or not the same {100 * closed_or_not:.1f} % of frames, {speed:.0f}x real time")
     print("  reference \\ audio only: " + " ".join(f"{c:>8}" for c in CLASSES))
     for name_, row in zip(CLASSES, confusion):
         print(f"  {name_:>22}: " + " ".join(f"{100 * v / max(row.sum(), 1):7.1f}%" for v in row))
