@@ -1,13 +1,14 @@
 """Lip sync without a transcript (speech/audio_only.py) against the transcript-aligned result.
 
 For every recording of the Biaobei dev set (tuning half 000001-000035, held-out half
-000036-000070; the AISHELL-3 and THCHS-30 sets hold no transcript as written): the mouth key frames of both alignments
+000036-000070), of AISHELL-3 (2) and of THCHS-30 (the MFA example, 7): the mouth key frames of both alignments
 (animate/timeline.mouth_keys, the shape shown from each key to the next) are sampled at
 FPS frames per second, each frame's shape put in its mouth class (audio_only.MOUTH_CLASSES:
 closed, open, rounded, spread), and the share of frames in the same class is reported
 (pooled over the set; the per-recording median too), with the confusion of the classes and
 the speed of `analyse_audio` in times real time. The transcript-aligned result is
-`analyse.analyse` with the transcript as written (bench/align.py's recordings).
+`analyse.analyse` with the transcript as written (Biaobei: bench/align.py's recordings;
+AISHELL-3: the hanzi column of transcripts.tsv; THCHS-30: the .lab files, spaces removed).
 
 `python -m bench no_transcript`; `python -m bench.no_transcript sweep` scores the tuning
 half for a grid of the thresholds (CLOSURE_DB and the vowel-class z-scores).
@@ -15,13 +16,14 @@ half for a grid of the thresholds (CLOSURE_DB and the vowel-class z-scores).
 
 from __future__ import annotations
 
+import csv
 import itertools
 import sys
 import time
 
 import numpy as np
 
-from bench.align import TUNING, Recording, biaobei
+from bench.align import TUNING, ZH, Recording, biaobei, load_audio
 from cartoonface.animate.timeline import mouth_keys
 from cartoonface.speech import audio_only
 from cartoonface.speech.analyse import analyse
@@ -30,6 +32,20 @@ from cartoonface.speech.records import Alignment
 
 FPS = 30
 CLASSES = ("closed", "open", "rounded", "spread")
+
+
+def aishell3() -> list[Recording]:
+    """The AISHELL-3 recordings with their hanzi transcripts (no reference parts: not needed here)."""
+    folder = ZH / "aishell3_charsiu"
+    rows = csv.DictReader((folder / "transcripts.tsv").open(encoding="utf-8"), delimiter="\t")
+    return [Recording(row["wav"], load_audio(folder / row["wav"]), (), row["hanzi"]) for row in rows]
+
+
+def thchs30() -> list[Recording]:
+    """The THCHS-30 recordings of the MFA example with their word-spaced transcripts joined."""
+    folder = ZH / "thchs30_mfa_example"
+    return [Recording(lab.stem, load_audio(lab.with_suffix(".wav")), (), "".join(lab.read_text(encoding="utf-8").split()))
+            for lab in sorted(folder.glob("*.lab")) if not lab.name.endswith(".pinyin.lab")]
 
 
 def frame_classes(alignment: Alignment, duration: float) -> np.ndarray:
@@ -94,6 +110,8 @@ def main() -> None:
     records = biaobei()
     report("Biaobei tuning 000001-000035", [r for r in records if int(r.name) in TUNING])
     report("Biaobei held-out 000036-000070", [r for r in records if int(r.name) not in TUNING])
+    report("AISHELL-3 (2 speakers)", aishell3())
+    report("THCHS-30 (MFA example)", thchs30())
 
 
 if __name__ == "__main__":
