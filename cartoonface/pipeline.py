@@ -35,6 +35,7 @@ from cartoonface.files import atomic_directory, folder_size, read_user_text, wri
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
+from cartoonface.speech.audio_only import transcribed
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import load_audio
@@ -153,7 +154,7 @@ def check_out_dir(out_dir: Path) -> None:
 def generate(
     face: Path | FaceModel,
     audio: Path,
-    transcript: Path | str,
+    transcript: Path | str | None,
     out_dir: Path,
     options: Options = Options(),
     progress: Callable[[str, float], None] | None = None,
@@ -162,7 +163,8 @@ def generate(
 
     `face`: a FaceModel or the path of its JSON. `audio`: the recording's path.
     `transcript`: a path (Path or os.PathLike) to a UTF-8 text file, or the text
-    itself as a str. `progress(stage, fraction)` is told when each stage of
+    itself as a str; None: no transcript, the lip sync from the audio alone (speech/audio_only.py)
+    and a page without text. `progress(stage, fraction)` is told when each stage of
     STAGES starts (and as segmentation and alignment go on) with the fraction
     0..1 of the whole job, and once more at ("pages", 1.0). Raises InputError (a
     subclass) for any bad input; then nothing is left at `out_dir`.
@@ -181,9 +183,10 @@ def generate(
     target = Path(out_dir)
     check_out_dir(target)
     model = face if isinstance(face, FaceModel) else load_face(face)
-    text = transcript if isinstance(transcript, str) else read_user_text(transcript, TranscriptError, "transcript file")
-    source = "transcript" if isinstance(transcript, str) else str(transcript)
-    marks = emotion_marks(text, source)
+    text = (transcript if transcript is None or isinstance(transcript, str)
+            else read_user_text(transcript, TranscriptError, "transcript file"))
+    source = "transcript" if transcript is None or isinstance(transcript, str) else str(transcript)
+    marks = () if text is None else emotion_marks(text, source)
     report("decode")
     recording = load_audio(audio)
     duration = recording.duration
@@ -219,12 +222,13 @@ def generate(
     try:
         with atomic_directory(target) as folder:
             sources = copy_audio(audio, folder, keep_original=options.keep_original)
-            captions = captions_vtt(alignment)
+            captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
             html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
                              fps=options.fps, links=options.links, captions=captions)
             write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
                        actions=actions_to_json(actions))
-            write_text_atomic(folder / CAPTIONS_NAME, captions)
+            if captions is not None:
+                write_text_atomic(folder / CAPTIONS_NAME, captions)
             cues = mouth_cues(alignment)
             for fmt in options.cues:
                 write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))

@@ -35,8 +35,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "mouth shapes) that can be corrected in Praat and given back to `generate --alignment`.")
     parser.add_argument("audio", type=Path, metavar="AUDIO",
                         help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
-    parser.add_argument("--transcript", type=Path, required=True, metavar="TEXT.txt",
-                        help="what is said, UTF-8 text (Chinese; sentences end with punctuation)")
+    parser.add_argument("--transcript", type=Path, metavar="TEXT.txt",
+                        help="what is said, UTF-8 text (Chinese; sentences end with punctuation); without it "
+                             "the mouth shapes come from the audio alone (loudness and formants)")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.TextGrid", help="TextGrid to write")
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="also write the alignment as JSON")
     parser.add_argument("--cues", action="append", default=[], choices=CUE_FORMATS,
@@ -103,12 +104,12 @@ def run(args: argparse.Namespace) -> int:
         if path in (args.output, args.json):
             raise OptionError(f"--cues {path.suffix[1:]}: would write {path}, which is already an output; "
                               "give -o a name ending in .TextGrid")
-    text = read_user_text(args.transcript, TranscriptError, "transcript file")
+    text = None if args.transcript is None else read_user_text(args.transcript, TranscriptError, "transcript file")
     shown = ProgressBar(sys.stderr)
     try:
         shown("decode", 0.0)
         audio = load_audio(args.audio)
-        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript))
+        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript or "transcript"))
     finally:
         shown.close()
     write_text_atomic(args.output, write_textgrid(alignment))

@@ -38,7 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--face", type=Path, required=True, metavar="FACE.json", help="face model (docs/face-model.md)")
     parser.add_argument("--audio", type=Path, required=True, metavar="SPEECH",
                         help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
-    parser.add_argument("--transcript", type=Path, required=True, metavar="TEXT.txt", help="what is said, UTF-8 text")
+    parser.add_argument("--transcript", type=Path, metavar="TEXT.txt",
+                        help="what is said, UTF-8 text; without it the lip sync comes from the audio alone "
+                             "and the page shows no text")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR",
                         help="folder to write (replaced if it holds a previous output)")
     parser.add_argument("--page", choices=PAGES, default=defaults.page, help="page kind (default %(default)s)")

@@ -26,6 +26,7 @@ from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import page_copy
+from cartoonface.speech.audio_only import transcribed
 
 PAGES = ("audiobook", "announcer")
 # Inside the package (a symlink to the top-level folders in a source checkout,
@@ -119,7 +120,8 @@ def page_html(
     """The HTML of the `page` ("audiobook" or "announcer") as a string.
 
     `alignment` gives the sentences (text, start and end in seconds) that the
-    page highlights as they are spoken; `svg` is the animation document, put
+    page highlights as they are spoken (none, and no text panel, for one made from the audio
+    alone: speech/audio_only.py); `svg` is the animation document, put
     inline; `audio` the sources of the `<audio>` clock, best first; `captions` the WebVTT
     text of the sentences, the audio's `<track>` (None: no track). The track is a data: URL:
     from `file://` Chromium refuses to load a track file beside the page (another origin).
@@ -129,7 +131,7 @@ def page_html(
     template = _environment().get_template(f"{page}.html")
     return template.render(
         title=title or "cartoonface",
-        sentences=alignment.sentences,
+        sentences=alignment.sentences if transcribed(alignment) else (),
         svg=inline_svg(svg),
         audio=tuple(audio),
         fps=fps,

@@ -28,6 +28,7 @@ from pypinyin.seg.mmseg import seg
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import align_syllables
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.audio_only import analyse_audio
 from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -55,7 +56,7 @@ MAX_PIECE = 60
 
 def analyse(
     audio: Audio,
-    transcript_text: str,
+    transcript_text: str | None,
     pause: tuple[float, float] | None = None,
     progress: Callable[[str, float], None] | None = None,
     source: str = "transcript",
@@ -66,12 +67,15 @@ def analyse(
     segmentation mode (Alg. 3.1); None the automatic one. `progress(stage,
     fraction)` is called with stage "segment" then "align" and the fraction
     0..1 done of that stage. `source` names the transcript in messages.
+    `transcript_text` None (no transcript): the lip sync from the audio alone (audio_only.py).
     Raises TranscriptError for an empty transcript, one in another language
     (more Latin words than Chinese characters), one with no Mandarin
     syllables (from parse_transcript), or one far longer than the speech
     (over MAX_RATE syllables per second); OptionError for a pause outside
     the recording.
     """
+    if transcript_text is None:
+        return analyse_audio(audio, pause, progress)
     report = progress or (lambda stage, fraction: None)
     if not transcript_text.strip():
         raise TranscriptError(f"{source}: the transcript is empty; expected the text spoken in the recording")

@@ -252,7 +252,8 @@ def check_audio(files: MultiDict[str, FileStorage], limits: Limits,
 
 def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
                      errors: dict[str, str]) -> str | None:
-    """The transcript text: an uploaded UTF-8 text file wins over the pasted text."""
+    """The transcript text: an uploaded UTF-8 text file wins over the pasted text; "" when neither
+    holds any (the lip sync then comes from the audio alone, speech/audio_only.py)."""
     upload = files.get("transcript_file")
     data, too_big = read_upload(upload, 4 * limits.transcript_chars + 3)
     field, name = "transcript", "transcript"
@@ -278,8 +279,7 @@ def check_transcript(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         return None
     text = text.replace("\r\n", "\n").strip()
     if not text:
-        errors["transcript"] = "Paste the transcript of the recording, or upload it as a UTF-8 text file."
-        return None
+        return ""
     if len(text) > limits.transcript_chars:
         errors[field] = (f"{name}: the transcript has {len(text)} characters; "
                          f"at most {limits.transcript_chars} are accepted.")
@@ -373,7 +373,9 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "duration": duration,
         "transcript_chars": len(transcript),
     }
-    files_out = {"face.json": face, f"audio.{ext}": audio, "transcript.txt": transcript.encode("utf-8")}
+    files_out = {"face.json": face, f"audio.{ext}": audio}
+    if transcript:  # without one the job is made from the audio alone
+        files_out["transcript.txt"] = transcript.encode("utf-8")
     for field, name, data in (("textgrid", TEXTGRID_FILE, textgrid), ("actions", ACTIONS_FILE, actions)):
         if data is not None:
             spec[f"{field}_file"] = name

@@ -26,6 +26,7 @@ from werkzeug.routing import BaseConverter
 from werkzeug.wrappers import Response as BaseResponse
 
 from cartoonface.files import remove_folder
+from cartoonface.exports.captions import CAPTIONS_NAME
 from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.draft_store import draft_choice, load_draft
 from cartoonface.face.model import load_face
@@ -232,7 +233,8 @@ def job_page(job_id: str) -> str:
     job = stored_job(job_id)
     return render_template("web/job.html", job=job, status=job.status, stage=job_label(job),
                            pages=PAGES, done=job.status.state == DONE, stages=STAGE_LIST,
-                           textgrid_name=TEXTGRID_FILE, actions_name=ACTIONS_FILE)
+                           textgrid_name=TEXTGRID_FILE, actions_name=ACTIONS_FILE,
+                           captions=(job.folder / SITE / CAPTIONS_NAME).is_file())
 
 
 @bp.get("/jobs/<jobid:job_id>/status")

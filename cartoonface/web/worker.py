@@ -145,9 +145,10 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
                       fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))),
                       alignment=folder / str(spec["textgrid_file"]) if spec.get("textgrid_file") else None,
                       actions=folder / str(spec["actions_file"]) if spec.get("actions_file") else None)
+    transcript = folder / "transcript.txt"  # absent when the form's transcript was left empty
     try:
         result = generate(folder / "face.json", folder / str(spec["audio_file"]),
-                          folder / "transcript.txt", folder / SITE, options, progress)
+                          transcript if transcript.is_file() else None, folder / SITE, options, progress)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
