@@ -33,6 +33,7 @@ from cartoonface.render.animation import animation_svg
 from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.analyse import analyse
+from cartoonface.speech.english import LANGUAGES
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
@@ -65,6 +66,7 @@ class Options:
     links: tuple[tuple[str, str], ...] = ()  # (label, url) for the audio-book page
     emotion: str | None = None  # default mood (face/emotion.py EMOTIONS) where the transcript marks none
     intensity: float = 1.0  # of the default mood, 0..1
+    language: str | None = None  # "zh" or "en" (speech/english.py LANGUAGES); None: from the transcript's script
 
 
 @dataclass(frozen=True)
@@ -103,6 +105,8 @@ def check_options(options: Options) -> None:
     check_links(options.links)
     if options.emotion is not None and options.emotion not in EMOTIONS:
         raise OptionError(f"emotion {options.emotion!r}: expected one of {', '.join(EMOTIONS)}")
+    if options.language is not None and options.language not in LANGUAGES:
+        raise OptionError(f"language {options.language!r}: expected one of {', '.join(LANGUAGES)}")
     intensity = options.intensity
     if isinstance(intensity, bool) or not isinstance(intensity, int | float) or not 0 <= intensity <= 1:
         raise OptionError(f"intensity {intensity!r}: expected a number from 0 to 1")
@@ -184,7 +188,8 @@ def generate(
         report("align")
         alignment = edited_alignment(options.alignment, duration)
     else:
-        alignment = analyse(recording, text, pause=options.pause, progress=report, source=source)
+        alignment = analyse(recording, text, pause=options.pause, progress=report, source=source,
+                            language=options.language)
     report("schedule")
     style = STYLES[options.style or PAGE_STYLES[options.page]]
     if options.actions is not None:

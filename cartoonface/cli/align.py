@@ -26,6 +26,8 @@ HELP = "time the sentences, syllables and mouth shapes of a recording (Praat Tex
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `align` subcommand."""
+    from cartoonface.speech.english import LANGUAGES
+
     parser = subparsers.add_parser(
         "align", help=HELP,
         description="Find when every sentence and syllable of the transcript is spoken in the recording and "
@@ -34,12 +36,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("audio", type=Path, metavar="AUDIO",
                         help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
     parser.add_argument("--transcript", type=Path, required=True, metavar="TEXT.txt",
-                        help="what is said, UTF-8 text (Chinese; sentences end with punctuation)")
+                        help="what is said, UTF-8 text (Chinese or English; sentences end with punctuation)")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.TextGrid", help="TextGrid to write")
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="also write the alignment as JSON")
     parser.add_argument("--pause", metavar="START,END",
                         help="seconds of the first pause between sentences: segment with the thesis's "
                              "thresholds learned from it (Alg. 3.1) instead of the automatic ones")
+    parser.add_argument("--language", choices=LANGUAGES, default=None,
+                        help="language of the transcript and speech (default: found from its script)")
     parser.set_defaults(func=run)
 
 
@@ -96,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         shown("decode", 0.0)
         audio = load_audio(args.audio)
-        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript))
+        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript),
+                            language=args.language)
     finally:
         shown.close()
     write_text_atomic(args.output, write_textgrid(alignment))
