@@ -34,6 +34,10 @@ LANGUAGES = ("zh", "en")
 RATE = 16000  # Hz: the sample rate of pocketsphinx's en-us acoustic model
 FRAME = 0.01  # seconds per pocketsphinx frame (its default frate 100)
 PCM_SCALE = 32767  # float samples -1..1 -> 16-bit PCM
+# Search beam of the second try when the default beams find no alignment: synthetic speech
+# (espeak-ng) lies so far from the acoustic model that every path is pruned (1e-60 and 1e-80
+# were not enough for the test sentence of tests/test_english.py).
+WIDE_BEAM = 1e-200
 # pocketsphinx gives no calibrated confidence: phones it aligned get this one; phones spread
 # evenly after a failed alignment get stretches.FALLBACK_CONFIDENCE.
 ALIGNED_CONFIDENCE = 1.0
@@ -68,6 +72,10 @@ VISEME_SHAPE: dict[int, str] = {
     13: "h'", 14: "h'",
 }
 PHONE_SHAPE: dict[str, str] = {phone: VISEME_SHAPE[v] for v, phones in VISEME_PHONES.items() for phone in phones}
+# A phone's record holds its shape HELD times: the timeline (animate/timeline.py) then puts keys at
+# the phone's start and at 81 % of it (thesis 002, 5.3, two shapes), so the shape is held through
+# the phone and blends into the next in its last part, instead of only being reached at its start.
+HELD = 2
 VOWELS = frozenset({"AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", "IY", "OW", "OY", "UH", "UW"})
 
 # Letter-to-sound fallback for words outside the dictionary: letter groups tried longest
@@ -105,6 +113,11 @@ class EnglishSentence:
 
     text: str
     words: tuple[Word, ...]
+
+
+def phone_shapes(phone: str) -> tuple[str, ...]:
+    """The shapes of the record of an ARPAbet `phone`: its Table 1 shape HELD times."""
+    return (PHONE_SHAPE[phone],) * HELD
 
 
 def detect_language(text: str) -> str:
@@ -176,11 +189,17 @@ def _word(text: str, decoder, source: str) -> Word:
     return Word(text, spelling, phones)
 
 
-def new_decoder():
-    """A pocketsphinx Decoder for forced alignment with the en-us model inside the wheel."""
+def new_decoder(beam: float | None = None, words: tuple[Word, ...] = ()):
+    """A pocketsphinx Decoder for forced alignment with the en-us model inside the wheel, its
+    search beams `beam` (None: pocketsphinx's defaults), knowing the pronunciations of `words`."""
     from pocketsphinx import Decoder
 
-    return Decoder(samprate=RATE, lm=None, bestpath=False, loglevel="FATAL")
+    beams = {} if beam is None else {"beam": beam, "wbeam": beam, "pbeam": beam}
+    decoder = Decoder(samprate=RATE, lm=None, bestpath=False, loglevel="FATAL", **beams)
+    for word in words:
+        if not decoder.lookup_word(word.spelling):
+            decoder.add_word(word.spelling, " ".join(word.phones), True)
+    return decoder
 
 
 def analyse_english(
@@ -211,15 +230,20 @@ def analyse_english(
     counts = [max(1, sum(p in VOWELS for w in s.words for p in w.phones)) for s in spoken]
     spans = reconcile(audio, parts, counts)
     sentences: list[Sentence] = []
+    wide = None  # the decoder with WIDE_BEAM, made when first needed
     for block in _blocks(spans):
         report("align", len(sentences) / len(spoken))
         span = Span(spans[block[0]].start, spans[block[-1]].end)
         group = [spoken[k] for k in block]
-        timed = align_words(audio, span, [w for s in group for w in s.words], decoder)
+        words = [w for s in group for w in s.words]
+        timed = align_words(audio, span, words, decoder)
+        if timed is None:
+            wide = wide or new_decoder(WIDE_BEAM, tuple(w for s in spoken for w in s.words))
+            timed = align_words(audio, span, words, wide)
         if timed is None:
             notes.append(f"sentences {block[0] + 1}-{block[-1] + 1} ({span.start:.2f}-{span.end:.2f} s): "
                          "pocketsphinx found no alignment; the phones are spread evenly over the speech")
-            timed = _spread([w for s in group for w in s.words], span)
+            timed = _spread(words, span)
         position = 0
         for sentence in group:
             phones = [p for w in timed[position : position + len(sentence.words)] for p in w]
@@ -275,7 +299,7 @@ def align_words(audio: Audio, span: Span, words: list[Word], decoder) -> list[li
                 continue  # a silence inside the word
             start = span.start + first * FRAME
             end = min(start + frames * FRAME, audio.duration)
-            phones.append(Syllable("" if phones else word.text, name, (PHONE_SHAPE[name],),
+            phones.append(Syllable("" if phones else word.text, name, phone_shapes(name),
                                    round(start, 3), round(max(end, start), 3), ALIGNED_CONFIDENCE))
         timed.append(phones)
     return timed
@@ -290,7 +314,7 @@ def _spread(words: list[Word], span: Span) -> list[list[Syllable]]:
         phones = []
         for index, phone in enumerate(word.phones):
             start = span.start + k * step
-            phones.append(Syllable(word.text if index == 0 else "", phone, (PHONE_SHAPE[phone],),
+            phones.append(Syllable(word.text if index == 0 else "", phone, phone_shapes(phone),
                                    round(start, 3), round(start + step, 3), FALLBACK_CONFIDENCE))
             k += 1
         timed.append(phones)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from cartoonface.errors import AlignmentError, TranscriptError
-from cartoonface.speech.english import PHONE_SHAPE
+from cartoonface.speech.english import HELD, PHONE_SHAPE
 from cartoonface.speech.records import Alignment, Sentence, Syllable, check_times
 from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shape_onsets, shapes_for
 
@@ -63,6 +63,7 @@ def write_textgrid(alignment: Alignment) -> str:
         records = [s for sentence in alignment.sentences for s in sentence.syllables]
         words = _word_intervals(records)
         phones = [Interval(s.start, s.end, s.pinyin) for s in records]
+        shapes = [Interval(s.start, s.end, s.shapes[0]) for s in records]  # one shape per phone (english.HELD)
         named = zip(ENGLISH_TIERS, (sentences, words, phones, shapes), strict=True)
     else:
         named = zip(TIERS, (sentences, syllables, shapes), strict=True)
@@ -264,10 +265,16 @@ def read_textgrid(text: str, source: str) -> Alignment:
     if not english:
         return alignment
     # A phone inside a word (labelled with the phone alone) has no text, as english.py makes it.
-    sentences = tuple(replace(sentence, syllables=tuple(replace(s, text="") if s.text == s.pinyin else s
-                                                        for s in sentence.syllables))
+    sentences = tuple(replace(sentence, syllables=tuple(_english_phone(s) for s in sentence.syllables))
                       for sentence in alignment.sentences)
     return replace(alignment, sentences=sentences)
+
+
+def _english_phone(record: Syllable) -> Syllable:
+    """A phone record read back as english.py makes it: no text inside a word (the label was the
+    phone alone), its one shape held (english.phone_shapes)."""
+    text = "" if record.text == record.pinyin else record.text
+    return replace(record, text=text, shapes=(record.shapes[0],) * HELD)
 
 
 def _phone_syllables(tiers: dict[str, list[Interval]], source: str) -> list[Interval]:
