@@ -151,3 +151,18 @@ def test_bad_english_input_exits_2_with_a_message(case, english, tmp_path):
 def test_digits_are_refused_before_aligning():
     with pytest.raises(TranscriptError, match=re.escape("story.txt: the number '7'")):
         parse_english("Seven is 7.", new_decoder(), "story.txt")
+
+
+def test_a_transcript_far_longer_than_the_speech_is_refused(aligned):
+    audio, _ = aligned
+    with pytest.raises(TranscriptError, match="story.txt: .* syllables to fit in"):
+        analyse(audio, " ".join([TEXT] * 12), source="story.txt")
+
+
+def test_align_counts_english_words_and_phones(english, tmp_path):
+    speech, transcript = english
+    done = run_cli("align", speech, "--transcript", transcript, "-o", tmp_path / "out.TextGrid")
+    assert done.returncode == 0, done.stderr
+    alignment = read_textgrid((tmp_path / "out.TextGrid").read_text(encoding="utf-8"), "out")
+    phones = sum(len(sentence.syllables) for sentence in alignment.sentences)
+    assert f"2 sentences, {len(WORD_RE.findall(TEXT))} words, {phones} phones" in done.stdout

@@ -69,10 +69,14 @@ def summary(alignment: Alignment, output: Path, seconds: float) -> str:
     """The one-line report of a finished alignment."""
     from cartoonface.speech.analyse import LOW_CONFIDENCE
 
+    from cartoonface.speech.textgrid import is_english
+
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
     low = sum(s.confidence < LOW_CONFIDENCE for s in syllables)
+    counted = (f"{_count(sum(bool(s.text) for s in syllables), 'word')}, {_count(len(syllables), 'phone')}"
+               if is_english(alignment) else _count(len(syllables), 'syllable'))
     return (
-        f"{output}: {_count(len(alignment.sentences), 'sentence')}, {_count(len(syllables), 'syllable')} "
+        f"{output}: {_count(len(alignment.sentences), 'sentence')}, {counted} "
         f"({low} with low confidence) in {alignment.duration:.1f} s of audio, "
         f"{_count(len(alignment.notes), 'note')}; took {seconds:.1f} s"
     )

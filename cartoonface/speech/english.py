@@ -38,6 +38,9 @@ PCM_SCALE = 32767  # float samples -1..1 -> 16-bit PCM
 # (espeak-ng) lies so far from the acoustic model that every path is pruned (1e-60 and 1e-80
 # were not enough for the test sentence of tests/test_english.py).
 WIDE_BEAM = 1e-200
+# English is read at about 3-7 syllables (vowel phones) per second of speech, as Mandarin: more than
+# MAX_RATE (analyse.MAX_RATE) means the transcript is far longer than the recording.
+MAX_RATE = 12.0
 # pocketsphinx gives no calibrated confidence: phones it aligned get this one; phones spread
 # evenly after a failed alignment get stretches.FALLBACK_CONFIDENCE.
 ALIGNED_CONFIDENCE = 1.0
@@ -212,8 +215,9 @@ def analyse_english(
     """Time every sentence, word and phone of the English `transcript_text` in `audio`.
 
     Arguments as `analyse.analyse`. Returns an Alignment whose syllable records are phones
-    (module docstring). Raises TranscriptError for an empty transcript, digits or a word
-    without pronunciation; OptionError for a pause outside the recording.
+    (module docstring). Raises TranscriptError for an empty transcript, digits, a word
+    without pronunciation or one far longer than the speech (over MAX_RATE syllables per
+    second); OptionError for a pause outside the recording.
     """
     report = progress or (lambda stage, fraction: None)
     if not transcript_text.strip():
@@ -228,6 +232,12 @@ def analyse_english(
         notes.append("no speaking part told apart from noise: the whole recording is taken as speech")
     report("segment", 1.0)
     counts = [max(1, sum(p in VOWELS for w in s.words for p in w.phones)) for s in spoken]
+    speech = sum(part.duration for part in parts)
+    if sum(counts) > MAX_RATE * speech:
+        raise TranscriptError(
+            f"{source}: {sum(counts)} syllables to fit in {speech:.1f} s of speech (English is read at 3-7 "
+            f"per second, at most {MAX_RATE:g} accepted): is this the transcript of this recording?"
+        )
     spans = reconcile(audio, parts, counts)
     sentences: list[Sentence] = []
     wide = None  # the decoder with WIDE_BEAM, made when first needed
