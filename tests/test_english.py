@@ -166,3 +166,8 @@ def test_align_counts_english_words_and_phones(english, tmp_path):
     alignment = read_textgrid((tmp_path / "out.TextGrid").read_text(encoding="utf-8"), "out")
     phones = sum(len(sentence.syllables) for sentence in alignment.sentences)
     assert f"2 sentences, {len(WORD_RE.findall(TEXT))} words, {phones} phones" in done.stdout
+
+
+def test_a_word_without_any_sound_is_refused_by_name():
+    with pytest.raises(TranscriptError, match="story.txt: the word 'Gh' has no pronunciation"):
+        parse_english("Bob said. Gh.", new_decoder(), "story.txt")

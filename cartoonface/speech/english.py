@@ -161,15 +161,15 @@ def letters_to_sounds(spelling: str) -> tuple[str, ...]:
     return tuple(phones)
 
 
-def parse_english(text: str, decoder: object, source: str) -> tuple[EnglishSentence, ...]:
+def parse_english(text: str, decoder, source: str) -> tuple[EnglishSentence, ...]:
     """Sentences and words of an English transcript, each word with its phones from the
     decoder's dictionary or, outside it, from `letters_to_sounds` (added to the decoder's
     dictionary). Raises TranscriptError naming `source` when the text has no words, holds
     digits (numbers must be written as words), or a word has no pronunciation."""
-    if re.search(r"\d", MARK_RE.sub(" ", text)):
-        number = re.search(r"\d+", MARK_RE.sub(" ", text))
-        raise TranscriptError(f"{source}: the number {number.group() if number else ''!r} in an English "
-                              "transcript; expected numbers written as words (twenty one)")
+    number = re.search(r"\d+", MARK_RE.sub(" ", text))
+    if number:
+        raise TranscriptError(f"{source}: the number {number.group()!r} in an English transcript; "
+                              "expected numbers written as words (twenty one)")
     sentences = []
     for sentence in split_sentences(text):
         words = tuple(_word(match.group(), decoder, source) for match in WORD_RE.finditer(sentence))
