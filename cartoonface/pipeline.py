@@ -37,6 +37,7 @@ from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, 
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.audio_only import transcribed
 from cartoonface.speech.analyse import analyse
+from cartoonface.speech.english import LANGUAGES
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import load_audio
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
@@ -71,6 +72,7 @@ class Options:
     intensity: float = 1.0  # of the default mood, 0..1
     keep_original: bool = False  # also put the recording as given into the folder (recording.<ext>)
     cues: tuple[str, ...] = ()  # Rhubarb mouth-cue files to add: "tsv", "json", "xml" (exports/cues.py)
+    language: str | None = None  # "zh" or "en" (speech/english.py LANGUAGES); None: from the transcript's script
 
 
 @dataclass(frozen=True)
@@ -112,6 +114,8 @@ def check_options(options: Options) -> None:
     check_links(options.links)
     if options.emotion is not None and options.emotion not in EMOTIONS:
         raise OptionError(f"emotion {options.emotion!r}: expected one of {', '.join(EMOTIONS)}")
+    if options.language is not None and options.language not in LANGUAGES:
+        raise OptionError(f"language {options.language!r}: expected one of {', '.join(LANGUAGES)}")
     intensity = options.intensity
     if isinstance(intensity, bool) or not isinstance(intensity, int | float) or not 0 <= intensity <= 1:
         raise OptionError(f"intensity {intensity!r}: expected a number from 0 to 1")
@@ -195,7 +199,8 @@ def generate(
         report("align")
         alignment = edited_alignment(options.alignment, duration)
     else:
-        alignment = analyse(recording, text, pause=options.pause, progress=report, source=source)
+        alignment = analyse(recording, text, pause=options.pause, progress=report, source=source,
+                            language=options.language)
     report("schedule")
     style = STYLES[options.style or PAGE_STYLES[options.page]]
     if options.actions is not None:

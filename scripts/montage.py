@@ -95,7 +95,7 @@ def grid(tiles: list[Image.Image], labels: list[str], columns: int, title: str =
 def shape_times(textgrid: str, count: int, start: float) -> list[tuple[float, str, str]]:
     """(middle seconds, syllable, shape) of the first `count` shape intervals starting at or after `start`."""
     _, tiers = read_tiers(textgrid, "alignment.TextGrid")
-    syllables = [item for item in tiers["syllables"] if item.text]
+    syllables = [item for item in tiers.get("syllables", tiers.get("phones", [])) if item.text]  # phones: English
     chosen = []
     for item in tiers["mouth shapes"]:
         if not item.text or item.start < start:

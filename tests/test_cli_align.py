@@ -129,7 +129,8 @@ def test_wrong_language_transcript_is_refused(speech, tmp_path, capsys):
     recording, _ = speech
     path = tmp_path / "english.txt"
     path.write_text("Hello, I am the teacher. The weather is fine today!", encoding="utf-8")
-    code = main(["align", str(recording), "--transcript", str(path), "-o", str(tmp_path / "out.TextGrid")])
+    code = main(["align", str(recording), "--transcript", str(path), "-o", str(tmp_path / "out.TextGrid"),
+                 "--language", "zh"])
     err = capsys.readouterr().err
     assert code == 2
     assert f"{path}: the transcript looks like another language" in err

@@ -27,6 +27,7 @@ HELP = "time the sentences, syllables and mouth shapes of a recording (Praat Tex
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `align` subcommand."""
     from cartoonface.exports.cues import FORMATS as CUE_FORMATS
+    from cartoonface.speech.english import LANGUAGES
 
     parser = subparsers.add_parser(
         "align", help=HELP,
@@ -36,8 +37,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("audio", type=Path, metavar="AUDIO",
                         help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
     parser.add_argument("--transcript", type=Path, metavar="TEXT.txt",
-                        help="what is said, UTF-8 text (Chinese; sentences end with punctuation); without it "
-                             "the mouth shapes come from the audio alone (loudness and formants)")
+                        help="what is said, UTF-8 text (Chinese or English; sentences end with punctuation); "
+                             "without it the mouth shapes come from the audio alone (loudness and formants)")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.TextGrid", help="TextGrid to write")
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="also write the alignment as JSON")
     parser.add_argument("--cues", action="append", default=[], choices=CUE_FORMATS,
@@ -46,6 +47,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--pause", metavar="START,END",
                         help="seconds of the first pause between sentences: segment with the thesis's "
                              "thresholds learned from it (Alg. 3.1) instead of the automatic ones")
+    parser.add_argument("--language", choices=LANGUAGES, default=None,
+                        help="language of the transcript and speech (default: found from its script)")
     parser.set_defaults(func=run)
 
 
@@ -71,10 +74,14 @@ def summary(alignment: Alignment, output: Path, seconds: float) -> str:
     """The one-line report of a finished alignment."""
     from cartoonface.speech.analyse import LOW_CONFIDENCE
 
+    from cartoonface.speech.textgrid import is_english
+
     syllables = [s for sentence in alignment.sentences for s in sentence.syllables]
     low = sum(s.confidence < LOW_CONFIDENCE for s in syllables)
+    counted = (f"{_count(sum(bool(s.text) for s in syllables), 'word')}, {_count(len(syllables), 'phone')}"
+               if is_english(alignment) else _count(len(syllables), 'syllable'))
     return (
-        f"{output}: {_count(len(alignment.sentences), 'sentence')}, {_count(len(syllables), 'syllable')} "
+        f"{output}: {_count(len(alignment.sentences), 'sentence')}, {counted} "
         f"({low} with low confidence) in {alignment.duration:.1f} s of audio, "
         f"{_count(len(alignment.notes), 'note')}; took {seconds:.1f} s"
     )
@@ -109,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         shown("decode", 0.0)
         audio = load_audio(args.audio)
-        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript or "transcript"))
+        alignment = analyse(audio, text, pause=pause, progress=shown, source=str(args.transcript or "transcript"),
+                            language=args.language)
     finally:
         shown.close()
     write_text_atomic(args.output, write_textgrid(alignment))

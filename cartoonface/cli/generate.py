@@ -29,6 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from cartoonface.pipeline import Options
     from cartoonface.render.pages import PAGES
     from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
+    from cartoonface.speech.english import LANGUAGES
 
     defaults = Options()
     parser = subparsers.add_parser(
@@ -65,6 +66,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--pause", metavar="S,E",
                         help="a stretch of pure silence in the recording (start,end seconds): sentence "
                              "segmentation then uses the thesis's threshold from it (Alg. 3.1)")
+    parser.add_argument("--language", choices=LANGUAGES, default=None,
+                        help="language of the transcript and speech (default: found from its script)")
     parser.add_argument("--link", action="append", default=[], metavar="LABEL=URL",
                         help="a link under the audio-book text (repeatable)")
     parser.add_argument("--video", type=Path, metavar="OUT.mp4",
@@ -111,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
         clothes=args.clothes, actions=args.actions, alignment=args.alignment, pause=parse_pause(args.pause),
         links=tuple(parse_link(link) for link in args.link), emotion=args.emotion, intensity=args.intensity,
-        cues=tuple(dict.fromkeys(args.cues)), keep_original=args.keep_original,
+        cues=tuple(dict.fromkeys(args.cues)), keep_original=args.keep_original, language=args.language,
     )
     size = parse_size(args.size)
     if args.video is not None:

@@ -29,6 +29,7 @@ from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import align_syllables
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.audio_only import analyse_audio
+from cartoonface.speech.english import analyse_english, detect_language
 from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -60,8 +61,12 @@ def analyse(
     pause: tuple[float, float] | None = None,
     progress: Callable[[str, float], None] | None = None,
     source: str = "transcript",
+    language: str | None = None,
 ) -> Alignment:
     """Time every sentence and syllable of `transcript_text` in `audio`.
+
+    `language` "zh" or "en" (english.LANGUAGES); None finds it from the transcript's script
+    (english.detect_language). English is aligned by english.analyse_english.
 
     `pause` = (start, end) seconds of the first pause selects the thesis's
     segmentation mode (Alg. 3.1); None the automatic one. `progress(stage,
@@ -76,6 +81,8 @@ def analyse(
     """
     if transcript_text is None:
         return analyse_audio(audio, pause, progress)
+    if (language or detect_language(transcript_text)) == "en":
+        return analyse_english(audio, transcript_text, pause, progress, source)
     report = progress or (lambda stage, fraction: None)
     if not transcript_text.strip():
         raise TranscriptError(f"{source}: the transcript is empty; expected the text spoken in the recording")

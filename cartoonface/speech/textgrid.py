@@ -20,14 +20,17 @@ from __future__ import annotations
 import codecs
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from cartoonface.errors import AlignmentError, TranscriptError
+from cartoonface.speech.english import HELD, PHONE_SHAPE
 from cartoonface.speech.records import Alignment, Sentence, Syllable, check_times
 from cartoonface.speech.mouth_shapes import MOUTH_SYMBOLS, shape_onsets, shapes_for
 
 TIERS = ("sentences", "syllables", "mouth shapes")
+# An English alignment (its records are ARPAbet phones, speech/english.py) has words and phones instead of syllables.
+ENGLISH_TIERS = ("sentences", "words", "phones", "mouth shapes")
 # Times are written with 6 decimals (1 microsecond): a round trip keeps every time to the ms.
 _DECIMALS = 6
 # Boundary slack when placing syllables in sentences and shapes in syllables (seconds).
@@ -56,7 +59,15 @@ def write_textgrid(alignment: Alignment) -> str:
             syllables.append(Interval(syllable.start, syllable.end, _syllable_label(syllable)))
             shapes += _shape_intervals(syllable)
     duration = max([alignment.duration] + [s.end for s in sentences])
-    tiers = [(name, _fill(items, duration)) for name, items in zip(TIERS, (sentences, syllables, shapes), strict=True)]
+    if is_english(alignment):
+        records = [s for sentence in alignment.sentences for s in sentence.syllables]
+        words = _word_intervals(records)
+        phones = [Interval(s.start, s.end, s.pinyin) for s in records]
+        shapes = [Interval(s.start, s.end, s.shapes[0]) for s in records]  # one shape per phone (english.HELD)
+        named = zip(ENGLISH_TIERS, (sentences, words, phones, shapes), strict=True)
+    else:
+        named = zip(TIERS, (sentences, syllables, shapes), strict=True)
+    tiers = [(name, _fill(items, duration)) for name, items in named]
     lines = [
         'File type = "ooTextFile"',
         'Object class = "TextGrid"',
@@ -84,6 +95,24 @@ def write_textgrid(alignment: Alignment) -> str:
                 f"            text = {_quote(interval.text)} ",
             ]
     return "\n".join(lines) + "\n"
+
+
+def is_english(alignment: Alignment) -> bool:
+    """True when the alignment's records are English phones (ARPAbet, english.PHONE_SHAPE), not syllables."""
+    records = [s for sentence in alignment.sentences for s in sentence.syllables]
+    return bool(records) and all(s.pinyin in PHONE_SHAPE for s in records)
+
+
+def _word_intervals(phones: list[Syllable]) -> list[Interval]:
+    """English words from phone records: a word starts at a record with text and ends with the last
+    phone before the next word's."""
+    words: list[Interval] = []
+    for phone in phones:
+        if phone.text or not words:
+            words.append(Interval(phone.start, phone.end, phone.text))
+        else:
+            words[-1] = Interval(words[-1].start, phone.end, words[-1].text)
+    return words
 
 
 def _syllable_label(syllable: Syllable) -> str:
@@ -225,11 +254,46 @@ def read_textgrid(text: str, source: str) -> Alignment:
     syllable lies outside every sentence.
     """
     duration, tiers = read_tiers(text, source)
+    english = "syllables" not in tiers and "phones" in tiers
+    if english:
+        tiers["syllables"] = _phone_syllables(tiers, source)
     for name in TIERS[:2]:
         if name not in tiers:
             raise AlignmentError(f"{source}: no interval tier named {name!r}; expected tiers {', '.join(TIERS)}")
     labelled = {name: [item for item in items if item.text] for name, items in tiers.items()}
-    return _alignment(labelled, duration, source)
+    alignment = _alignment(labelled, duration, source)
+    if not english:
+        return alignment
+    # A phone inside a word (labelled with the phone alone) has no text, as english.py makes it.
+    sentences = tuple(replace(sentence, syllables=tuple(_english_phone(s) for s in sentence.syllables))
+                      for sentence in alignment.sentences)
+    return replace(alignment, sentences=sentences)
+
+
+def _english_phone(record: Syllable) -> Syllable:
+    """A phone record read back as english.py makes it: no text inside a word (the label was the
+    phone alone), its one shape held (english.phone_shapes)."""
+    text = "" if record.text == record.pinyin else record.text
+    return replace(record, text=text, shapes=(record.shapes[0],) * HELD)
+
+
+def _phone_syllables(tiers: dict[str, list[Interval]], source: str) -> list[Interval]:
+    """The labelled intervals of an English `phones` tier as syllable intervals `word PHONE` (the word
+    on the phone where a `words` interval starts). Without a `mouth shapes` tier one is added from
+    the phones (english.PHONE_SHAPE). AlignmentError naming a label that is not an ARPAbet phone."""
+    starts = {_rounded(item.start): item.text for item in tiers.get("words", []) if item.text}
+    syllables, shapes = [], []
+    for item in tiers["phones"]:
+        if not item.text:
+            continue
+        if item.text not in PHONE_SHAPE:
+            raise AlignmentError(f"{source}: tier phones, label {item.text!r} at {item.start:g} s; expected an "
+                                 f"ARPAbet phone ({' '.join(sorted(PHONE_SHAPE))})")
+        word = starts.get(_rounded(item.start), "")
+        syllables.append(Interval(item.start, item.end, f"{word} {item.text}" if word else item.text))
+        shapes.append(Interval(item.start, item.end, PHONE_SHAPE[item.text]))
+    tiers.setdefault(TIERS[2], shapes)
+    return syllables
 
 
 def read_tiers(text: str, source: str) -> tuple[float, dict[str, list[Interval]]]:
