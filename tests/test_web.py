@@ -352,6 +352,13 @@ def test_the_mood_and_the_markup_reach_the_job(app, client, speech, sample_name)
     assert job.spec["mood"] == "sad"
 
 
+@pytest.mark.parametrize("language", ["", "zh", "en"])
+def test_the_language_choice_reaches_the_job(app, client, speech, sample_name, language):
+    response = post(client, form(client, speech, sample_name, language=language))
+    assert response.status_code == 303
+    assert load_job(Path(app.instance_path), job_id_of(response.headers["Location"])).spec["language"] == language
+
+
 def test_transcript_file_is_used_instead_of_pasted_text(app, client, speech, sample_name):
     response = post(client, form(client, speech, sample_name, transcript="",
                                  transcript_file=(io.BytesIO("\ufeff你好，世界。\r\n".encode()), "t.txt")))
@@ -430,6 +437,7 @@ def test_photo_size_and_either_model_or_photo(client, speech, sample_name):
     ("clothes", "", "Choose one of the clothes"),
     ("style", "lively", "Choose one of the styles"),
     ("mood", "joy", "Choose one of the moods"),
+    ("language", "fr", "Choose one of the languages"),
     ("transcript", "你好。\n世界[joy]。", "line 2, column 3: unknown emotion &#39;joy&#39;"),
     ("transcript", "你好[/sad]世界。", "line 1, column 3: closing mark [/sad]"),
     ("title", "x" * 201, "at most 200 are accepted"),

@@ -31,7 +31,8 @@ bp = Blueprint("api", __name__, url_prefix="/api")
 
 # API field -> the form field that check_submission reads (the same checks as the form).
 TEXT_FIELDS = {"sample": "face_sample", "title": "title", "page": "page", "style": "style",
-               "background": "background", "clothes": "clothes", "mood": "mood", "transcript": "transcript"}
+               "background": "background", "clothes": "clothes", "mood": "mood", "language": "language",
+               "transcript": "transcript"}
 FILE_FIELDS = {"face": "face_file", "photo": "photo", "audio": "audio", "transcript": "transcript_file",
                "textgrid": "textgrid_file", "actions": "actions_file"}
 # A form field's error -> the API field to name.

@@ -38,6 +38,9 @@ STYLE_CHOICES = {"": "the page's own (audio book: storyteller, announcer: announ
                  "announcer": "announcer (restrained)", "storyteller": "storyteller (livelier)"}
 # The default mood (face/emotion.py EMOTIONS), where the transcript's [emotion] marks set none.
 MOOD_CHOICES = {"": "neutral", **{name: name for name in EMOTIONS}}
+# The language of the transcript and speech (speech/english.py LANGUAGES); "" finds it from the script.
+LANGUAGE_CHOICES = {"": "found from the transcript (Chinese characters or English words)", "zh": "Mandarin",
+                    "en": "English"}
 MAX_FACE_BYTES = 1 << 20  # a face model is a few kB of JSON; 1 MiB is generous
 MAX_PHOTO_BYTES = 20 << 20  # a 50-megapixel JPEG is ~15 MB
 # An edited TextGrid: a 4-minute recording's is 0.3 MB in UTF-8, so 30 minutes in UTF-16 take ~4.4 MB.
@@ -148,7 +151,7 @@ def _text(form: MultiDict[str, str], name: str) -> str:
 
 def form_values(form: MultiDict[str, str]) -> dict[str, str]:
     """The plain fields as sent, to fill the form again when it comes back with errors."""
-    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "style", "mood", "title",
+    return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "style", "mood", "language", "title",
                                                  "background", "clothes", "transcript")}
 
 
@@ -349,6 +352,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     page = check_choice(form, "page", PAGES, "page kinds", errors)
     style = check_choice(form, "style", STYLE_CHOICES, "styles", errors)
     mood = check_choice(form, "mood", MOOD_CHOICES, "moods", errors)
+    language = check_choice(form, "language", LANGUAGE_CHOICES, "languages", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
     face, face_label, face_notes = check_face(form, files, limits, errors, chosen)
@@ -364,6 +368,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "page": page,
         "style": style,
         "mood": mood,
+        "language": language,
         "background": background,
         "clothes": clothes,
         "face_label": face_label,

@@ -31,7 +31,7 @@ from cartoonface.web.config import PACKAGE, Settings
 from cartoonface.web.draft_store import draft_choice, load_draft
 from cartoonface.face.model import load_face
 from cartoonface.web.inputs import (ACTIONS_FILE, MAX_ACTIONS_BYTES, MAX_PHOTO_BYTES, MAX_TEXTGRID_BYTES, MAX_TITLE,
-                                    MOOD_CHOICES, PAGES, STYLE_CHOICES, TEXTGRID_FILE, Limits, check_submission,
+                                    LANGUAGE_CHOICES, MOOD_CHOICES, PAGES, STYLE_CHOICES, TEXTGRID_FILE, Limits, check_submission,
                                     form_values, megabytes)
 from cartoonface.web.point_editor import preview_svg
 from cartoonface.web.runner import QueueFull, Runner
@@ -152,7 +152,7 @@ def render_form(values: dict[str, str], errors: dict[str, str], status: int = 20
     shown = {**defaults, **{key: value for key, value in values.items() if value}}
     draft = load_draft(state().settings.instance, shown["face_draft"]) if shown.get("face_draft") else None
     return render_template(
-        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES, styles=STYLE_CHOICES, moods=MOOD_CHOICES, draft=draft,
+        "web/index.html", values=shown, errors=errors, limits=limits, pages=PAGES, styles=STYLE_CHOICES, moods=MOOD_CHOICES, languages=LANGUAGE_CHOICES, draft=draft,
         max_title=MAX_TITLE, upload_mb=megabytes(limits.upload_bytes), photo_mb=megabytes(MAX_PHOTO_BYTES),
         textgrid_mb=megabytes(MAX_TEXTGRID_BYTES), actions_mb=megabytes(MAX_ACTIONS_BYTES),
         csrf=csrf_token(),

@@ -141,7 +141,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
                       background=str(spec["background"]), clothes=str(spec["clothes"]), cues=CUE_FORMATS,
-                      emotion=str(spec.get("mood") or "") or None,
+                      emotion=str(spec.get("mood") or "") or None, language=str(spec.get("language") or "") or None,
                       fps=int(str(spec.get("fps", DEFAULT_OPTIONS.fps))), seed=int(str(spec.get("seed", DEFAULT_OPTIONS.seed))),
                       alignment=folder / str(spec["textgrid_file"]) if spec.get("textgrid_file") else None,
                       actions=folder / str(spec["actions_file"]) if spec.get("actions_file") else None)
