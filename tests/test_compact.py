@@ -39,21 +39,18 @@ def looking_about() -> list[FaceState]:
     return still + turning
 
 
-def frozen(data: bytes, frame: int) -> bytes:
-    """The animation `data` as a still SVG of frame `frame` (time frame / FPS): each track's frame
-    shown then is made visible, the others and every <set> removed."""
-    ms = round(frame * 1000 / FPS)
+def frozen(data: bytes, frame: int, fps: int = FPS) -> bytes:
+    """The animation `data` as a still SVG of frame `frame` (frame / fps s): each track's `<use>`
+    pointed at the drawing its href animation shows in the middle of that frame, the animation removed."""
+    ms = (frame + 0.5) * 1000 / fps
     svg = etree.fromstring(data)
-    for show in list(svg.iter(f"{S}set")):
-        holder = show.getparent()
-        begins = [round(float(value) * 1000) for value in show.get("begin").split(";")]
-        ends = ([begin + round(float(show.get("dur")) * 1000) for begin in begins] if show.get("dur")
-                else [round(float(value) * 1000) for value in show.get("end").split(";")])
-        if any(begin <= ms < end for begin, end in zip(begins, ends, strict=True)):
-            holder.set("visibility", "visible")
-        holder.remove(show)
-    for hidden in list(svg.iterfind(".//s:g[@visibility='hidden']", NS)):
-        hidden.getparent().remove(hidden)
+    for animate in list(svg.iter(f"{S}animate")):
+        use = animate.getparent()
+        total = float(animate.get("dur")) * 1000
+        times = [float(value) * total for value in animate.get("keyTimes").split(";")]
+        values = animate.get("values").split(";")
+        use.set("href", values[max(index for index, at in enumerate(times) if at <= ms)])
+        use.remove(animate)
     return etree.tostring(svg)
 
 
