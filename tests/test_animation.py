@@ -16,7 +16,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.face.lift import lift
 from cartoonface.face.pose import pose_face, rig, unroll
-from cartoonface.render.animation import KEY_TIME_DECIMALS, KEY_TIME_LEAD, animation_svg, clock
+from cartoonface.render.animation import KEY_TIME_DECIMALS, KEY_TIME_LEAD, KEY_TIME_MIN_LEAD, animation_svg, clock
 from cartoonface.render.pathdata import MIRROR, TOLERANCE, compact_paths
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -85,7 +85,8 @@ def test_key_times_tile_the_timeline_on_the_frame_boundaries(face):
         total = float(animate.get("dur"))
         for at in (float(value) * total * 1000 for value in animate.get("keyTimes").split(";")[1:]):
             boundary = round(round(at * fps / 1000) * 1000 / fps)  # whole ms, as the frames begin
-            early = (KEY_TIME_LEAD + 1) * total * 1000 / 10 ** KEY_TIME_DECIMALS  # the lead, rounded down
+            step = total * 1000 / 10 ** KEY_TIME_DECIMALS  # ms
+            early = max(KEY_TIME_LEAD * step, KEY_TIME_MIN_LEAD) + 2 * step  # the lead, rounded down
             assert boundary - early <= at < boundary, (
                 f"{name}: key time {at} ms is not just before a frame boundary")
 

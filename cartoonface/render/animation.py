@@ -45,6 +45,7 @@ own plays silently; the pages drive its clock from the audio (static/cartoonface
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import count
@@ -82,9 +83,12 @@ HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every ot
 # times have KEY_TIME_DECIMALS decimals (units of 10 us in 100 s, 0.1 ms in 1000 s) and are written
 # KEY_TIME_LEAD units early: Chromium compares them with the time as a share of the whole in single
 # precision (24 bits), so a key time written exactly can fall either side of a time on the boundary;
-# 5 units are 8 steps of single precision near the end (0.5 ms early in a 1000 s animation).
+# 5 units are 8 steps of single precision near the end (0.5 ms early in a 1000 s animation). They are
+# also at least KEY_TIME_MIN_LEAD ms early: Chromium's clock counts whole microseconds, cut down from
+# the seconds given to setCurrentTime (0.033 -> 32.999 ms).
 KEY_TIME_DECIMALS = 7
 KEY_TIME_LEAD = 5
+KEY_TIME_MIN_LEAD = 0.01
 # The ids of the tracks' drawings: this letter and a number in base 36 (compact.short_id).
 FRAME_LETTER = "f"
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
@@ -192,7 +196,8 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
     all_runs = runs(keys)
     total = 10 ** len(str(frame_ms(len(keys), fps)))  # ms: 633 -> 1000, 190325 -> 1000000
     units = 10 ** KEY_TIME_DECIMALS
-    times = ";".join(decimal_text(max(0, frame_ms(run.first, fps) * units // total - KEY_TIME_LEAD) / units,
+    lead = max(KEY_TIME_LEAD, math.ceil(KEY_TIME_MIN_LEAD * units / total))
+    times = ";".join(decimal_text(max(0, frame_ms(run.first, fps) * units // total - lead) / units,
                                   KEY_TIME_DECIMALS) for run in all_runs)
     return {"calcMode": "discrete", "values": ";".join(value(keys[run.first]) for run in all_runs),
             "keyTimes": times, "dur": clock(total), "fill": "freeze"}
