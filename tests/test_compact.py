@@ -16,6 +16,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.png import svg_to_png
+from tests.stills import frozen
 
 ROOT = Path(__file__).resolve().parent.parent
 NS = {"s": "http://www.w3.org/2000/svg"}
@@ -37,25 +38,6 @@ def looking_about() -> list[FaceState]:
              for (h, v), symbol in zip(GAZES, "aoeium", strict=True) for _ in range(2)]
     turning = [FaceState(pose=Pose(turn=float(i), tilt=i / 2), gaze_h=3.0 * (i % 2)) for i in range(4)]
     return still + turning
-
-
-def frozen(data: bytes, frame: int, fps: int = FPS) -> bytes:
-    """The animation `data` as a still SVG of frame `frame` (frame / fps s): each discrete animation
-    replaced by the value it holds in the middle of that frame (a track's `<use>` pointed at the
-    frame's drawing, a layer's transform set to the frame's turn or shift)."""
-    ms = (frame + 0.5) * 1000 / fps
-    svg = etree.fromstring(data)
-    for animate in list(svg.iter(f"{S}animate", f"{S}animateTransform")):
-        holder = animate.getparent()
-        total = float(animate.get("dur")) * 1000
-        times = [float(value) * total for value in animate.get("keyTimes").split(";")]
-        value = animate.get("values").split(";")[max(index for index, at in enumerate(times) if at <= ms)]
-        if animate.tag == f"{S}animate":
-            holder.set(animate.get("attributeName"), value)
-        else:
-            holder.set("transform", f"{animate.get('type')}({value})")
-        holder.remove(animate)
-    return etree.tostring(svg)
 
 
 def pixels(data: bytes) -> np.ndarray:
@@ -105,7 +87,7 @@ def in_frame_copies(data: bytes) -> bytes:
 @pytest.mark.parametrize("frame", [0, 3, 7, 9, 12, 15])
 def test_a_frame_with_shared_clip_paths_looks_as_with_its_own(face, frame):
     # the frame at the same time, drawn with the shared clip paths and with copies of its own
-    still = frozen(animation_svg(face, looking_about(), FPS), frame)
+    still = frozen(animation_svg(face, looking_about(), FPS), frame, FPS)
     before = in_frame_copies(still)
     assert before != still, "the frame uses shared clip paths"
     after, own = pixels(still), pixels(before)

@@ -1,5 +1,5 @@
 """The frames' timing in real Chromium (Playwright, Debian's chromium): at a frame's start and in its
-middle, the animation seeked by `setCurrentTime` looks as that frame drawn still (tests/test_compact.py
+middle, the animation seeked by `setCurrentTime` looks as that frame drawn still (tests/stills.py
 `frozen`: each track's `<use>` pointed at the frame's drawing), in every track, the head's roll included."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from PIL import Image
 from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg, frame_ms
-from tests.test_compact import frozen
+from tests.stills import frozen
 
 pytestmark = pytest.mark.browser
 
