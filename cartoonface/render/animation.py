@@ -3,25 +3,24 @@
 Spatial domain (6.3.1): four layers, background, hair, clothes and face, drawn
 in that order; the face's gradients live once in `<defs>`. A part's clip path
 (the eye outline clipping the eyeball, the mouth opening clipping the teeth)
-is written just before the part, inside the same frame: its children inherit
-the frame's visibility, so the clip is whole exactly while the part is shown,
-and gzip finds the clip's outline next to the same outline drawn by the part. A clip path
-that several drawings hold alike (an eye's outline under different gazes of a still head) is
-written once in the document's `<defs>` instead, where nothing hides it (render/compact.py).
+is written just before the part, inside the same drawing, where gzip finds the
+clip's outline next to the same outline drawn by the part. A clip path that several
+drawings hold alike (an eye's outline under different gazes of a still head) is
+written once in the document's `<defs>` instead (render/compact.py).
 
 Temporal domain (6.3.2): the thesis shows each frame as
 `<g visibility="hidden"><set attributeName="visibility" to="visible" begin=".." dur=".."/>...</g>`.
-We keep that form and make it small:
+We show a track's frames with one `<use>` whose `href` one discrete `<animate>` points at
+the drawing of each frame (about 95 bytes less per drawing, and Chromium plays a long
+animation about three times as fast: docs/BENCHMARKS.md, "Frames by one <use>"):
 
 - the face of render/svg.py is split into part tracks (TRACK_OF): hair, ears,
   face (outline, cheeks and mouth, which follow the jaw), features (nose and
   brows), eyes. Each track has its own frames, so a moving mouth does not
   repeat the eyes, and a still head does not repeat the hair;
-- a part drawing that looks the same in consecutive frames is one longer
-  `<set>`; a drawing that comes back later (the rest mouth, open eyes) is
-  written once, its earlier runs in one `<set>` with a begin list (and one
-  `dur`, or an end list), its last run in a `<set>` of its own;
-- a track whose drawing never changes is written once, outside any frame;
+- each distinct drawing of a track is written once, as a `<g id>` in the track's own
+  `<defs>`; consecutive frames showing the same drawing are one value of the animation;
+- a track whose drawing never changes is written once, with no `<use>`;
 - every frame's state is drawn (no pose held over frames); the head's roll is
   not drawn into the parts but is a rotation of the hair and face layers (one
   discrete `<animateTransform>` each, and a skew of the neck about the collar),
@@ -35,12 +34,13 @@ We keep that form and make it small:
 - repeated presentation attributes become CSS classes, the most used ones
   named by one letter; ids are short (base 36).
 
-Frame i shows time i / fps. Times are written in whole milliseconds, each
-`begin`/`dur`/`end` derived from the frame boundaries round(i * 1000 / fps), so the
-`<set>`s of one track tile the timeline with no gap and no overlap. The last
-drawing of each track is frozen (`fill="freeze"`) so the face stays after the
-end. SMIL starts at 0 when the document loads: animation.svg opened on its
-own plays silently; the pages drive its clock from the audio (static/cartoonface.js).
+Frame i shows time i / fps, from its boundary round(i * 1000 / fps) ms. Every discrete
+animation (_discrete) lasts a power of ten of milliseconds and writes each key time a
+little before its boundary (KEY_TIME_LEAD), so Chromium, which compares in single
+precision and whole microseconds, shows the new frame at the boundary itself. The last
+value is frozen (`fill="freeze"`) so the face stays after the end. SMIL starts at 0 when
+the document loads: animation.svg opened on its own plays silently; the pages drive its
+clock from the audio (static/cartoonface.js).
 """
 
 from __future__ import annotations
@@ -322,7 +322,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `body` (animate/body.py, one value per state) moves the clothes layer: the shoulders
     follow the head and breathe (None: a still body).
     The root is `<svg id="cf-face">`; each track is a `<g data-part="...">`;
-    mouth frames carry `data-shape`, the dominant basic mouth shape they show.
+    the mouth track's drawings carry `data-shape`, the dominant basic mouth shape they show.
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
     drawn (every PROGRESS_FRAMES frames) and tidied, and 1.0 at the end.
     """
