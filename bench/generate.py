@@ -112,7 +112,7 @@ def page_ready(index: Path) -> tuple[list[float], float]:
 
 def bytes_by_track(svg: bytes, minutes: float) -> str:
     """Raw / gzipped KB per minute of the document's <defs> and of each part track
-    (`<g data-part>`), with the track's number of frames, as one line."""
+    (`<g data-part>`), with the track's number of drawings (frames), as one line."""
     from lxml import etree
 
     root = etree.fromstring(svg)
@@ -122,7 +122,7 @@ def bytes_by_track(svg: bytes, minutes: float) -> str:
     texts = []
     for name, element in pieces:
         data = etree.tostring(element)
-        frames = len(element.findall(f"{ns}g[@visibility='hidden']"))
+        frames = len(element.findall(f"{ns}defs/{ns}g")) if name != "defs" else 0  # a track's drawings
         texts.append(f"{name} {len(data) / minutes / 1e3:.0f}/{len(gzip.compress(data, 6)) / minutes / 1e3:.0f}"
                      + (f" ({frames} frames)" if frames else ""))
     return "KB per minute raw/gzipped: " + ", ".join(texts)

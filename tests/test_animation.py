@@ -1,4 +1,5 @@
-"""The animation SVG: layers, frames and <set>s tiling the timeline, merging, rounding, references."""
+"""The animation SVG: layers, each track's drawings shown by one <use> whose href tiles the timeline,
+merging, rounding, references."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.face.lift import lift
 from cartoonface.face.pose import pose_face, rig, unroll
-from cartoonface.render.animation import animation_svg, clock
+from cartoonface.render.animation import KEY_TIME_DECIMALS, KEY_TIME_LEAD, KEY_TIME_MIN_LEAD, animation_svg, clock
 from cartoonface.render.pathdata import MIRROR, TOLERANCE, compact_paths
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -33,51 +34,61 @@ def talking(*mouths: tuple[str, int]) -> list[FaceState]:
     return [FaceState(mouth=((symbol, 1.0),)) for symbol, count in mouths for _ in range(count)]
 
 
+def shows(track: etree._Element) -> etree._Element:
+    """The discrete <animate> of the href of a track's one <use> (checked: discrete, frozen, its first
+    value the <use>'s own href)."""
+    use = track.find("s:use", NS)
+    animate = use.find("s:animate", NS)
+    assert animate.get("attributeName") == "href" and animate.get("calcMode") == "discrete"
+    assert animate.get("fill") == "freeze", "the last drawing stays"
+    assert use.get("href") == animate.get("values").split(";")[0], "without SMIL the first drawing shows"
+    return animate
+
+
 def intervals(track: etree._Element) -> list[tuple[int, int, etree._Element]]:
-    """(begin ms, end ms, frame <g>) of every interval of every <set> in a track, sorted by
-    begin. A <set> has a begin list and either one dur or an end list as long."""
-    found = []
-    for show in track.iterfind(".//s:set", NS):
-        begins = [round(float(value) * 1000) for value in show.get("begin").split(";")]
-        if show.get("dur") is not None:
-            assert show.get("end") is None
-            ends = [begin + round(float(show.get("dur")) * 1000) for begin in begins]
-        else:
-            ends = [round(float(value) * 1000) for value in show.get("end").split(";")]
-        assert len(ends) == len(begins)
-        assert all(a < b <= c for a, b, c in zip(begins, ends, begins[1:] + [ends[-1]])), "time order"
-        found += [(begin, end, show.getparent()) for begin, end in zip(begins, ends, strict=True)]
-    return sorted(found, key=lambda item: item[0])
+    """(begin ms, end ms, drawing <g>) of every run of a track, in time order: the key times of its
+    <use>'s href animation (fractions of its dur) and the drawings of the track's <defs> they show.
+    A run ends where the next begins, the last at the end of the animation."""
+    animate = shows(track)
+    total = float(animate.get("dur")) * 1000
+    begins = [round(float(value) * total) for value in animate.get("keyTimes").split(";")]
+    values = animate.get("values").split(";")
+    assert len(values) == len(begins) and begins[0] == 0
+    drawings = {g.get("id"): g for g in track.find("s:defs", NS).iterfind("s:g", NS)}
+    ends = begins[1:] + [round(total)]
+    assert all(begin < end for begin, end in zip(begins, ends)), "time order"
+    return [(begin, end, drawings[value[1:]]) for begin, end, value in zip(begins, ends, values, strict=True)]
 
 
 def content(frame: etree._Element) -> bytes:
-    """A frame's drawing without its <set>s."""
-    return b"".join(etree.tostring(child) for child in frame if child.tag != f"{S}set")
+    """A drawing's elements."""
+    return b"".join(etree.tostring(child) for child in frame)
 
 
 def tracks(svg: etree._Element) -> dict[str, etree._Element]:
     return {g.get("data-part"): g for g in svg.iterfind(".//s:g[@data-part]", NS)}
 
 
-def test_sets_tile_the_timeline_without_gap_or_overlap(face):
+def test_key_times_tile_the_timeline_on_the_frame_boundaries(face):
     fps = 30
     states = talking(("m", 5), ("a", 4), ("m", 3), ("o", 2), ("m", 4), ("i", 1))
     svg = etree.fromstring(animation_svg(face, states, fps))
-    animated = {name: g for name, g in tracks(svg).items() if g.find(".//s:set", NS) is not None}
+    animated = {name: g for name, g in tracks(svg).items() if g.find("s:use/s:animate", NS) is not None}
     assert animated, "a talking face has at least one animated track"
     end = round(len(states) * 1000 / fps)
     for name, track in animated.items():
         spans = intervals(track)
-        assert spans[0][0] == 0 and spans[-1][1] == end, name
-        for (_, first_end, _), (second_begin, _, _) in zip(spans, spans[1:]):
-            assert first_end == second_begin, f"{name}: gap or overlap at {first_end} ms"
-        for frame in {id(f): f for _, _, f in spans}.values():
-            assert frame.get("visibility") == "hidden"
-            assert all(s.get("attributeName") == "visibility" and s.get("to") == "visible"
-                       for s in frame.iterfind("s:set", NS))
-        freezes = track.findall(".//s:set[@fill='freeze']", NS)
-        assert len(freezes) == 1, f"{name}: only the last drawing stays"
-        assert round(float(freezes[0].get("begin")) * 1000) == spans[-1][0]
+        assert spans[-1][1] >= end, name
+        for _, _, frame in spans:
+            assert frame.getparent() is track.find("s:defs", NS), f"{name}: drawings are only shown by the <use>"
+        animate = shows(track)
+        total = float(animate.get("dur"))
+        for at in (float(value) * total * 1000 for value in animate.get("keyTimes").split(";")[1:]):
+            boundary = round(round(at * fps / 1000) * 1000 / fps)  # whole ms, as the frames begin
+            step = total * 1000 / 10 ** KEY_TIME_DECIMALS  # ms
+            early = max(KEY_TIME_LEAD * step, KEY_TIME_MIN_LEAD) + 2 * step  # the lead, rounded down
+            assert boundary - early <= at < boundary, (
+                f"{name}: key time {at} ms is not just before a frame boundary")
 
 
 def test_identical_frames_are_merged_and_written_once(face):
@@ -86,26 +97,26 @@ def test_identical_frames_are_merged_and_written_once(face):
     mouth = next(g for g in tracks(svg).values() if g.find(".//s:g[@data-shape]", NS) is not None)
     spans = intervals(mouth)
     runs = [frame for _, _, frame in spans]
-    assert len(runs) == 5, "one <set> per run of equal frames"
+    assert len(runs) == 5, "one value per run of equal frames"
     assert all(a is not b for a, b in zip(runs, runs[1:])), "neighbouring runs are different drawings"
-    frames = mouth.findall("s:g", NS)
+    frames = mouth.findall("s:defs/s:g", NS)
     assert len(frames) == 2, "the rest mouth and 'a' are each written once"
     assert len({content(f) for f in frames}) == len(frames)
     shapes = sorted(f.get("data-shape") for f in frames)
     assert shapes == ["a", "m"]
     rest = next(f for f in frames if f.get("data-shape") == "m")
     assert len([span for span in spans if span[2] is rest]) == 3, "the rest mouth shows three times"
-    assert len(rest.findall("s:set", NS)) == 2, "one <set> for its first two runs, one frozen for the last"
+    assert len(mouth.findall("s:use", NS)) == 1, "one <use> shows them all"
 
 
 def test_still_parts_stay_outside_frames(face):
     states = talking(("m", 3), ("a", 3), ("m", 3))
     svg = etree.fromstring(animation_svg(face, states, 30))
     found = tracks(svg)
-    still = [name for name, g in found.items() if g.find(".//s:set", NS) is None]
+    still = [name for name, g in found.items() if g.find(".//s:animate", NS) is None]
     assert {"hair", "eyes"} <= set(still)
     for name in still:
-        assert not found[name].findall("s:g[@visibility]", NS)
+        assert not found[name].findall("s:defs", NS), f"{name} has no drawings to choose from"
         assert len(found[name]) > 0, f"{name} is drawn"
 
 
@@ -133,7 +144,7 @@ def test_roll_is_a_rotation_of_the_head_layers_matching_the_posed_face(face):
     states = [FaceState(pose=Pose(tilt=3, turn=-6, roll=r), mouth=(("a", 1.0),)) for r in rolls]
     svg = etree.fromstring(animation_svg(face, states, 30))
     face_track = tracks(svg)["face"]
-    assert not face_track.findall("s:g[@visibility]", NS), "the roll alone redraws nothing"
+    assert not face_track.findall("s:defs", NS), "the roll alone redraws nothing"
     lifted = lift(face)
     origin = rig(lifted).origin
     for index, state in enumerate(states):
@@ -172,8 +183,7 @@ def test_layers_references_ids_and_rounding(face):
     for target in set(re.findall(r'url\(#([^)]+)\)', text)) | set(re.findall(r'href="#([^"]+)"', text)):
         assert target in ids, f"dangling reference #{target}"
     def holder(node):  # the frame or shared definition a node is drawn with
-        while node is not None and not (node.get("visibility") == "hidden" or node.getparent().tag == f"{S}defs"
-                                        or node.get("data-part")):
+        while node is not None and not (node.getparent().tag == f"{S}defs" or node.get("data-part")):
             node = node.getparent()
         return node
 
@@ -309,7 +319,7 @@ def test_many_drawings_have_unique_ids_and_every_reference_resolves(face):
             assert target.getparent().tag == f"{S}clipPath" and target.get("class") is None
             assert use.get("class"), "the <use> carries the style"
             frame = use
-            while frame.get("visibility") != "hidden" and frame.get("data-part") is None:
+            while frame.getparent().tag != f"{S}defs" and frame.get("data-part") is None:
                 frame = frame.getparent()
             shared = target.getparent().getparent() is svg.find("s:defs", NS)  # several drawings' clip path
             assert shared or target in frame.iter(), "the outline sits in the same frame as its use"

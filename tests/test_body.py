@@ -39,8 +39,8 @@ def _layer(root, name):
 def _at_frames(animation, count: int) -> list[list[float]]:
     """The numbers of a discrete <animateTransform>'s value shown at each of `count` frames."""
     values = [[float(v) for v in value.split()] for value in animation.get("values").split(";")]
-    times = np.array([float(t) for t in animation.get("keyTimes").split(";")])
-    index = np.searchsorted(times, (np.arange(count) + 0.5) / count, side="right") - 1
+    times = np.array([float(t) for t in animation.get("keyTimes").split(";")]) * float(animation.get("dur"))  # s
+    index = np.searchsorted(times, (np.arange(count) + 0.5) / FPS, side="right") - 1
     return [values[i] for i in index]
 
 

@@ -34,8 +34,10 @@ CLOCKS = """() => ({audio: document.getElementById('cf-audio').currentTime,
 CLOCKS_IN_FRAME = """() => new Promise(done => requestAnimationFrame(() => done({
     audio: document.getElementById('cf-audio').currentTime,
     svg: document.getElementById('cf-face').getCurrentTime()})))"""
-VISIBLE_MOUTH = """() => [...document.querySelectorAll('#cf-face g[data-shape]')]
-    .filter(g => getComputedStyle(g).visibility === 'visible').map(g => g.dataset.shape)"""
+# The mouth shapes shown: the drawings (with data-shape) the tracks' <use>s point at now.
+VISIBLE_MOUTH = """() => [...document.querySelectorAll('#cf-face g[data-part] > use')]
+    .map(use => document.getElementById(use.href.animVal.slice(1))).filter(g => g && g.dataset.shape)
+    .map(g => g.dataset.shape)"""
 
 
 @pytest.fixture(scope="session")
@@ -166,8 +168,8 @@ def test_standalone_animation_plays_on_its_own(browser, site):
     alone = browser.new_page()
     alone.goto((site / "animation.svg").as_uri(), wait_until="load")
     alone.wait_for_timeout(1200)
-    shown = alone.evaluate("""() => ({time: document.documentElement.getCurrentTime(),
-        visible: [...document.querySelectorAll('g[data-shape]')].filter(g => getComputedStyle(g).visibility === 'visible').length})""")
+    shown = alone.evaluate(f"""() => ({{time: document.documentElement.getCurrentTime(),
+        visible: ({VISIBLE_MOUTH})().length}})""")
     alone.close()
     assert shown["time"] > 1.0
     assert shown["visible"] == 1

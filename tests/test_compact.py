@@ -16,6 +16,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.png import svg_to_png
+from tests.stills import frozen
 
 ROOT = Path(__file__).resolve().parent.parent
 NS = {"s": "http://www.w3.org/2000/svg"}
@@ -37,24 +38,6 @@ def looking_about() -> list[FaceState]:
              for (h, v), symbol in zip(GAZES, "aoeium", strict=True) for _ in range(2)]
     turning = [FaceState(pose=Pose(turn=float(i), tilt=i / 2), gaze_h=3.0 * (i % 2)) for i in range(4)]
     return still + turning
-
-
-def frozen(data: bytes, frame: int) -> bytes:
-    """The animation `data` as a still SVG of frame `frame` (time frame / FPS): each track's frame
-    shown then is made visible, the others and every <set> removed."""
-    ms = round(frame * 1000 / FPS)
-    svg = etree.fromstring(data)
-    for show in list(svg.iter(f"{S}set")):
-        holder = show.getparent()
-        begins = [round(float(value) * 1000) for value in show.get("begin").split(";")]
-        ends = ([begin + round(float(show.get("dur")) * 1000) for begin in begins] if show.get("dur")
-                else [round(float(value) * 1000) for value in show.get("end").split(";")])
-        if any(begin <= ms < end for begin, end in zip(begins, ends, strict=True)):
-            holder.set("visibility", "visible")
-        holder.remove(show)
-    for hidden in list(svg.iterfind(".//s:g[@visibility='hidden']", NS)):
-        hidden.getparent().remove(hidden)
-    return etree.tostring(svg)
 
 
 def pixels(data: bytes) -> np.ndarray:
@@ -104,7 +87,7 @@ def in_frame_copies(data: bytes) -> bytes:
 @pytest.mark.parametrize("frame", [0, 3, 7, 9, 12, 15])
 def test_a_frame_with_shared_clip_paths_looks_as_with_its_own(face, frame):
     # the frame at the same time, drawn with the shared clip paths and with copies of its own
-    still = frozen(animation_svg(face, looking_about(), FPS), frame)
+    still = frozen(animation_svg(face, looking_about(), FPS), frame, FPS)
     before = in_frame_copies(still)
     assert before != still, "the frame uses shared clip paths"
     after, own = pixels(still), pixels(before)

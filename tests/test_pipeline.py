@@ -57,7 +57,7 @@ def test_page_svg_is_the_animation_file(made):
     page = html.document_fromstring((result.out_dir / "index.html").read_text(encoding="utf-8"))
     standalone = etree.fromstring((result.out_dir / "animation.svg").read_bytes())
     inline = page.xpath("//svg[@id='cf-face']")[0]
-    assert len(inline.xpath(".//set")) == len(standalone.findall(".//{http://www.w3.org/2000/svg}set")) > 0
+    assert len(inline.xpath(".//animate")) == len(standalone.findall(".//{http://www.w3.org/2000/svg}animate")) > 0
 
 
 def test_progress_goes_through_every_stage_in_order(made):

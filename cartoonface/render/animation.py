@@ -3,25 +3,24 @@
 Spatial domain (6.3.1): four layers, background, hair, clothes and face, drawn
 in that order; the face's gradients live once in `<defs>`. A part's clip path
 (the eye outline clipping the eyeball, the mouth opening clipping the teeth)
-is written just before the part, inside the same frame: its children inherit
-the frame's visibility, so the clip is whole exactly while the part is shown,
-and gzip finds the clip's outline next to the same outline drawn by the part. A clip path
-that several drawings hold alike (an eye's outline under different gazes of a still head) is
-written once in the document's `<defs>` instead, where nothing hides it (render/compact.py).
+is written just before the part, inside the same drawing, where gzip finds the
+clip's outline next to the same outline drawn by the part. A clip path that several
+drawings hold alike (an eye's outline under different gazes of a still head) is
+written once in the document's `<defs>` instead (render/compact.py).
 
 Temporal domain (6.3.2): the thesis shows each frame as
 `<g visibility="hidden"><set attributeName="visibility" to="visible" begin=".." dur=".."/>...</g>`.
-We keep that form and make it small:
+We show a track's frames with one `<use>` whose `href` one discrete `<animate>` points at
+the drawing of each frame (10 % fewer bytes than a `<set>` per drawing, and Chromium plays a long
+animation about three times as fast: docs/BENCHMARKS.md, "Frames by one <use>"):
 
 - the face of render/svg.py is split into part tracks (TRACK_OF): hair, ears,
   face (outline, cheeks and mouth, which follow the jaw), features (nose and
   brows), eyes. Each track has its own frames, so a moving mouth does not
   repeat the eyes, and a still head does not repeat the hair;
-- a part drawing that looks the same in consecutive frames is one longer
-  `<set>`; a drawing that comes back later (the rest mouth, open eyes) is
-  written once, its earlier runs in one `<set>` with a begin list (and one
-  `dur`, or an end list), its last run in a `<set>` of its own;
-- a track whose drawing never changes is written once, outside any frame;
+- each distinct drawing of a track is written once, as a `<g id>` in the track's own
+  `<defs>`; consecutive frames showing the same drawing are one value of the animation;
+- a track whose drawing never changes is written once, with no `<use>`;
 - every frame's state is drawn (no pose held over frames); the head's roll is
   not drawn into the parts but is a rotation of the hair and face layers (one
   discrete `<animateTransform>` each, and a skew of the neck about the collar),
@@ -35,18 +34,21 @@ We keep that form and make it small:
 - repeated presentation attributes become CSS classes, the most used ones
   named by one letter; ids are short (base 36).
 
-Frame i shows time i / fps. Times are written in whole milliseconds, each
-`begin`/`dur`/`end` derived from the frame boundaries round(i * 1000 / fps), so the
-`<set>`s of one track tile the timeline with no gap and no overlap. The last
-drawing of each track is frozen (`fill="freeze"`) so the face stays after the
-end. SMIL starts at 0 when the document loads: animation.svg opened on its
-own plays silently; the pages drive its clock from the audio (static/cartoonface.js).
+Frame i shows time i / fps, from its boundary round(i * 1000 / fps) ms. Every discrete
+animation (_discrete) lasts a power of ten of milliseconds and writes each key time a
+little before its boundary (KEY_TIME_LEAD), so Chromium, which compares in single
+precision and whole microseconds, shows the new frame at the boundary itself. The last
+value is frozen (`fill="freeze"`) so the face stays after the end. SMIL starts at 0 when
+the document loads: animation.svg opened on its own plays silently; the pages drive its
+clock from the audio (static/cartoonface.js).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from itertools import count
 
 import numpy as np
 from lxml import etree
@@ -56,7 +58,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll, unrolled
 from cartoonface.face.state import FaceState
-from cartoonface.render.compact import Writer, share
+from cartoonface.render.compact import Writer, share, short_id
 from cartoonface.render.elements import DECIMALS, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
@@ -75,6 +77,20 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "fa
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
+# Discrete animations (the tracks' drawings, the head's roll, the body) last a power of ten of
+# milliseconds, the first at or above the frames' end (the last value is frozen after that), so that a
+# key time is a frame boundary's milliseconds shifted in decimals and keeps their steps for gzip; key
+# times have KEY_TIME_DECIMALS decimals (units of 10 us in 100 s, 0.1 ms in 1000 s) and are written
+# KEY_TIME_LEAD units early: Chromium compares them with the time as a share of the whole in single
+# precision (24 bits), so a key time written exactly can fall either side of a time on the boundary;
+# 5 units are 8 steps of single precision near the end (0.5 ms early in a 1000 s animation). They are
+# also at least KEY_TIME_MIN_LEAD ms early: Chromium's clock counts whole microseconds, cut down from
+# the seconds given to setCurrentTime (0.033 -> 32.999 ms).
+KEY_TIME_DECIMALS = 7
+KEY_TIME_LEAD = 5
+KEY_TIME_MIN_LEAD = 0.01
+# The ids of the tracks' drawings: this letter and a number in base 36 (compact.short_id).
+FRAME_LETTER = "f"
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
@@ -173,54 +189,46 @@ def _tracks(frames: Sequence[tuple[FaceState, tuple[int, ...]]], raw_tracks: Seq
     return tracks
 
 
-def _show(frame: etree._Element, spans: Sequence[tuple[int, int]]) -> etree._Element:
-    """Add to `frame` the `<set>` making it visible during `spans` ((begin, end) ms, in time
-    order): one begin list, with one `dur` if all spans are as long, else with the list of
-    their ends (SMIL: each interval ends at the first end after its begin). Returns the set."""
-    begins = ";".join(clock(begin) for begin, _ in spans)
-    lengths = {end - begin for begin, end in spans}
-    timing = ({"dur": clock(lengths.pop())} if len(lengths) == 1
-              else {"end": ";".join(clock(end) for _, end in spans)})
-    return element(frame, "set", attributeName="visibility", to="visible", begin=begins, **timing)
+def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dict[str, str]:
+    """The attributes of a discrete SMIL animation holding `value(key)` over each run of equal
+    `keys` (one per frame) from just before the run's first frame boundary, frozen at the end:
+    calcMode, values, keyTimes (fractions of the whole), dur and fill."""
+    all_runs = runs(keys)
+    total = 10 ** len(str(frame_ms(len(keys), fps)))  # ms: 633 -> 1000, 190325 -> 1000000
+    units = 10 ** KEY_TIME_DECIMALS
+    lead = max(KEY_TIME_LEAD, math.ceil(KEY_TIME_MIN_LEAD * units / total))
+    times = ";".join(decimal_text(max(0, frame_ms(run.first, fps) * units // total - lead) / units,
+                                  KEY_TIME_DECIMALS) for run in all_runs)
+    return {"calcMode": "discrete", "values": ";".join(value(keys[run.first]) for run in all_runs),
+            "keyTimes": times, "dur": clock(total), "fill": "freeze"}
 
 
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
-                 keys: Sequence[int], fps: int, shapes: Sequence[str]) -> None:
-    """Write one track into `parent`: its drawing as is if it never changes, else one
-    `<g visibility="hidden">` per distinct drawing, shown by `<set>`s (_show) over the runs of
-    frames showing it."""
+                 keys: Sequence[int], fps: int, shapes: Sequence[str], names: Iterator[str]) -> None:
+    """Write one track into `parent` as a `<g data-part>`: its drawing as is if it never changes,
+    else each distinct drawing once as a `<g id>` (ids from `names`) in the track's own `<defs>`
+    and one `<use>` whose `href` a discrete `<animate>` (_discrete) points at the drawing of
+    every run of frames. The mouth track's drawings carry `data-shape`."""
     holder = element(parent, "g", data_part=track)
     if len(drawings) == 1:
         holder.extend(drawings[0])
         return
-    frames = [element(holder, "g", visibility="hidden") for _ in drawings]
-    all_runs = runs(keys)
-    shown: list[list[tuple[int, int]]] = [[] for _ in drawings]  # (begin, end) ms of each drawing's runs
-    for run in all_runs[:-1]:
-        shown[run.drawing].append((frame_ms(run.first, fps), frame_ms(run.first + run.count, fps)))
-    for frame, spans in zip(frames, shown, strict=True):
-        if spans:
-            _show(frame, spans)
-    last = all_runs[-1]
-    _show(frames[last.drawing], [(frame_ms(last.first, fps), frame_ms(last.first + last.count, fps))]).set(
-        "fill", "freeze")
-    for number, frame in enumerate(frames):
+    store = element(holder, "defs")
+    ids = [next(names) for _ in drawings]
+    for number, (name, drawing) in enumerate(zip(ids, drawings, strict=True)):
+        frame = element(store, "g", id=name)
         if track == MOUTH_TRACK:
             frame.set("data-shape", shapes[number])
-        frame.extend(drawings[number])
+        frame.extend(drawing)
+    shown = element(holder, "use", href=f"#{ids[keys[0]]}")
+    element(shown, "animate", {"attributeName": "href", **_discrete(keys, fps, lambda key: f"#{ids[key]}")})
 
 
 def _steps(keys: Sequence[int], fps: int, kind: str, value: Callable[[int], str]) -> etree._Element:
     """A discrete `<animateTransform>` of `kind` ("rotate", "skewX") holding `value(key)` over each
-    run of equal `keys` (one per frame): its key times are the runs' frame boundaries."""
-    all_runs = runs(keys)
-    total = frame_ms(len(keys), fps)
-    # fractions of the whole, 9 decimals (never an exponent): within 0.01 ms for up to 10^4 s
-    times = ";".join(decimal_text(frame_ms(run.first, fps) / total, 9) for run in all_runs)
-    return element(None, "animateTransform", {
-        "attributeName": "transform", "type": kind, "calcMode": "discrete",
-        "values": ";".join(value(keys[run.first]) for run in all_runs), "keyTimes": times, "dur": clock(total),
-        "fill": "freeze"})
+    run of equal `keys` (one per frame): its key times are the runs' frame boundaries (_discrete)."""
+    return element(None, "animateTransform", {"attributeName": "transform", "type": kind,
+                                              **_discrete(keys, fps, value)})
 
 
 def _roll(layers: Sequence[etree._Element], rolls: Sequence[int], fps: int, centre: str) -> None:
@@ -314,7 +322,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `body` (animate/body.py, one value per state) moves the clothes layer: the shoulders
     follow the head and breathe (None: a still body).
     The root is `<svg id="cf-face">`; each track is a `<g data-part="...">`;
-    mouth frames carry `data-shape`, the dominant basic mouth shape they show.
+    the mouth track's drawings carry `data-shape`, the dominant basic mouth shape they show.
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
     drawn (every PROGRESS_FRAMES frames) and tidied, and 1.0 at the end.
     """
@@ -374,8 +382,9 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     if desk is not None:
         root.append(desk)
     layer = element(root, "g", id="face")
+    names = (short_id(FRAME_LETTER, number) for number in count())
     for number, (name, track) in enumerate(tracks.items(), 1):
-        _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes)
+        _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes, names)
         report(SHARED_SHARE + (TRACKED_SHARE - SHARED_SHARE) * number / len(tracks))
     _roll((hair, layer), rolls, fps,
           f"{origin[0]:.6g} {origin[1]:.6g}")
