@@ -3,7 +3,8 @@
 The video shows the frames of animation.svg itself: for each video frame the SMIL
 animation is resolved at the frame's time (`<set>` intervals, discrete `<animate>` and
 `<animateTransform>`; docs/output.md describes what render/animation.py writes), the
-hidden drawings are left out, and the static document that remains is drawn by resvg.
+drawings a frame does not show are left out (of each track's `<defs>` only the one its
+`<use>` points at), and the static document that remains is drawn by resvg.
 Frames whose resolved document is the same as the one before are drawn once. The PNG
 frames are piped to the ffmpeg that imageio-ffmpeg bundles, which centres them on a
 WIDTH x HEIGHT canvas and encodes them with the recording's sound.
@@ -128,7 +129,14 @@ class FrameDocuments:
             parent = element.getparent()
             make = _set_track if etree.QName(element).localname == "set" else _discrete_track
             self.tracks.setdefault(parent, []).append(make(element, times))
-        self.dynamic: set[etree._Element] = set()
+        # a track's drawings (render/animation.py: `<defs>` of `<g id>` beside one `<use>` whose
+        # href a discrete <animate> moves): per frame only the drawing shown is written
+        self.shown_by: dict[etree._Element, tuple[etree._Element, dict[str, etree._Element]]] = {}
+        for parent in self.tracks:
+            defs = parent.getprevious()
+            if etree.QName(parent).localname == "use" and defs is not None and etree.QName(defs).localname == "defs":
+                self.shown_by[defs] = (parent, {str(child.get("id")): child for child in defs})
+        self.dynamic: set[etree._Element] = set(self.shown_by)
         for parent in self.tracks:
             node = parent
             while node is not None and node not in self.dynamic:
@@ -155,13 +163,11 @@ class FrameDocuments:
                 text = etree.tostring(element, encoding="unicode", with_tail=False)
                 self.static[element] = text
             return text
-        attributes = {self._name(name): value for name, value in element.attrib.items()}
-        for track in self.tracks.get(element, ()):
-            index = int(track.index[frame])
-            if index >= 0:
-                value = track.values[index]
-                written = attributes.get(track.attribute)
-                attributes[track.attribute] = f"{written} {value}" if track.additive and written else value
+        if element in self.shown_by:
+            use, drawings = self.shown_by[element]
+            drawing = drawings.get(self._attributes(use, frame).get("href", "").removeprefix("#"))
+            return "" if drawing is None else f"<defs>{self._element(drawing, frame)}</defs>"
+        attributes = self._attributes(element, frame)
         if attributes.get("visibility") == "hidden":
             return ""
         attributes.update(override or {})
@@ -172,6 +178,17 @@ class FrameDocuments:
                            if not isinstance(child.tag, str) or etree.QName(child).localname not in ANIMATIONS)
         opening = "".join(f" {name}={quoteattr(value)}" for name, value in attributes.items())
         return f"<{tag}{opening}>{escape(element.text or '')}{children}</{tag}>"
+
+    def _attributes(self, element: etree._Element, frame: int) -> dict[str, str]:
+        """`element`'s attributes as its animations set them at `frame`."""
+        attributes = {self._name(name): value for name, value in element.attrib.items()}
+        for track in self.tracks.get(element, ()):
+            index = int(track.index[frame])
+            if index >= 0:
+                value = track.values[index]
+                written = attributes.get(track.attribute)
+                attributes[track.attribute] = f"{written} {value}" if track.additive and written else value
+        return attributes
 
     @staticmethod
     def _name(name: str) -> str:
