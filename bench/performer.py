@@ -28,7 +28,7 @@ import numpy as np
 
 from bench.generate import build_input
 from cartoonface.animate.behaviour import schedule, speech_pauses, speech_spans
-from cartoonface.animate.frames import sample_frames
+from cartoonface.animate.frames import on_twos, sample_frames
 from cartoonface.animate.gaze import DART_RADIUS
 from cartoonface.animate.idle import with_sway
 from cartoonface.animate.prosody import pitch_peaks
@@ -79,7 +79,7 @@ def measure(name: str, alignment, peaks: tuple[float, ...], face) -> None:
     peak_times = np.array(peaks)
     blinks = kinds.count("blink") / minutes
     started = time.perf_counter()
-    svg = animation_svg(face, states, FPS)
+    svg = animation_svg(face, on_twos(states), FPS)  # drawn as generate draws them
     svg_seconds = time.perf_counter() - started
     print(f"style {name}: {duration:.1f} s, {len(states)} frames")
     print(f"  blinks per minute {blinks:.1f} (target {BLINK_RATE[0]}-{BLINK_RATE[1]}: "

@@ -20,7 +20,7 @@ from pathlib import Path
 from cartoonface.animate.actions import actions_to_json, load_actions
 from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedule, silences_of, speech_pauses, speech_spans
 from cartoonface.animate.body import body_motion
-from cartoonface.animate.frames import FPS_RANGE, sample_breaths, sample_frames
+from cartoonface.animate.frames import FPS_RANGE, on_twos, sample_breaths, sample_frames
 from cartoonface.animate.idle import with_sway
 from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import PAGE_STYLES, STYLES
@@ -217,7 +217,7 @@ def generate(
         actions += emotion_actions(spans or (), duration, default)
     report("frames")
     timeline = build_timeline(alignment, actions)
-    states = with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak)
+    states = on_twos(with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak))
     body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
     report("svg")
     svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,

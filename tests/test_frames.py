@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from cartoonface.animate.behaviour import schedule, speech_pauses
-from cartoonface.animate.frames import sample_frames, states_at
+from cartoonface.animate.frames import HOLD_STEP, on_twos, sample_frames, states_at
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import InputError, OptionError
 from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.face.state import FaceState
+from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from tests.synthetic import synthetic_talk
 
@@ -84,3 +84,26 @@ def test_head_angles_ease_in_and_out(timeline):
     steps = np.diff(turns)
     assert np.all(steps >= 0) and turns[10] == pytest.approx(5.0)
     assert steps[0] < steps[10] > steps[-1]
+
+
+def _turning(rate: float, frames: int = 12) -> tuple[FaceState, ...]:
+    """States turning the head at `rate` degrees per frame from 0, with the mouth moving."""
+    return tuple(FaceState(pose=Pose(turn=rate * i), mouth=((("a", "m")[i % 2], 1.0),)) for i in range(frames))
+
+
+def test_a_slow_head_move_is_drawn_on_twos():
+    slow = _turning(HOLD_STEP * 0.8)
+    held = on_twos(slow)
+    for i, (before, after) in enumerate(zip(slow, held, strict=True)):
+        assert after.mouth == before.mouth  # only the pose is held
+        assert abs(after.pose.turn - before.pose.turn) < HOLD_STEP  # never further than one slow step
+        if i % 2:
+            assert after.pose == held[i - 1].pose
+        else:
+            assert after == before
+    assert len({s.pose for s in held}) < len({s.pose for s in slow})
+
+
+def test_a_fast_head_move_keeps_every_pose():
+    fast = _turning(HOLD_STEP * 2)
+    assert on_twos(fast) == fast

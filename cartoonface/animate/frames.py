@@ -16,6 +16,7 @@ writer can merge them: angles to 0.1 degree, amounts and mouth weights to 0.01.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -82,6 +83,27 @@ def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float]
     amounts = [_amount(timeline.track(f"emotion:{name}"), t).tolist() for name in names]
     return [tuple((name, a) for name, a in zip(names, column, strict=True) if a > 0)
             for column in zip(*amounts, strict=True)] if names else [()] * len(t)
+
+
+# A slow head move is drawn on twos (our choice, as animators do; it lightens the SVG, where every
+# new pose redraws every part): a frame whose pose differs from both neighbours' by less than
+# HOLD_STEP degrees on every axis keeps the pose of the frame before. 0.6 degree moves a point
+# one FAPU d (the eye distance, 100 px on the sample faces) from the axis by about 1 px, for one
+# frame: the precision the path data is written with (render/pathdata.py: whole pixels).
+HOLD_STEP = 0.6  # degrees per frame (18 degrees per second at 30 fps)
+
+
+def on_twos(states: Sequence[FaceState]) -> tuple[FaceState, ...]:
+    """`states` (one per frame) with every second frame of a slow head move holding the pose of
+    the frame before (HOLD_STEP); fast moves, the gaze, the mouth and the rest are unchanged."""
+    poses = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states]).reshape(-1, 3)
+    steps = np.abs(np.diff(poses, axis=0)).max(axis=1) if len(poses) > 1 else np.zeros(0)
+    out = list(states)
+    for i in range(1, len(out), 2):
+        after = steps[i] if i < len(steps) else 0.0
+        if steps[i - 1] < HOLD_STEP and after < HOLD_STEP and out[i].pose != out[i - 1].pose:
+            out[i] = replace(out[i], pose=out[i - 1].pose)
+    return tuple(out)
 
 
 def breaths_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> np.ndarray:
