@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import tempfile
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,13 +35,13 @@ from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
 from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
 from cartoonface.render.animation import animation_svg
-from cartoonface.render.pages import PAGES, check_links, copy_audio, page_html, write_site
+from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.audio_only import transcribed
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.english import LANGUAGES
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import load_audio
+from cartoonface.speech.audio import load_audio, page_copy
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
 
@@ -193,54 +195,63 @@ def generate(
     marks = () if text is None else emotion_marks(text, source)
     report("decode")
     recording = load_audio(audio)
-    duration = recording.duration
-    if options.alignment is not None:
-        report("segment")
-        report("align")
-        alignment = edited_alignment(options.alignment, duration)
-    else:
-        alignment = analyse(recording, text, pause=options.pause, progress=report, source=source,
-                            language=options.language)
-    report("schedule")
-    style = STYLES[options.style or PAGE_STYLES[options.page]]
-    if options.actions is not None:
-        actions = load_actions(options.actions, duration)
-    else:
-        actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
-                           peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment),
-                           breath_pauses=silences_of(alignment))
-        spans = marked_spans(alignment, marks)
-        if spans is None:
-            alignment = dataclasses.replace(alignment, notes=alignment.notes + (
-                "the transcript's emotion marks were not used: the alignment holds other syllables",))
-        default = None if options.emotion is None else (options.emotion, options.intensity)
-        actions += emotion_actions(spans or (), duration, default)
-    report("frames")
-    timeline = build_timeline(alignment, actions)
-    states = on_twos(with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak))
-    body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
-    report("svg")
-    svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
-                        wide=options.page == "announcer", title=options.title, body=body,
-                        progress=lambda done: report("svg", done))
-    report("pages")
+    # the page's compressed audio is made by ffmpeg on the other core while the animation is drawn
+    pool = ThreadPoolExecutor(max_workers=1)
+    staging = tempfile.TemporaryDirectory(prefix="cartoonface-audio-")
+    compressed = pool.submit(page_copy, audio, staging.name, AUDIO_STEM)
     try:
-        with atomic_directory(target) as folder:
-            sources = copy_audio(audio, folder, keep_original=options.keep_original)
-            captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
-            html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
-                             fps=options.fps, links=options.links, captions=captions)
-            write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
-                       actions=actions_to_json(actions))
-            if captions is not None:
-                write_text_atomic(folder / CAPTIONS_NAME, captions)
-            cues = mouth_cues(alignment)
-            for fmt in options.cues:
-                write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))
-            size = folder_size(folder)
-    except OSError as exc:  # the place given for the output cannot be written (permissions, full disk, ...)
-        raise OptionError(f"{target}: cannot write the output folder ({exc.strerror or exc})") from None
-    if progress is not None:
-        progress("pages", 1.0)
-    return Result(out_dir=target, duration=duration, frames=len(states), size=size,
-                  seconds=time.perf_counter() - started, notes=tuple(alignment.notes))
+        duration = recording.duration
+        if options.alignment is not None:
+            report("segment")
+            report("align")
+            alignment = edited_alignment(options.alignment, duration)
+        else:
+            alignment = analyse(recording, text, pause=options.pause, progress=report, source=source,
+                                language=options.language)
+        report("schedule")
+        style = STYLES[options.style or PAGE_STYLES[options.page]]
+        if options.actions is not None:
+            actions = load_actions(options.actions, duration)
+        else:
+            actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
+                               peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment),
+                               breath_pauses=silences_of(alignment))
+            spans = marked_spans(alignment, marks)
+            if spans is None:
+                alignment = dataclasses.replace(alignment, notes=alignment.notes + (
+                    "the transcript's emotion marks were not used: the alignment holds other syllables",))
+            default = None if options.emotion is None else (options.emotion, options.intensity)
+            actions += emotion_actions(spans or (), duration, default)
+        report("frames")
+        timeline = build_timeline(alignment, actions)
+        states = on_twos(with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak))
+        body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
+        report("svg")
+        svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
+                            wide=options.page == "announcer", title=options.title, body=body,
+                            progress=lambda done: report("svg", done))
+        report("pages")
+        try:
+            with atomic_directory(target) as folder:
+                sources = copy_audio(audio, folder, keep_original=options.keep_original,
+                                     compressed=compressed.result())
+                captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
+                html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
+                                 fps=options.fps, links=options.links, captions=captions)
+                write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
+                           actions=actions_to_json(actions))
+                if captions is not None:
+                    write_text_atomic(folder / CAPTIONS_NAME, captions)
+                cues = mouth_cues(alignment)
+                for fmt in options.cues:
+                    write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))
+                size = folder_size(folder)
+        except OSError as exc:  # the place given for the output cannot be written (permissions, full disk, ...)
+            raise OptionError(f"{target}: cannot write the output folder ({exc.strerror or exc})") from None
+        if progress is not None:
+            progress("pages", 1.0)
+        return Result(out_dir=target, duration=duration, frames=len(states), size=size,
+                      seconds=time.perf_counter() - started, notes=tuple(alignment.notes))
+    finally:
+        pool.shutdown(wait=True)
+        staging.cleanup()

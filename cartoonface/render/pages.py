@@ -144,15 +144,17 @@ def page_html(
 
 
 def copy_audio(source: str | os.PathLike[str], folder: str | os.PathLike[str],
-               keep_original: bool = False) -> tuple[AudioSource, ...]:
+               keep_original: bool = False, compressed: Path | None = None) -> tuple[AudioSource, ...]:
     """Put the recording `source` into `folder` compressed for the page (audio.m4a, speech/audio.py
-    page_copy) and, when `keep_original`, byte for byte as recording.<suffix>.
+    page_copy; `compressed`: that file made already, copied in) and, when `keep_original`, byte for
+    byte as recording.<suffix>.
 
     Returns the page's audio sources (the compressed one).
     """
     original = Path(source)
     target = Path(folder)
-    playable = page_copy(original, target, stem=AUDIO_STEM)
+    playable = (page_copy(original, target, stem=AUDIO_STEM) if compressed is None
+                else write_bytes_atomic(target / compressed.name, compressed.read_bytes()))
     if keep_original:
         write_bytes_atomic(target / f"{ORIGINAL_STEM}{original.suffix.lower() or '.original'}", original.read_bytes())
     return (AudioSource(playable.name, MEDIA_TYPES[playable.suffix]),)

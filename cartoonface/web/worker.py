@@ -203,8 +203,9 @@ def main(folder: Path, server_alive: Callable[[], bool], limits: JobLimits | Non
 
 
 # What libraries say instead of raising MemoryError when an allocation fails (C++ std::bad_alloc
-# through parselmouth, errno ENOMEM through the OS, ...).
-OUT_OF_MEMORY_WORDS = ("bad_alloc", "cannot allocate memory", "out of memory", "memoryerror")
+# through parselmouth, errno ENOMEM through the OS, a thread whose stack does not fit under the
+# address-space limit, ...).
+OUT_OF_MEMORY_WORDS = ("bad_alloc", "cannot allocate memory", "out of memory", "memoryerror", "can't start new thread")
 
 
 def out_of_memory(exc: BaseException) -> bool:
