@@ -297,14 +297,8 @@ class Result:
     fallbacks: int = 0
 
 
-def evaluate(recordings: list[Recording], with_dtw: bool = False, pipeline: str = "") -> Result:
-    """Onset errors of the aligner, the baseline and (`with_dtw`) espeak+DTW over every part.
-    With `pipeline` "kept" or "removed" the onsets come from the whole analyser run on each
-    recording with its transcript's punctuation kept or removed instead (recordings whose
-    transcript gives another syllable count than the reference are to be left out first: see
-    `transcribed`)."""
-    if pipeline:
-        return evaluate_pipeline(recordings, pipeline == "removed")
+def evaluate(recordings: list[Recording], with_dtw: bool = False) -> Result:
+    """Onset errors of the aligner, the baseline and (`with_dtw`) espeak+DTW over every part."""
     signed: list[float] = []
     classes: list[str] = []
     base: list[float] = []
@@ -423,9 +417,12 @@ def row(label: str, errors: np.ndarray, inner: np.ndarray) -> str:
 
 
 def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_landmarks: bool = False,
-           pipeline: str = "") -> Result:
-    """Print the figures of one set (module docstring) and return its Result."""
-    result = evaluate(recordings, with_dtw, pipeline)
+           unpunctuated: bool | None = None) -> Result:
+    """Print the figures of one set (module docstring) and return its Result: the aligner's over
+    the reference parts, or with `unpunctuated` given the whole analyser's on each recording with
+    its transcript's punctuation removed (True) or kept (False) (recordings whose transcript gives
+    another syllable count than the reference are to be left out first: see `transcribed`)."""
+    result = evaluate(recordings, with_dtw) if unpunctuated is None else evaluate_pipeline(recordings, unpunctuated)
     print(f"{name}: {sum(len(r.parts) for r in recordings)} parts, {result.speech:.1f} s of speech, "
           f"aligner {result.speech / max(result.seconds, 1e-9):.0f}x real time (CPU time)")
     print(row("aligner", result.errors, result.inner))
@@ -444,7 +441,7 @@ def report(name: str, recordings: list[Recording], with_dtw: bool = False, with_
           f" precision {100 * precision:.1f}%, recall {100 * recall:.1f}%, F1 {100 * f1:.1f}%")
     print(f"  median signed onset error (positive: later than the reference): all {1000 * np.median(result.signed):+.1f} ms,"
           f" inner {1000 * np.median(result.signed[result.inner]):+.1f} ms")
-    if pipeline:
+    if unpunctuated is not None:
         print(f"  stretches timed again over loudness peaks: {result.fallbacks}")
     return result
 
@@ -492,9 +489,9 @@ def main() -> None:
         pool.append(report(f"Biaobei {label}, paragraphs of {PARAGRAPH} recordings as one part", paragraphs(half)))
         readable = transcribed(half)
         for mode in ("kept", "removed"):
-            report(f"Biaobei {label}, analyse, punctuation {mode}", readable, pipeline=mode)
+            report(f"Biaobei {label}, analyse, punctuation {mode}", readable, unpunctuated=mode == "removed")
         pool.append(report(f"Biaobei {label}, paragraphs of {PARAGRAPH}, analyse, punctuation removed",
-                           paragraphs(readable), pipeline="removed"))
+                           paragraphs(readable), unpunctuated=True))
         pooled_flags(f"Biaobei {label}: plain, tempi, pitches, paragraphs, analysed paragraphs", pool)
 
 
