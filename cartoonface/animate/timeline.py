@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 from cartoonface.animate.behaviour import KINDS, Action, adapt_to_emotions
 from cartoonface.face.emotion import EMOTIONS
+from cartoonface.speech.align import MIN_PAUSE
+from cartoonface.speech.features import HOP
 from cartoonface.speech.mouth_shapes import shape_onsets
 
 REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: shape m, lips closed)
@@ -37,9 +39,9 @@ REST = "m"  # the closed mouth shown when nothing is said (thesis 002, 5.2.2: sh
 LEAD_MS = 80
 LAG_MS = 80
 # A pause shorter than LAG_MS + LEAD_MS but at least this long (the aligner's shortest pause
-# inside a speaking part, speech/align.py MIN_PAUSE) still closes the mouth, for an instant:
-# lag and lead shrink in proportion. Shorter gaps blend straight on.
-SHORT_PAUSE_MS = 100
+# inside a speaking part, speech/align.py MIN_PAUSE, 100 ms) still closes the mouth, for an
+# instant: lag and lead shrink in proportion. Shorter gaps blend straight on.
+SHORT_PAUSE_MS = round(MIN_PAUSE * HOP * 1000)
 # Lips closed for b, p, m (thesis 002, 5.2.2: their shape is m): held this long from the
 # syllable's start, the stop closure or nasal murmur (bilabial closures of read Mandarin last
 # about 50-100 ms). 70 ms holds the closed mouth over at least 2 frames at 30 fps.

@@ -11,7 +11,7 @@
 - closures: a dip of the whole band's energy at least CLOSURE_DB below the quieter of the
   two nuclei around it (a stop or nasal closure, not a fricative, which keeps its energy)
   is left out of both syllables, a gap of CLOSURE_GAP around the dip, so the timeline closes
-  the mouth there (animate/timeline.py: a gap of SHORT_PAUSE_MS or more closes it; the
+  the mouth there (animate/timeline.py: a gap of SHORT_PAUSE_MS = align.MIN_PAUSE or more closes it; the
   thesis's closed-shape onset would hold a leading m over 81 % of a two-shape syllable);
 - vowel class: the first two formants at the nucleus (Burg, parselmouth), normalised per
   recording (z-scores over all nuclei, Lobanov), give open (high F1), rounded (low F2),
@@ -27,8 +27,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.signal import find_peaks
 
-from cartoonface.animate.timeline import SHORT_PAUSE_MS
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.align import MIN_PAUSE
 from cartoonface.speech.features import HOP, frames, smooth
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
@@ -41,7 +41,7 @@ MIN_SYLLABLE = 0.1           # s between two nuclei at least (Mandarin: 3-7 syll
 NUCLEUS_RANGE_DB = 30.0      # peaks this far below the part's loudest frame are noise, not nuclei
 EDGE_DB = 20.0               # a part's first/last syllable starts/ends where the band is this far below its nucleus
 CLOSURE_DB = 20.0            # energy dip (dB below the quieter neighbouring nucleus) taken as a lip closure
-CLOSURE_GAP = SHORT_PAUSE_MS / 1000  # s left out around a closure (the shortest gap that closes the mouth)
+CLOSURE_GAP = MIN_PAUSE * HOP  # s left out around a closure (the aligner's shortest pause: a gap that closes the mouth)
 FORMANT_STEP = HOP           # s between formant measurements
 MAX_FORMANT_HZ = 5500.0      # Burg's ceiling (Praat's default for a female voice; fine for male voices too)
 FORMANT_FRAMES = 2           # nucleus +- this many formant frames are averaged (median)
