@@ -196,10 +196,9 @@ def generate(
     report("decode")
     recording = load_audio(audio)
     # the page's compressed audio is made by ffmpeg on the other core while the animation is drawn
-    pool = ThreadPoolExecutor(max_workers=1)
-    staging = tempfile.TemporaryDirectory(prefix="cartoonface-audio-")
-    compressed = pool.submit(page_copy, audio, staging.name, AUDIO_STEM)
-    try:
+    # (the pool is left, waiting for ffmpeg, before its folder is removed)
+    with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool:
+        compressed = pool.submit(page_copy, audio, staging, AUDIO_STEM)
         duration = recording.duration
         if options.alignment is not None:
             report("segment")
@@ -252,6 +251,3 @@ def generate(
             progress("pages", 1.0)
         return Result(out_dir=target, duration=duration, frames=len(states), size=size,
                       seconds=time.perf_counter() - started, notes=tuple(alignment.notes))
-    finally:
-        pool.shutdown(wait=True)
-        staging.cleanup()
