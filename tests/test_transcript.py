@@ -239,11 +239,11 @@ def test_bad_overrides_name_position_and_reading(parse, text, fragment):
 
 # --- Latin, emoji, symbols, empty ------------------------------------------------------
 
-def test_acronyms_are_spelled_and_words_skipped_with_a_note(parse):
+def test_acronyms_are_spelled_and_english_words_read(parse):
     (sentence,) = parse("我用iPhone看CCTV，OK？")
     shown = [s.text for s in sentence.syllables]
-    assert [t for t in shown if t.isascii() and t] == ["C", "C", "T", "V", "O", "K"]
-    assert any("iPhone" in note for note in sentence.notes)
+    assert [t for t in shown if t.isascii() and t] == ["iPhone", "C", "C", "T", "V", "O", "K"]
+    assert not sentence.notes  # iPhone is in the dictionary: nothing guessed
 
 
 def test_emoji_and_symbols_are_dropped_with_a_note(parse):

@@ -18,6 +18,8 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
 
 import numpy as np
 from scipy import signal
@@ -28,7 +30,7 @@ from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE
-from cartoonface.speech.transcript import HAN_RE
+from cartoonface.speech.readings import HAN_RE
 
 LANGUAGES = ("zh", "en")
 RATE = 16000  # Hz: the sample rate of pocketsphinx's en-us acoustic model
@@ -159,6 +161,28 @@ def letters_to_sounds(spelling: str) -> tuple[str, ...]:
         else:
             position += 1
     return tuple(phones)
+
+
+@cache
+def dictionary() -> dict[str, tuple[str, ...]]:
+    """The CMU pronouncing dictionary inside the pocketsphinx wheel (the one its Decoder uses):
+    lower-case spelling -> ARPAbet phones of its first pronunciation."""
+    from pocketsphinx import get_model_path
+
+    words: dict[str, tuple[str, ...]] = {}
+    path = Path(get_model_path("en-us")) / "cmudict-en-us.dict"
+    for line in path.read_text(encoding="utf-8").splitlines():
+        spelling, _, phones = line.partition(" ")
+        if phones and "(" not in spelling:
+            words.setdefault(spelling, tuple(phones.split()))
+    return words
+
+
+def pronounce(spelling: str) -> tuple[tuple[str, ...], bool]:
+    """A lower-case word -> (its ARPAbet phones, from the dictionary?): the dictionary's first
+    pronunciation, else `letters_to_sounds` (empty when no letter is known)."""
+    known = dictionary().get(spelling)
+    return (known, True) if known else (letters_to_sounds(spelling), False)
 
 
 def parse_english(text: str, decoder, source: str) -> tuple[EnglishSentence, ...]:

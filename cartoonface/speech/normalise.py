@@ -1,16 +1,21 @@
 """Numbers, symbols and Latin letters in a transcript -> the Chinese that is read out.
 
 Times 12:30, years, long digit runs, dates, decimals, percentages, 两 before measure words,
-spelled acronyms with Mandarin letter names, and full-width ASCII forms. The rules are
+spelled acronyms with Mandarin letter names, English words (english_in_mandarin.py), and
+full-width ASCII forms. The rules are
 written out in docs/mandarin-mouth-shapes.md.
 """
 
 from __future__ import annotations
 
 import re
+import unicodedata
 
 import cn2an
 
+from cartoonface.errors import TranscriptError
+from cartoonface.speech.english import VOWELS, pronounce
+from cartoonface.speech.english_in_mandarin import english_syllables
 from cartoonface.speech.readings import Unit
 
 # Letter names as Mandarin speakers say them (our approximation), for spelled acronyms.
@@ -44,7 +49,13 @@ def ascii_form(ch: str) -> str:
 
 
 def is_latin(ch: str) -> bool:
-    return bool(ch) and "a" <= ascii_form(ch).lower() <= "z"
+    """A letter of the Latin script: a-z, their full-width forms, and accented or other
+    Latin letters (é, ø, ß; those not English are refused by latin_units)."""
+    if not ch:
+        return False
+    if "a" <= ascii_form(ch).lower() <= "z":
+        return True
+    return ch.isalpha() and unicodedata.name(ch, "").startswith("LATIN")
 
 
 def number_words(match: re.Match[str], following: str) -> tuple[str, bool]:
@@ -88,23 +99,56 @@ def _cardinal(whole: str) -> str:
     return cn2an.an2cn(str(int(whole)), "low")
 
 
-def latin_units(word: str, readings: tuple[str, ...] | None, notes: list[str]) -> list[Unit]:
-    """A Latin word: its override readings, spelled letter names for an acronym, or nothing.
+def latin_units(word: str, readings: tuple[str, ...] | None, notes: list[str], where: str) -> list[Unit]:
+    """A Latin word of a Mandarin transcript -> its syllables as units.
 
-    Acronyms: all capitals, at most _ACRONYM_MAX letters, or a single letter.
+    Its override readings when given; letter names (_LETTERS) for an acronym (all capitals,
+    at most _ACRONYM_MAX letters) or a single letter; otherwise its English pronunciation
+    (english.pronounce: dictionary, else letter-to-sound, with a note) cut into syllables, each
+    with the nearest Mandarin reading and the mouth shapes of its English phones
+    (english_in_mandarin); a word the letter-to-sound rules give no vowel ("xkcd") is spelled.
+    The word is shown on its first unit. Raises TranscriptError starting with `where` (source,
+    line, column) for a word with a letter that is not English (after accents are dropped).
     """
     if readings:
         return [Unit(word if k == 0 else "", reading=r, no_sandhi=True)
                 for k, r in enumerate(readings)]
-    letters = "".join(ascii_form(c) for c in word)
-    if len(letters) == 1 or (letters.isupper() and len(letters) <= _ACRONYM_MAX):
-        units: list[Unit] = []
-        for shown, letter in zip(word, letters.upper()):
-            units.extend(Unit(shown if k == 0 else "", reading=r, no_sandhi=True)
-                         for k, r in enumerate(_LETTERS[letter]))
-        return units
-    notes.append(f"skipped the Latin word {word!r}: not read as Mandarin (write it in Chinese, "
-                 f"or give its readings like {word}{{ha1 lou2}}, one per syllable)")
-    return []
+    letters = english_letters(word)
+    if not re.fullmatch(r"[a-z]+(?:'[a-z]+)*", letters, re.IGNORECASE):
+        strange = next(c for c, plain in zip(word, letters) if not ("a" <= plain.lower() <= "z" or plain == "'"))
+        raise TranscriptError(
+            f"{where}: the word {word!r} has no pronunciation ({strange!r} is not an English letter); "
+            f"expected English or Chinese, or give its readings like {word}{{ou1 si1}}, one per syllable")
+    spelled = letters.replace("'", "")
+    if len(spelled) == 1 or (spelled.isupper() and len(spelled) <= _ACRONYM_MAX):
+        return _spelled(word, spelled)
+    phones, known = pronounce(letters.lower())
+    if not any(phone in VOWELS for phone in phones):
+        return _spelled(word, spelled)
+    syllables = english_syllables(phones)
+    if not known:
+        notes.append(f"read the English word {word!r} from its spelling (not in the dictionary) as "
+                     f"{' '.join(s.pinyin for s in syllables)}; if it is said otherwise, give its "
+                     f"readings in braces, one per syllable, like {word}{{ha1 lou2}}")
+    return [Unit(word if k == 0 else "", reading=s.pinyin, no_sandhi=True, shapes=s.shapes)
+            for k, s in enumerate(syllables)]
 
 
+def english_letters(word: str) -> str:
+    """`word` with full-width forms as ASCII, accents dropped (café -> cafe) and ’ as ';
+    one character for each of `word`'s."""
+    out = []
+    for ch in word:
+        plain = unicodedata.normalize("NFD", ascii_form(ch))[0]
+        out.append("'" if plain == "’" else plain)
+    return "".join(out)
+
+
+def _spelled(shown: str, letters: str) -> list[Unit]:
+    """Units of the Mandarin letter names of `letters` (a-z), each letter shown on its first."""
+    units: list[Unit] = []
+    letter_chars = [c for c in shown if c not in "'’"]
+    for char, letter in zip(letter_chars, letters.upper()):
+        units.extend(Unit(char if k == 0 else "", reading=r, no_sandhi=True)
+                     for k, r in enumerate(_LETTERS[letter]))
+    return units

@@ -36,17 +36,21 @@ _DIGIT_CHARS = frozenset("〇零一二三四五六七八九十")
 _AA_KEEP = frozenset("好早远满稳小老久饱紧短浅")
 
 _READING_RE = re.compile(r"[a-zü]+r?[1-5]")
+# Han characters: CJK Unified Ideographs with extensions A-H, compatibility ideographs, 〇.
+HAN_RE = re.compile(r"[\u3007\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\U00020000-\U0003134f]")
 
 @dataclass(frozen=True)
 class Unit:
-    """A syllable on its way: shown text, the Hanzi to look up (or ""), a fixed reading."""
+    """A syllable on its way: shown text, the Hanzi to look up (or ""), a fixed reading, and
+    for a syllable of an English word the mouth shapes of its English phones (else ())."""
 
     text: str
     han: str = ""
     reading: str = ""
-    no_sandhi: bool = False   # digit-by-digit numbers, spelled letters, overrides
+    no_sandhi: bool = False   # digit-by-digit numbers, spelled letters, overrides, English words
     word: int = 0
     pinyin: str = ""
+    shapes: tuple[str, ...] = ()
 
 
 @cache

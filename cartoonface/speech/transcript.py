@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import itertools
 import math
-import re
 import unicodedata
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from pypinyin.contrib.tone_convert import to_tone3
@@ -41,7 +41,7 @@ from cartoonface.speech.normalise import (
     number_words,
 )
 from cartoonface.speech.pinyin import syllable_parts
-from cartoonface.speech.readings import Unit, erhua, look_up, tone_changes, zhuyin
+from cartoonface.speech.readings import HAN_RE, Unit, erhua, look_up, tone_changes, zhuyin
 
 
 @dataclass(frozen=True)
@@ -82,14 +82,13 @@ class SentenceText:
 _ENDS = frozenset("。！？；!?;…\n")
 _CLOSERS = frozenset("”’」』）)》〉】]\"'")
 _PAUSES = frozenset("，、,：:—–")
+_APOSTROPHES = frozenset("'\u2019")  # inside a Latin word: don't, it’s
 
 # Emotion markup: a mark is replaced by this invisible character (a word joiner, which
 # _read_sentence skips) so every position in the text stays where the user wrote it.
 MARK_FILL = "\u2060"
 MARK_CLOSE_ANY = "/"  # [/] closes the latest open mark
 
-# Han characters: CJK Unified Ideographs with extensions A-H, compatibility ideographs, 〇.
-HAN_RE = re.compile(r"[\u3007\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\U00020000-\U0003134f]")
 
 
 @dataclass
@@ -98,6 +97,7 @@ class _Sentence:
     units: list[list[Unit]] = field(default_factory=list)   # one list per sandhi domain
     pause_after: set[int] = field(default_factory=set)        # domains a comma-like mark follows
     notes: list[str] = field(default_factory=list)
+    english: int = 0                                          # units read from English words
 
 
 def parse_transcript(text: str, source: str = "transcript") -> tuple[SentenceText, ...]:
@@ -111,13 +111,15 @@ def parse_transcript(text: str, source: str = "transcript") -> tuple[SentenceTex
     if not text.strip():
         raise TranscriptError(f"{source}: the transcript is empty; expected Mandarin text")
     text, _ = _strip_marks(text, source)
-    clean, overrides = _strip_overrides(text, source)
+    clean, overrides, origin = _strip_overrides(text, source)
     sentences: list[SentenceText] = []
     pending_notes: list[str] = []
+    mandarin = False  # a syllable not from an English word
     for start, end in _sentence_spans(clean):
-        raw = _read_sentence(clean, start, end, overrides)
+        raw = _read_sentence(clean, start, end, overrides, lambda i: f"{source}: {_position(text, origin[i])}")
         if raw is None:
             continue
+        mandarin = mandarin or raw.english < sum(map(len, raw.units))
         sentence = _finish_sentence(raw)
         if not sentence.syllables:
             if sentences:
@@ -129,10 +131,10 @@ def parse_transcript(text: str, source: str = "transcript") -> tuple[SentenceTex
             sentence = replace(sentence, notes=tuple(pending_notes) + sentence.notes)
             pending_notes = []
         sentences.append(sentence)
-    if not sentences:
+    if not sentences or not mandarin:
         raise TranscriptError(
             f"{source}: no Mandarin syllables found; expected Chinese text "
-            "(Latin words, emoji and symbols alone are not read)")
+            "(English words, emoji and symbols alone are not a Mandarin transcript)")
     return tuple(sentences)
 
 
@@ -142,13 +144,15 @@ def _position(text: str, index: int) -> str:
     return f"line {line}, column {column}"
 
 
-def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, ...]]]:
-    """Remove `{reading}` overrides; return the clean text and {index in it: readings}.
+def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, ...]], list[int]]:
+    """Remove `{reading}` overrides; return the clean text, {index in it: readings} and the
+    index in `text` of each character of the clean text.
 
     An override follows a Chinese character (one reading) or a Latin word (one or more,
     space-separated); the key is the index of that character or of the word's last letter.
     """
     clean: list[str] = []
+    origin: list[int] = []
     overrides: dict[int, tuple[str, ...]] = {}
     i = 0
     while i < len(text):
@@ -157,6 +161,7 @@ def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, 
             raise TranscriptError(f"{source}: {_position(text, i)}: '}}' without an opening '{{'")
         if ch != "{":
             clean.append(ch)
+            origin.append(i)
             i += 1
             continue
         close = text.find("}", i + 1)
@@ -180,7 +185,7 @@ def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, 
             raise TranscriptError(f"{where}: a second override for {target!r}")
         overrides[len(clean) - 1] = tuple(_override_reading(t, where, target) for t in tokens)
         i = close + 1
-    return "".join(clean), overrides
+    return "".join(clean), overrides, origin
 
 
 def _override_reading(token: str, where: str, target: str) -> str:
@@ -227,9 +232,10 @@ def _ends_sentence(clean: str, i: int) -> bool:
     return ch in _ENDS
 
 
-def _read_sentence(clean: str, start: int, end: int,
-                   overrides: dict[int, tuple[str, ...]]) -> _Sentence | None:
-    """Tokenise one sentence span of the clean text into sandhi domains of units."""
+def _read_sentence(clean: str, start: int, end: int, overrides: dict[int, tuple[str, ...]],
+                   locate: Callable[[int], str]) -> _Sentence | None:
+    """Tokenise one sentence span of the clean text into sandhi domains of units;
+    `locate(i)` names where index i of the clean text was written ("source: line L, column C")."""
     text = clean[start:end].replace(MARK_FILL, "").strip()
     if not text:
         return None
@@ -261,11 +267,14 @@ def _read_sentence(clean: str, start: int, end: int,
                                 no_sandhi=by_digit) for c in spoken)
             i = start + number.end()
         elif is_latin(ch):
-            j = i
-            while j < end and is_latin(clean[j]):
+            j = i + 1
+            while j < end and (is_latin(clean[j]) or (clean[j] in _APOSTROPHES and j + 1 < end
+                                                      and is_latin(clean[j + 1]))):
                 j += 1
             close_domain()
-            domain.extend(latin_units(clean[i:j], overrides.get(j - 1), sentence.notes))
+            units = latin_units(clean[i:j], overrides.get(j - 1), sentence.notes, locate(i))
+            sentence.english += sum(bool(u.shapes) for u in units)
+            domain.extend(units)
             close_domain()
             i = j
         elif ch in SYMBOL_READINGS:
@@ -302,7 +311,7 @@ def _finish_sentence(raw: _Sentence) -> SentenceText:
     for d, domain in enumerate(raw.units):
         for unit in tone_changes(erhua(look_up(domain, notes))):
             syllables.append(SyllableText(unit.text, unit.pinyin, zhuyin(unit.pinyin),
-                                          shapes_for(unit.pinyin)))
+                                          unit.shapes or shapes_for(unit.pinyin)))
         if d in raw.pause_after and syllables:
             ends.add(len(syllables) - 1)
     clause_ends = tuple(sorted(e for e in ends if e < len(syllables) - 1))
@@ -415,7 +424,7 @@ def emotion_marks(text: str, source: str = "transcript") -> tuple[EmotionMark, .
     for tag in open_marks:
         ranges.append((tag, _sentence_end(filled, spans, tag.end)))
     cuts = sorted({p for tag, end in ranges for p in (tag.end, end)})
-    counts = dict(zip(cuts, itertools.accumulate(_count(filled[a:b], source) for a, b in zip([0] + cuts, cuts)),
+    counts = dict(zip(cuts, itertools.accumulate(_count(filled, a, b, source) for a, b in zip([0] + cuts, cuts)),
                       strict=True))
     marks = []
     for tag, end in sorted(ranges, key=lambda r: r[0].start):
@@ -438,12 +447,13 @@ def _sentence_end(filled: str, spans: list[tuple[int, int]], at: int) -> int:
     return len(filled)
 
 
-def _count(piece: str, source: str) -> int:
-    """How many syllables `piece` of a (mark-filled) transcript speaks."""
-    clean, overrides = _strip_overrides(piece, source)
+def _count(filled: str, first: int, last: int, source: str) -> int:
+    """How many syllables `filled[first:last]` of a (mark-filled) transcript speaks."""
+    clean, overrides, origin = _strip_overrides(filled[first:last], source)
     total = 0
     for start, end in _sentence_spans(clean):
-        raw = _read_sentence(clean, start, end, overrides)
+        raw = _read_sentence(clean, start, end, overrides,
+                             lambda i: f"{source}: {_position(filled, first + origin[i])}")
         if raw is not None:
             total += len(_finish_sentence(raw).syllables)
     return total
