@@ -10,12 +10,22 @@ spellings); the table gives per set the words paired, the share of onsets within
 ms, and the speed in times real time (seconds of audio per second of work). Nothing here is
 tuned on these files: pocketsphinx's defaults are used, so all of them are reported.
 
+Letter-to-sound (`letters_to_sounds`, the rules for words outside the dictionary): a seeded
+sample of SAMPLE dictionary words (letters only, as a transcript holds them) is read from its
+spelling and compared with the dictionary's first pronunciation: phone error rate (edit
+distance / reference phones), words right, and what the face shows: the mouth-shape sequence
+(seed 000 Table 1, english.PHONE_SHAPE, equal neighbours merged) - its error rate and the words
+whose sequence is right. The rules are written by hand, not fitted on the dictionary, so every
+dictionary word is held out; the sample is split in a tuning half (rules changed while looking
+at it) and a held-out half (reported).
+
 Run: `.venv/bin/python -m bench english` from the project root.
 """
 
 from __future__ import annotations
 
 import difflib
+import random
 import time
 from pathlib import Path
 
@@ -24,6 +34,7 @@ import numpy as np
 from bench.align import read_tiers
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
+from cartoonface.speech.english import PHONE_SHAPE, dictionary, letters_to_sounds
 
 ROOT = Path(__file__).resolve().parent.parent.parent / "shared" / "bench"
 WITHIN = 0.05  # seconds: the issue's goal is 85 % of word onsets within 50 ms
@@ -74,8 +85,65 @@ def onset_errors(wav: Path, reference: Path, tier: str) -> tuple[list[float], fl
     return errors, audio.duration, seconds, len(words)
 
 
+SAMPLE = 2000  # dictionary words read by the letter-to-sound rules
+SEED = 14  # the issue's number: the sample and its halves are fixed
+
+
+def edit_distance(a: tuple[str, ...], b: tuple[str, ...]) -> int:
+    """Levenshtein distance between two symbol sequences (substitution, insertion, deletion 1)."""
+    row = list(range(len(b) + 1))
+    for k, x in enumerate(a, start=1):
+        previous, row[0] = row[0], k
+        for m, y in enumerate(b, start=1):
+            previous, row[m] = row[m], min(row[m] + 1, row[m - 1] + 1, previous + (x != y))
+    return row[-1]
+
+
+def shape_sequence(phones: tuple[str, ...]) -> tuple[str, ...]:
+    """The mouth shapes the face shows for `phones`: Table 1 shapes, equal neighbours merged."""
+    shapes = [PHONE_SHAPE[p] for p in phones]
+    return tuple(s for k, s in enumerate(shapes) if k == 0 or s != shapes[k - 1])
+
+
+def letter_to_sound_halves() -> tuple[list[tuple[str, tuple[str, ...]]], list[tuple[str, tuple[str, ...]]]]:
+    """(tuning half, held-out half) of a seeded sample of SAMPLE letters-only dictionary words."""
+    words = sorted((w, p) for w, p in dictionary().items() if w.isalpha() and w.isascii())
+    sample = random.Random(SEED).sample(words, SAMPLE)
+    return sample[: SAMPLE // 2], sample[SAMPLE // 2 :]
+
+
+def letter_to_sound_scores(words: list[tuple[str, tuple[str, ...]]]) -> dict[str, float]:
+    """Phone error rate, word accuracy, shape error rate and shape-sequence accuracy of
+    `letters_to_sounds` on (spelling, dictionary phones) pairs, as fractions."""
+    phone_errors = phones = shape_errors = shapes = right = shapes_right = 0
+    for spelling, reference in words:
+        guess = letters_to_sounds(spelling)
+        phone_errors += edit_distance(guess, reference)
+        phones += len(reference)
+        right += guess == reference
+        want, got = shape_sequence(reference), shape_sequence(guess)
+        shape_errors += edit_distance(got, want)
+        shapes += len(want)
+        shapes_right += got == want
+    return {"phone error": phone_errors / phones, "words right": right / len(words),
+            "shape error": shape_errors / shapes, "shape sequence right": shapes_right / len(words)}
+
+
+def print_letter_to_sound() -> None:
+    """Print the letter-to-sound table for the tuning and held-out halves."""
+    tuning, held_out = letter_to_sound_halves()
+    print("| half | words | phone error rate | words right | shape error rate | shape sequence right |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for name, half in (("tuning", tuning), ("held out", held_out)):
+        score = letter_to_sound_scores(half)
+        print(f"| {name} | {len(half)} | {score['phone error']:.1%} | {score['words right']:.1%} "
+              f"| {score['shape error']:.1%} | {score['shape sequence right']:.1%} |")
+
+
 def main() -> None:
-    """Print the table of word-onset accuracy and speed per set and over all."""
+    """Print the table of word-onset accuracy and speed per set and over all, then the
+    letter-to-sound table."""
+    print_letter_to_sound()
     results: dict[str, list[tuple[list[float], float, float, int]]] = {}
     for name, wav, reference, tier in MATERIAL:
         results.setdefault(name, []).append(onset_errors(ROOT / wav, ROOT / reference, tier))

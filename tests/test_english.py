@@ -171,3 +171,17 @@ def test_align_counts_english_words_and_phones(english, tmp_path):
 def test_a_word_without_any_sound_is_refused_by_name():
     with pytest.raises(TranscriptError, match="story.txt: the word 'Gh' has no pronunciation"):
         parse_english("Bob said. Gh.", new_decoder(), "story.txt")
+
+
+@pytest.mark.parametrize("word, ending", [
+    ("jumped", ("P", "T")), ("named", ("M", "D")), ("wanted", ("IH", "D")), ("cats", ("T", "S")),
+    ("dogs", ("G", "Z")), ("boxes", ("IH", "Z")), ("nation", ("SH", "AH", "N")),
+])
+def test_letter_to_sound_reads_suffixes_by_the_stem(word, ending):
+    assert letters_to_sounds(word)[-len(ending):] == ending
+
+
+@pytest.mark.parametrize("word, vowel", [("make", "EY"), ("time", "AY"), ("home", "OW"), ("mat", "AE"), ("tim", "IH")])
+def test_a_silent_final_e_makes_the_vowel_long(word, vowel):
+    phones = letters_to_sounds(word)
+    assert [p for p in phones if p in VOWELS] == [vowel]
