@@ -169,7 +169,7 @@ def test_align_counts_english_words_and_phones(english, tmp_path):
 
 
 def test_a_word_without_any_sound_is_refused_by_name():
-    with pytest.raises(TranscriptError, match="story.txt: the word 'Gh' has no pronunciation"):
+    with pytest.raises(TranscriptError, match="story.txt: line 1, column 11: the word 'Gh' has no pronunciation"):
         parse_english("Bob said. Gh.", new_decoder(), "story.txt")
 
 
@@ -185,3 +185,12 @@ def test_letter_to_sound_reads_suffixes_by_the_stem(word, ending):
 def test_a_silent_final_e_makes_the_vowel_long(word, vowel):
     phones = letters_to_sounds(word)
     assert [p for p in phones if p in VOWELS] == [vowel]
+
+
+def test_accents_are_dropped_and_other_letters_refused_naming_word_line_and_column():
+    decoder = new_decoder()
+    (sentence,) = parse_english("A café.", decoder, "t")
+    assert [w.spelling for w in sentence.words] == ["a", "cafe"]
+    assert sentence.words[1].text == "café"
+    with pytest.raises(TranscriptError, match=r"story.txt: line 2, column 11: the word 'Straße'.*'ß'"):
+        parse_english("Hello there.\n[happy] A Straße.", decoder, "story.txt")

@@ -16,6 +16,7 @@ table (`letters_to_sounds`). docs/english.md has the details.
 from __future__ import annotations
 
 import re
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
@@ -30,7 +31,7 @@ from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE
-from cartoonface.speech.readings import HAN_RE
+from cartoonface.speech.readings import HAN_RE, position_of
 
 LANGUAGES = ("zh", "en")
 RATE = 16000  # Hz: the sample rate of pocketsphinx's en-us acoustic model
@@ -112,7 +113,11 @@ ENDINGS = {"tion": "SH AH N", "sion": "ZH AH N", "ture": "CH ER", "ous": "AH S",
            "al": "AH L", "el": "AH L", "en": "AH N", "on": "AH N", "an": "AH N", "o": "OW",
            "a": "AH"}
 SOFT = {"c": "S"}  # before e, i, y (a soft g too made the tuning half worse: get, give, girl)
-WORD_RE = re.compile(r"[A-Za-z]+(?:'[A-Za-z]+)*")
+# Words: runs of Latin letters (ASCII, Latin-1 and Latin Extended-A/B: café, Straße) with inner
+# apostrophes; accents are dropped for the dictionary (english_letters), other letters refused.
+LETTERS = "A-Za-z\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u024f"
+WORD_RE = re.compile(rf"[{LETTERS}]+(?:'[{LETTERS}]+)*")
+SPELLING_RE = re.compile(r"[a-z]+(?:'[a-z]+)*")
 SENTENCE_END_RE = re.compile(r"(?<=[.!?;])\s+|\n\s*\n")
 MARK_RE = re.compile(r"\[[^\]\n]*\]")  # emotion marks (transcript.py); the pipeline reads them
 LATIN_RE = re.compile(r"[A-Za-z]+")
@@ -245,33 +250,50 @@ def pronounce(spelling: str) -> tuple[tuple[str, ...], bool]:
     return (known, True) if known else (letters_to_sounds(spelling), False)
 
 
+def english_letters(word: str) -> str:
+    """`word` with accents dropped (café -> cafe) and ’ as '; one character for each of `word`'s."""
+    out = []
+    for ch in word:
+        plain = unicodedata.normalize("NFD", ch)[0]
+        out.append("'" if plain == "\u2019" else plain)
+    return "".join(out)
+
+
 def parse_english(text: str, decoder, source: str) -> tuple[EnglishSentence, ...]:
     """Sentences and words of an English transcript, each word with its phones from the
     decoder's dictionary or, outside it, from `letters_to_sounds` (added to the decoder's
     dictionary). Raises TranscriptError naming `source` when the text has no words, holds
-    digits (numbers must be written as words), or a word has no pronunciation."""
-    number = re.search(r"\d+", MARK_RE.sub(" ", text))
+    digits (numbers must be written as words), or a word has a letter that is not English
+    (after accents are dropped) or no pronunciation (naming the word, line and column)."""
+    blanked = MARK_RE.sub(lambda mark: " " * len(mark.group()), text)
+    number = re.search(r"\d+", blanked)
     if number:
         raise TranscriptError(f"{source}: the number {number.group()!r} in an English transcript; "
                               "expected numbers written as words (twenty one)")
+    places = (f"{source}: {position_of(text, match.start())}" for match in WORD_RE.finditer(blanked))
     sentences = []
     for sentence in split_sentences(text):
-        words = tuple(_word(match.group(), decoder, source) for match in WORD_RE.finditer(sentence))
+        words = tuple(_word(match.group(), decoder, next(places)) for match in WORD_RE.finditer(sentence))
         sentences.append(EnglishSentence(sentence, words))
     if not sentences:
         raise TranscriptError(f"{source}: no English words in the transcript; expected the text spoken in the recording")
     return tuple(sentences)
 
 
-def _word(text: str, decoder, source: str) -> Word:
-    """The Word for `text` with phones from the dictionary, else from the letters (then added to it)."""
-    spelling = text.lower()
+def _word(text: str, decoder, where: str) -> Word:
+    """The Word for `text` with phones from the dictionary, else from the letters (then added to
+    it); TranscriptError starting with `where` when it has none."""
+    spelling = english_letters(text).lower()
+    if not SPELLING_RE.fullmatch(spelling):
+        strange = next(c for c, plain in zip(text, spelling) if not ("a" <= plain <= "z" or plain == "'"))
+        raise TranscriptError(f"{where}: the word {text!r} has no pronunciation ({strange!r} is not an English "
+                              "letter); expected English words")
     known = decoder.lookup_word(spelling)
     if known:
         return Word(text, spelling, tuple(known.split()))
     phones = letters_to_sounds(spelling)
     if not phones:
-        raise TranscriptError(f"{source}: the word {text!r} has no pronunciation; expected English words")
+        raise TranscriptError(f"{where}: the word {text!r} has no pronunciation; expected English words")
     decoder.add_word(spelling, " ".join(phones), True)
     return Word(text, spelling, phones)
 

@@ -14,7 +14,7 @@ import unicodedata
 import cn2an
 
 from cartoonface.errors import TranscriptError
-from cartoonface.speech.english import VOWELS, pronounce
+from cartoonface.speech.english import VOWELS, english_letters, pronounce
 from cartoonface.speech.english_in_mandarin import english_syllables
 from cartoonface.speech.readings import Unit
 
@@ -113,7 +113,7 @@ def latin_units(word: str, readings: tuple[str, ...] | None, notes: list[str], w
     if readings:
         return [Unit(word if k == 0 else "", reading=r, no_sandhi=True)
                 for k, r in enumerate(readings)]
-    letters = english_letters(word)
+    letters = english_letters("".join(ascii_form(c) for c in word))
     if not re.fullmatch(r"[a-z]+(?:'[a-z]+)*", letters, re.IGNORECASE):
         strange = next(c for c, plain in zip(word, letters) if not ("a" <= plain.lower() <= "z" or plain == "'"))
         raise TranscriptError(
@@ -132,16 +132,6 @@ def latin_units(word: str, readings: tuple[str, ...] | None, notes: list[str], w
                      f"readings in braces, one per syllable, like {word}{{ha1 lou2}}")
     return [Unit(word if k == 0 else "", reading=s.pinyin, no_sandhi=True, shapes=s.shapes)
             for k, s in enumerate(syllables)]
-
-
-def english_letters(word: str) -> str:
-    """`word` with full-width forms as ASCII, accents dropped (café -> cafe) and ’ as ';
-    one character for each of `word`'s."""
-    out = []
-    for ch in word:
-        plain = unicodedata.normalize("NFD", ascii_form(ch))[0]
-        out.append("'" if plain == "’" else plain)
-    return "".join(out)
 
 
 def _spelled(shown: str, letters: str) -> list[Unit]:

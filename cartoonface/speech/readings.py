@@ -101,6 +101,13 @@ def look_up(domain: list[Unit], notes: list[str]) -> list[Unit]:
     return out
 
 
+def position_of(text: str, index: int) -> str:
+    """Where `index` of `text` is, as a person counts: "line L, column C" (both from 1)."""
+    line = text.count("\n", 0, index) + 1
+    column = index - (text.rfind("\n", 0, index) + 1) + 1
+    return f"line {line}, column {column}"
+
+
 def _reading_of(han: str) -> str:
     """pypinyin's reading of one character, tone-numbered ("" when it has none)."""
     readings = lazy_pinyin(han, style=Style.TONE3, neutral_tone_with_five=True, v_to_u=True)

@@ -41,7 +41,7 @@ from cartoonface.speech.normalise import (
     number_words,
 )
 from cartoonface.speech.pinyin import syllable_parts
-from cartoonface.speech.readings import HAN_RE, Unit, erhua, look_up, tone_changes, zhuyin
+from cartoonface.speech.readings import HAN_RE, Unit, erhua, look_up, position_of, tone_changes, zhuyin
 
 
 @dataclass(frozen=True)
@@ -116,7 +116,7 @@ def parse_transcript(text: str, source: str = "transcript") -> tuple[SentenceTex
     pending_notes: list[str] = []
     mandarin = False  # a syllable not from an English word
     for start, end in _sentence_spans(clean):
-        raw = _read_sentence(clean, start, end, overrides, lambda i: f"{source}: {_position(text, origin[i])}")
+        raw = _read_sentence(clean, start, end, overrides, lambda i: f"{source}: {position_of(text, origin[i])}")
         if raw is None:
             continue
         mandarin = mandarin or raw.english < sum(map(len, raw.units))
@@ -138,12 +138,6 @@ def parse_transcript(text: str, source: str = "transcript") -> tuple[SentenceTex
     return tuple(sentences)
 
 
-def _position(text: str, index: int) -> str:
-    line = text.count("\n", 0, index) + 1
-    column = index - (text.rfind("\n", 0, index) + 1) + 1
-    return f"line {line}, column {column}"
-
-
 def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, ...]], list[int]]:
     """Remove `{reading}` overrides; return the clean text, {index in it: readings} and the
     index in `text` of each character of the clean text.
@@ -158,7 +152,7 @@ def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, 
     while i < len(text):
         ch = text[i]
         if ch == "}":
-            raise TranscriptError(f"{source}: {_position(text, i)}: '}}' without an opening '{{'")
+            raise TranscriptError(f"{source}: {position_of(text, i)}: '}}' without an opening '{{'")
         if ch != "{":
             clean.append(ch)
             origin.append(i)
@@ -167,9 +161,9 @@ def _strip_overrides(text: str, source: str) -> tuple[str, dict[int, tuple[str, 
         close = text.find("}", i + 1)
         if close < 0 or any(c in "{\n" for c in text[i + 1:close]):
             raise TranscriptError(
-                f"{source}: {_position(text, i)}: '{{' without a closing '}}' on the same line; "
+                f"{source}: {position_of(text, i)}: '{{' without a closing '}}' on the same line; "
                 "expected an override like 行{hang2}")
-        where = f"{source}: {_position(text, i)}"
+        where = f"{source}: {position_of(text, i)}"
         tokens = text[i + 1:close].split()
         target = clean[-1] if clean else ""
         if HAN_RE.fullmatch(target):
@@ -354,16 +348,16 @@ def _strip_marks(text: str, source: str) -> tuple[str, list[_Tag]]:
     while i < len(text):
         ch = text[i]
         if ch == "]":
-            raise TranscriptError(f"{source}: {_position(text, i)}: ']' without an opening '['; "
+            raise TranscriptError(f"{source}: {position_of(text, i)}: ']' without an opening '['; "
                                   "expected an emotion mark like [happy]")
         if ch != "[":
             i += 1
             continue
         close = text.find("]", i + 1)
         if close < 0 or any(c in "[\n" for c in text[i + 1:close]):
-            raise TranscriptError(f"{source}: {_position(text, i)}: '[' without a closing ']' on the same line; "
+            raise TranscriptError(f"{source}: {position_of(text, i)}: '[' without a closing ']' on the same line; "
                                   "expected an emotion mark like [happy] or [happy 0.5]")
-        tags.append(_tag(text[i + 1:close], i, close + 1, f"{source}: {_position(text, i)}"))
+        tags.append(_tag(text[i + 1:close], i, close + 1, f"{source}: {position_of(text, i)}"))
         out[i:close + 1] = MARK_FILL * (close + 1 - i)
         i = close + 1
     return "".join(out), tags
@@ -416,7 +410,7 @@ def emotion_marks(text: str, source: str = "transcript") -> tuple[EmotionMark, .
             continue
         match = [t for t in open_marks if tag.closes in (MARK_CLOSE_ANY, t.name)]
         if not match:
-            raise TranscriptError(f"{source}: {_position(text, tag.start)}: closing mark "
+            raise TranscriptError(f"{source}: {position_of(text, tag.start)}: closing mark "
                                   f"[/{'' if tag.closes == MARK_CLOSE_ANY else tag.closes}] with no open mark "
                                   "to close; expected it after a mark like [happy]")
         open_marks.remove(match[-1])
@@ -430,9 +424,9 @@ def emotion_marks(text: str, source: str = "transcript") -> tuple[EmotionMark, .
     for tag, end in sorted(ranges, key=lambda r: r[0].start):
         first, last = counts[tag.end], counts[end] - 1
         if last < first:
-            raise TranscriptError(f"{source}: {_position(text, tag.start)}: the mark [{tag.name}] stands over no "
+            raise TranscriptError(f"{source}: {position_of(text, tag.start)}: the mark [{tag.name}] stands over no "
                                   "spoken syllable; expected it before the words it colours")
-        marks.append(EmotionMark(tag.name, tag.intensity, first, last, _position(text, tag.start)))
+        marks.append(EmotionMark(tag.name, tag.intensity, first, last, position_of(text, tag.start)))
     return tuple(marks)
 
 
@@ -453,7 +447,7 @@ def _count(filled: str, first: int, last: int, source: str) -> int:
     total = 0
     for start, end in _sentence_spans(clean):
         raw = _read_sentence(clean, start, end, overrides,
-                             lambda i: f"{source}: {_position(filled, first + origin[i])}")
+                             lambda i: f"{source}: {position_of(filled, first + origin[i])}")
         if raw is not None:
             total += len(_finish_sentence(raw).syllables)
     return total
