@@ -88,6 +88,7 @@ VOWELS = frozenset({"AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", 
 # first at each position (our rules, a crude reading of English spelling; docs/english.md).
 SPELLING: dict[str, str] = {
     "tch": "CH", "sch": "S K", "igh": "AY", "ough": "OW",
+    "nk": "NG K", "kn": "N", "wr": "R", "oe": "OW", "ew": "UW", "oa": "OW", "ue": "UW",
     "ch": "CH", "sh": "SH", "th": "TH", "ph": "F", "wh": "W", "ck": "K", "ng": "NG", "qu": "K W", "gh": "",
     "ee": "IY", "ea": "IY", "oo": "UW", "ou": "AW", "ow": "OW", "oi": "OY", "oy": "OY", "ai": "EY", "ay": "EY",
     "au": "AO", "aw": "AO", "ei": "EY", "ey": "IY", "ie": "IY", "er": "ER", "ir": "ER", "ur": "ER",
@@ -109,7 +110,8 @@ _VOWEL_LETTERS = frozenset("aeiouy")
 _MAGIC_E_RE = re.compile(r"(?<![aeiou])([aeiou])([bcdfgklmnprstvz])e$")
 LONG_VOWEL = {"a": "EY", "e": "IY", "i": "AY", "o": "OW", "u": "UW"}
 # Word endings of words with a vowel letter before them (or alone: a final o, a).
-ENDINGS = {"tion": "SH AH N", "sion": "ZH AH N", "ture": "CH ER", "ous": "AH S", "le": "AH L",
+ENDINGS = {"tion": "SH AH N", "sion": "ZH AH N", "ture": "CH ER", "ous": "AH S", "ism": "IH Z AH M",
+           "ier": "IY ER", "ian": "IY AH N", "ity": "AH T IY", "ia": "IY AH", "lle": "L", "or": "ER", "le": "AH L",
            "al": "AH L", "el": "AH L", "en": "AH N", "on": "AH N", "an": "AH N", "o": "OW",
            "a": "AH"}
 SOFT = {"c": "S"}  # before e, i, y (a soft g too made the tuning half worse: get, give, girl)
@@ -203,6 +205,16 @@ def _suffix_phones(ending: str, stem: list[str]) -> list[str]:
     return ending.split()
 
 
+def _y_sound(before: str, after: str) -> str:
+    """The sound of a y between the letters `before` and `after` ("" at an edge), or "" to
+    read it by SPELLING: Y before a vowel at the start (yes), IH between consonants (analyst)."""
+    if not before and after in _VOWEL_LETTERS and after:
+        return "Y"
+    if before and after and before not in _VOWEL_LETTERS and after not in _VOWEL_LETTERS:
+        return "IH"
+    return ""
+
+
 def _groups(word: str) -> list[str]:
     """SPELLING letter groups of `word`, longest first; c before e, i, y reads S (SOFT)."""
     phones: list[str] = []
@@ -212,6 +224,10 @@ def _groups(word: str) -> list[str]:
         letter = word[position]
         if letter in SOFT and following and following in "eiy":
             phones.append(SOFT[letter])
+            position += 1
+            continue
+        if letter == "y" and (sound := _y_sound(word[position - 1 : position], following)):
+            phones.append(sound)
             position += 1
             continue
         for size in range(min(_LONGEST, len(word) - position), 0, -1):
