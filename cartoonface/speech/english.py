@@ -167,8 +167,8 @@ def letters_to_sounds(spelling: str) -> tuple[str, ...]:
     """ARPAbet phones for a lower-case word by our spelling rules (docs/english.md): the
     suffixes -s -es -ed -ing -ly read after the stem (SUFFIXES, -s and -ed voiced after a voiced
     sound), a long vowel before consonant + silent final e (LONG_VOWEL), word endings
-    (ENDINGS), c soft before e i y, then the SPELLING letter groups longest first
-    (doubled letters read once). Empty when no letter is known."""
+    (ENDINGS), c soft before e i y, y as Y or IH by its neighbours, then the SPELLING letter
+    groups longest first (doubled letters read once). Empty when no letter is known."""
     return tuple(_read(spelling.replace("'", "")))
 
 
