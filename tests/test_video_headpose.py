@@ -25,7 +25,8 @@ if not MISSING:
     from cartoonface.face.pose import rotation_matrix
     from cartoonface.face.state import Pose
     from cartoonface.photo.landmarks import landmarker
-    from cartoonface.video.headpose import Start, angles, mesh_axes, mesh_pose, track_cylinder
+    from cartoonface.video.headpose import (FLIP, Start, angles, mesh_axes, mesh_pose, pose_rotation,
+                                             rotation_pose, track_cylinder)
 
 # How close the mesh's roll follows an exact in-plane rotation of the picture, degrees.
 ROLL_BOUND = 1.5
@@ -97,6 +98,9 @@ def test_a_rigidly_rotated_mesh_gives_face_pose_convention_angles(pose: tuple[fl
     posed = frontal @ rotation_matrix(Pose(*pose)).T + centre
     assert np.allclose(mesh_pose(posed * flip), pose, atol=1e-6)
     assert np.allclose(angles(rotation_matrix(Pose(*pose))), pose, atol=1e-9)
+    # the tracker's OpenCV-frame rotation is the same rotation, and goes back to the pose
+    assert np.allclose(FLIP @ pose_rotation(pose) @ FLIP, rotation_matrix(Pose(*pose)), atol=1e-12)
+    assert np.allclose(rotation_pose(pose_rotation(pose)), pose, atol=1e-9)
 
 
 def gray(rgb: np.ndarray) -> np.ndarray:

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cartoonface.face.state import MAX_ANGLE
 
 # Face mesh indices (photo/landmarks.py's IBUG68 choice plus the forehead midline),
 # rigid under speech and expression: (image-left, image-right) of a frontal face.
@@ -140,11 +139,14 @@ def camera(shape: tuple[int, ...]) -> np.ndarray:
 
 
 def pose_rotation(pose: tuple[float, float, float]) -> np.ndarray:
-    """(3, 3) head-to-camera rotation in OpenCV's frame for (tilt, turn, roll) degrees."""
-    from cartoonface.face.pose import rotation_matrix
-    from cartoonface.face.state import Pose
-
-    return FLIP @ rotation_matrix(Pose(*(float(np.clip(v, -MAX_ANGLE, MAX_ANGLE)) for v in pose))) @ FLIP
+    """(3, 3) head-to-camera rotation in OpenCV's frame for (tilt, turn, roll) degrees
+    (face/pose.py's rotation_matrix, Rz(roll) @ Rx(tilt) @ Ry(turn), without Pose's
+    +-15 degree limit: a tracked head may start further turned)."""
+    a, b, g = (math.radians(v) for v in pose)
+    about_x = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(a), -math.sin(a)], [0.0, math.sin(a), math.cos(a)]])
+    about_y = np.array([[math.cos(b), 0.0, math.sin(b)], [0.0, 1.0, 0.0], [-math.sin(b), 0.0, math.cos(b)]])
+    about_z = np.array([[math.cos(g), -math.sin(g), 0.0], [math.sin(g), math.cos(g), 0.0], [0.0, 0.0, 1.0]])
+    return FLIP @ about_z @ about_x @ about_y @ FLIP
 
 
 def rotation_pose(rotation: np.ndarray) -> tuple[float, float, float]:
