@@ -25,7 +25,7 @@ if not MISSING:
     from cartoonface.face.pose import rotation_matrix
     from cartoonface.face.state import Pose
     from cartoonface.photo.landmarks import landmarker
-    from cartoonface.video.headpose import (FLIP, Start, angles, mesh_axes, mesh_pose, pose_rotation,
+    from cartoonface.video.headpose import (FLIP, Start, angles, mesh_axes, mesh_pose, mesh_start, pose_rotation,
                                              rotation_pose, track_cylinder)
 
 # How close the mesh's roll follows an exact in-plane rotation of the picture, degrees.
@@ -108,15 +108,13 @@ def gray(rgb: np.ndarray) -> np.ndarray:
 
 
 def start_of(rgb: np.ndarray) -> Start:
-    found = landmarker().find(rgb)
-    assert found is not None
-    return Start(mesh_pose(found.points), found.box)
+    return mesh_start(points(rgb))
 
 
 def relocate(index: int, frame: np.ndarray) -> Start | None:
     """The mesh on a gray frame: the Start the tracker re-initialises from, or None."""
     found = landmarker().find(np.ascontiguousarray(np.repeat(frame[:, :, None], 3, axis=2)))
-    return None if found is None else Start(mesh_pose(found.points), found.box)
+    return None if found is None else mesh_start(found.points)
 
 
 def moved(frame: np.ndarray, dx: float, dy: float) -> np.ndarray:

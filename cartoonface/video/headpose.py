@@ -69,9 +69,12 @@ def mesh_pose(points: np.ndarray) -> tuple[float, float, float]:
 # Camera: a pinhole at the image centre with this focal length in image widths (the
 # clips' lenses are unknown; 1.0 is a ~53 degree field of view, a webcam's).
 FOCAL_WIDTHS = 1.0
-# The cylinder's radius in face box widths (the detector's box spans the face from
-# cheek to cheek; the head's cross-section is about as wide).
-RADIUS_BOXES = 0.5
+# The cylinder's radius in face box widths (mesh_start's box spans the face oval from
+# cheek to cheek; the head is a little wider): tuned on s1_bbaf2n's synthetic motions
+# (bench/video_pose.py; 0.5 to 0.65 tried).
+RADIUS_BOXES = 0.55
+# The face mesh's rows before the irises (photo/landmarks.py: 468-477 are the irises).
+FACE_POINTS = 468
 # Template points are sampled in the face box down to this fraction of its height
 # (eyes, brows, nose; not the mouth and jaw, which move with speech) and only where the
 # cylinder's surface faces the camera within this angle (degrees): nearer the rim a
@@ -106,7 +109,9 @@ REFILL_POINTS = 60
 # After this many occluded frames in a row the track is lost and re-initialised.
 LOST_FRAMES = 5
 # Drift control: the key template (the frame the track started from) is registered
-# again when at least this many of its points come back within INLIER_PIXELS.
+# again in every frame; its points join the fit when at least KEY_POINTS come back.
+# (Registering only within 5 or 10 degrees of the key's pose, where its patches look
+# alike, let the pose drift further on the tuning clip: docs/video.md.)
 KEY_POINTS = 12
 # CV frame (x right, y down, z away) <-> face/pose.py's local frame (y up, z front).
 FLIP = np.diag([1.0, -1.0, -1.0])
@@ -115,10 +120,20 @@ FLIP = np.diag([1.0, -1.0, -1.0])
 @dataclass(frozen=True)
 class Start:
     """Where a track starts: the head's pose (tilt, turn, roll degrees, as mesh_pose
-    gives) and its face box (x0, y0, x1, y1) image pixels (Landmarks.box)."""
+    gives) and its face box (x0, y0, x1, y1) image pixels (mesh_start makes both)."""
 
     pose: tuple[float, float, float]
     box: tuple[float, float, float, float]
+
+
+def mesh_start(points: np.ndarray) -> Start:
+    """A track's Start from one face mesh ((478, 3) as mesh_pose takes): its pose and
+    the extent (x0, y0, x1, y1) of the face's FACE_POINTS (forehead to chin, cheek to
+    cheek; the irises left out)."""
+    face = points[:FACE_POINTS, :2]
+    x0, y0 = face.min(axis=0)
+    x1, y1 = face.max(axis=0)
+    return Start(mesh_pose(points), (float(x0), float(y0), float(x1), float(y1)))
 
 
 @dataclass(frozen=True)
@@ -152,6 +167,28 @@ def pose_rotation(pose: tuple[float, float, float]) -> np.ndarray:
 def rotation_pose(rotation: np.ndarray) -> tuple[float, float, float]:
     """(tilt, turn, roll) degrees of a (3, 3) head-to-camera rotation in OpenCV's frame."""
     return angles(FLIP @ rotation @ FLIP)
+
+
+def towards(point: np.ndarray) -> np.ndarray:
+    """(3, 3) the smallest rotation taking the camera's optical axis (0, 0, 1) to the
+    line of sight to `point` (3,) (camera coordinates, in front of the camera)."""
+    axis = np.array([0.0, 0.0, 1.0])
+    sight = point / np.linalg.norm(point)
+    across = np.cross(axis, sight)
+    sine, cosine = float(np.linalg.norm(across)), float(axis @ sight)
+    if sine < 1e-12:
+        return np.eye(3)
+    k = across / sine
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + sine * cross + (1 - cosine) * cross @ cross
+
+
+def _relative(rotation: np.ndarray, shift: np.ndarray, radius: float) -> tuple[float, float, float]:
+    """(tilt, turn, roll) degrees of the cylinder posed by `rotation` (3, 3) and `shift`
+    (3,) relative to the line of sight to the middle of its front (a radius in front of
+    its axis)."""
+    front = shift - rotation @ np.array([0.0, 0.0, radius])
+    return rotation_pose(towards(front).T @ rotation)
 
 
 def _on_cylinder(xy: np.ndarray, radius: float, rotation: np.ndarray, shift: np.ndarray,
@@ -196,11 +233,17 @@ class _Cylinder:
         self.half_height = (y1 - y0) / 2
         # 3D units: pixels at the depth of the face's front (distance = focal)
         self.radius = RADIUS_BOXES * self.box_width
-        self.rotation = pose_rotation(start.pose)
         centre = np.array([(x0 + x1) / 2 - self.matrix[0, 2], (y0 + y1) / 2 - self.matrix[1, 2], focal])
+        # the mesh's pose is relative to the line of sight to the face
+        self.rotation = towards(centre) @ pose_rotation(start.pose)
         # the axis lies a radius behind the face's front along the head's own depth
         self.shift = centre + self.rotation @ np.array([0.0, 0.0, self.radius])
         return self.sample(gray, start.box)
+
+    def pose(self) -> tuple[float, float, float]:
+        """(tilt, turn, roll) degrees relative to the line of sight to the head (as the
+        mesh gives them: a head off the image centre that faces the camera has 0, 0, 0)."""
+        return _relative(self.rotation, self.shift, self.radius)
 
     def sample(self, gray: np.ndarray, box: tuple[float, float, float, float],
                taken: np.ndarray | None = None) -> _Template | None:
@@ -267,7 +310,7 @@ class _Cylinder:
                                           self.matrix, None, rvec, tvec)
         rotation = np.asarray(cv2.Rodrigues(rvec)[0], dtype=float)
         shift = np.asarray(tvec, dtype=float).ravel()
-        if max(abs(a) for a in rotation_pose(rotation)) > LOST_ANGLE or shift[2] <= self.radius:
+        if max(abs(a) for a in _relative(rotation, shift, self.radius)) > LOST_ANGLE or shift[2] <= self.radius:
             return None
         self.rotation, self.shift = rotation, shift
         return keep
@@ -297,7 +340,7 @@ def track_cylinder(frames: Iterable[np.ndarray], start: Start,
     """Head pose per frame by the seed 003 cylindrical head model (section 2).
 
     frames: gray (H, W) uint8 images; start: the pose and face box on the first frame
-    (from the mesh: mesh_pose and Landmarks.box); relocate(index, gray): a new Start for
+    (mesh_start of the frame's face mesh); relocate(index, gray): a new Start for
     a frame when the track is lost (the mesh again), or None (no face: hold the pose).
     Returns (n, 3) float (tilt, turn, roll) degrees, one row per frame.
 
@@ -331,7 +374,7 @@ def track_cylinder(frames: Iterable[np.ndarray], start: Start,
             if found is not None:
                 key = template = tracker.start(gray, found)
                 missed = 0
-        poses.append(rotation_pose(tracker.rotation))
+        poses.append(tracker.pose())
     return np.array(poses, dtype=float).reshape(-1, 3)
 
 
