@@ -23,6 +23,9 @@ Figures, per clip and over the clips:
   time for the mesh (network and mesh_pose) and for the cylinder tracker alone (it runs on top of the mesh in the
   driving code), at 360 x 288 and scaled to 900 x 720.
 
+`python bench/video_pose.py OUT.png` draws docs/video.md's picture; `python
+bench/video_pose.py --clip OUT.mp4` writes a clip with larger head movement (write_clip).
+
 The known-motion figures were tuned on s1_bbaf2n (the tuning half) and are reported
 on the other two clips (held out); agreement and jitter on all three.
 """
@@ -338,8 +341,48 @@ def figure(path: Path, clip: str = "s1_lbak3a") -> None:
     Image.open(buffer).convert("RGB").quantize(256).save(path, optimize=True)
 
 
+def write_clip(path: Path) -> None:
+    """Write a clip with larger head movement (CC BY 4.0, from GRID) to `path` (MP4,
+    H.264 + AAC) and its known motion to `path` with suffix .csv: the three GRID clips
+    joined, each warped by one synthetic sine of AMPLITUDE over its whole length (turn,
+    tilt, roll in clip order), with their own sound. Columns: frame, then the synthetic
+    tilt, turn, roll in degrees (Pose's signs), added to the speaker's own pose."""
+    clips = sorted(GRID.glob("*.mpg"))
+    parts, truth = [], []
+    for clip, axis in zip(clips, (1, 0, 2)):
+        frames = decode(clip)
+        _, meshes, _ = mesh_run(frames)
+        count = len(frames)
+        angles = AMPLITUDE * np.sin(2 * math.pi * np.arange(count) / count)
+        warped = frames.copy()
+        for i, (points, angle) in enumerate(zip(meshes, angles)):
+            if points is None:
+                continue
+            x, y = points[:FACE_POINTS, :2].mean(axis=0)
+            warped[i] = (rolled(frames[i], (float(x), float(y)), float(angle)) if axis == 2
+                         else turned(frames[i], points, axis, float(angle)))
+        parts.append(warped)
+        rows = np.zeros((count, 3))
+        rows[:, axis] = angles
+        truth.append(rows)
+    video = np.concatenate(parts)
+    height, width = video.shape[1:3]
+    sounds = [str(clip.with_suffix(".wav")) for clip in clips]
+    inputs = [arg for sound in sounds for arg in ("-i", sound)]
+    joined = "".join(f"[{k + 1}:a]" for k in range(len(sounds))) + f"concat=n={len(sounds)}:v=0:a=1[a]"
+    subprocess.run([ffmpeg_exe(), "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
+                    "-s", f"{width}x{height}", "-r", "25", "-i", "-", *inputs, "-filter_complex", joined,
+                    "-map", "0:v", "-map", "[a]", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "20",
+                    "-c:a", "aac", "-shortest", str(path)], input=video.tobytes(), check=True)
+    table = np.column_stack([np.arange(len(video)), np.concatenate(truth)])
+    np.savetxt(path.with_suffix(".csv"), table, fmt=["%d", "%.3f", "%.3f", "%.3f"], delimiter=",",
+               header="frame,tilt,turn,roll", comments="")
+
+
 if __name__ == "__main__":
-    if len(sys.argv) > 1:
+    if len(sys.argv) > 2 and sys.argv[1] == "--clip":
+        write_clip(Path(sys.argv[2]))
+    elif len(sys.argv) > 1:
         figure(Path(sys.argv[1]))
     else:
         main()
