@@ -26,7 +26,7 @@ if not MISSING:
     from cartoonface.face.state import Pose
     from cartoonface.photo.landmarks import landmarker
     from cartoonface.video.headpose import (FLIP, Start, angles, mesh_axes, mesh_pose, mesh_start, pose_rotation,
-                                             rotation_pose, track_cylinder)
+                                             rotation_pose, towards, track_cylinder)
 
 # How close the mesh's roll follows an exact in-plane rotation of the picture, degrees.
 ROLL_BOUND = 1.5
@@ -185,3 +185,14 @@ def test_a_partly_covered_face_keeps_its_pose_and_the_track_goes_on() -> None:
     poses = track_cylinder(frames, start_of(still))
     assert np.abs(poses[:9] - poses[0]).max() < OCCLUDED_BOUND
     assert abs((poses[-1, 2] - poses[0, 2]) - 6.0) < TRACK_ROLL_BOUND
+
+
+@pytest.mark.parametrize("point", [(0.0, 0.0, 5.0), (30.0, -40.0, 300.0), (-200.0, 90.0, 100.0)])
+def test_towards_turns_the_optical_axis_onto_the_line_of_sight(point: tuple[float, float, float]) -> None:
+    rotation = towards(np.array(point))
+    sight = np.array(point) / np.linalg.norm(point)
+    assert np.allclose(rotation @ np.array([0.0, 0.0, 1.0]), sight, atol=1e-12)
+    assert np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(rotation), 1.0)
+    # the smallest such rotation: what is square to both axes stays put
+    normal = np.cross([0.0, 0.0, 1.0], sight)
+    assert np.allclose(rotation @ normal, normal, atol=1e-12)
