@@ -194,7 +194,9 @@ def test_noise_lowers_the_confidence_but_keeps_the_count():
     sure = align_syllables(clean, span, syllables)
     unsure = align_syllables(noisy, span, syllables)
     check_shape(unsure, span, len(syllables))
-    assert np.mean([t.confidence for t in unsure]) < np.mean([t.confidence for t in sure]) - 0.2
+    assert np.mean([t.posterior for t in unsure]) < np.mean([t.posterior for t in sure]) - 0.2
+    # the miss model's probability of being within 50 ms falls with it
+    assert np.mean([t.confidence for t in unsure]) < np.mean([t.confidence for t in sure])
 
 
 def hiss(seconds: float, rng: np.random.Generator) -> np.ndarray:
@@ -276,9 +278,11 @@ def test_an_onset_that_nothing_marks_is_the_least_sure():
     check_shape(timings, span, 6)
     starts = np.array([t.start for t in timings])
     inside = int(np.flatnonzero((starts > onsets[2] + 0.05) & (starts < onsets[3] - 0.05))[0])
+    posterior = np.array([t.posterior for t in timings])
+    assert posterior[inside] == posterior.min()
+    assert np.delete(posterior, inside).min() > posterior[inside] + 0.2
     confidence = np.array([t.confidence for t in timings])
     assert confidence[inside] == confidence.min()
-    assert np.delete(confidence, inside).min() > confidence[inside] + 0.2
 
 
 def test_a_stretch_read_twice_as_fast_as_the_one_before_keeps_its_syllables():
