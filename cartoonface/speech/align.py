@@ -32,12 +32,14 @@ does not push syllables over it. Syllables are ordered, do not overlap and
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
 
-Confidence: the posterior probability that a syllable's onset lies within 50 ms of where the
-best cut puts it, over all cuts weighted by exp(score / TEMPERATURE) (forward-backward: the same
-dynamic programme summed instead of maximised, forward and on the time-reversed problem), times
-the part's signal quality (its loudness range), with each stretch at the rate the best cut
-chose. It is low where other cuts score nearly as well, also when they move a whole stretch by
-one syllable.
+Confidence: the probability, by a small miss model (logistic regression, MISS_WEIGHTS), that the
+onset lies within 50 ms of the truth, from the aligner's posterior and the evidence around the
+onset (onset_features). The posterior is the probability that the onset lies within 50 ms of
+where the best cut puts it, over all cuts weighted by exp(score / TEMPERATURE) (forward-backward:
+the same dynamic programme summed instead of maximised, forward and on the time-reversed
+problem), times the part's signal quality (its loudness range), with each stretch at the rate the
+best cut chose. It is low where other cuts score nearly as well, also when they move a whole
+stretch by one syllable; it is kept with each syllable (SyllableTiming.posterior).
 
 Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
 all give a duration-prior split with low confidence.

@@ -3,7 +3,8 @@
 A stretch is a run of aligned syllables with no pause between them (a gap of at least
 MIN_GAP between one syllable's end and the next one's start ends it), inside one sentence.
 Its speaking rate is its own: its mean syllable duration. The aligner's
-timing of a stretch is taken as unfit when its mean confidence is below SURE_UNFIT, or below
+timing of a stretch is taken as unfit when the mean of its syllables' posteriors (the aligner's
+own, SyllableTiming.posterior, not the miss model's confidence) is below SURE_UNFIT, or below
 UNFIT_CONFIDENCE while its syllable durations are implausible for the stretch's rate (the
 longest over LONGEST_SHARE times the stretch's mean syllable duration). An unfit stretch is timed again by
 `spread_over_peaks`: one syllable nucleus per loudness peak of the 100-1000 Hz band,
@@ -49,8 +50,8 @@ def stretches(starts: np.ndarray, ends: np.ndarray, firsts: set[int]) -> list[tu
 
 
 def unfit(starts: np.ndarray, ends: np.ndarray, confidence: np.ndarray) -> bool:
-    """(n,) starts, ends (s) and confidences of one stretch's syllables -> whether the aligner's timing
-    is unfit: mean confidence below SURE_UNFIT, or below UNFIT_CONFIDENCE with a syllable implausibly
+    """(n,) starts, ends (s) and aligner posteriors of one stretch's syllables -> whether the aligner's
+    timing is unfit: mean posterior below SURE_UNFIT, or below UNFIT_CONFIDENCE with a syllable implausibly
     long for the stretch's own rate (over LONGEST_SHARE times its mean syllable duration)."""
     if len(starts) < MIN_SYLLABLES or float(np.mean(confidence)) >= UNFIT_CONFIDENCE:
         return False
