@@ -288,13 +288,13 @@ def _dip(band: np.ndarray) -> np.ndarray:
     return np.clip(np.where(band <= nearby + MINIMUM_TOLERANCE_DB, dip, 0.0), 0.0, DIP_CAP)
 
 
-def onset_evidence(low: np.ndarray, mid: np.ndarray) -> dict[str, np.ndarray]:
+def onset_evidence(low: np.ndarray, mid: np.ndarray, low_dip: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """(T,) smoothed 100-1000 Hz and 1000-3000 Hz dB per boundary position -> for each initial
     class, (T,) evidence that a syllable of that class starts there (higher is likelier), each
-    moved by the class's ONSET_LEAD."""
+    moved by the class's ONSET_LEAD. `low_dip`: `_dip(low)` when already computed."""
     pad = np.pad(low, CHANGE_FRAMES, mode="edge")
     fall = FALL_WEIGHT * np.clip(pad[:-2 * CHANGE_FRAMES] - pad[2 * CHANGE_FRAMES:], 0.0, CHANGE_CAP_DB)
-    dip = DIP_WEIGHT * np.maximum(_dip(low), MID_DIP_SHARE * _dip(mid))
+    dip = DIP_WEIGHT * np.maximum(_dip(low) if low_dip is None else low_dip, MID_DIP_SHARE * _dip(mid))
     measure = {"closure": fall, "aspirated": fall, "frication": fall, "sonorant": dip, "glide": dip, "none": dip}
     return {c: _earlier(x, ONSET_LEAD[c]) for c, x in measure.items()}
 
@@ -554,7 +554,8 @@ def align_details(audio: Audio, span: SpanLike, syllables: Sequence[str],
                          _high_band_silence(high, index[:-1]))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
-    by_class = onset_evidence(low, mid)
+    low_dip = _dip(low)
+    by_class = onset_evidence(low, mid, low_dip)
     evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
     edges = edge_evidence(low, high)[:, index]
     evidence[0] = 0.0
@@ -566,7 +567,7 @@ def align_details(audio: Audio, span: SpanLike, syllables: Sequence[str],
         pace[a:b + 1] = np.log(RATES[r])
     quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
     posterior = quality * _onset_posteriors(evidence, silence, edges, means, penalty, pace, starts, ends, TEMPERATURE)
-    features = onset_features(posterior, starts, ends, means * RATES[rate], _dip(low)[index], edges)
+    features = onset_features(posterior, starts, ends, means * RATES[rate], low_dip[index], edges)
     confidence = within_probability(features)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
