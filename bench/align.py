@@ -26,6 +26,10 @@ analyse.LOW_CONFIDENCE, the share more than 50 ms off (precision), of those off,
 flagged (recall), and their F1; with the median signed onset error (a constant lead or lag
 against a reference's convention) and, for the analyser's sets, the number of stretches the
 analyser timed again over loudness peaks (stretches.py).
+
+`python -m bench.align fit` fits the aligner's miss model (align.MISS_BIAS, MISS_WEIGHTS: the
+confidence) on the aligner-alone tuning pool and prints the out-of-fold F1 of the low-confidence
+flag per threshold (folds of FOLD recordings), from which analyse.LOW_CONFIDENCE is chosen.
 """
 
 from __future__ import annotations
