@@ -232,10 +232,10 @@ def _fall_back(audio: Audio, sentences: list[Sentence], posteriors: list[float])
         owner += [number] * len(sentence.syllables)
     starts = np.array([s.start for s in timed])
     ends = np.array([s.end for s in timed])
-    confidence = np.array(posteriors)
+    posterior = np.array(posteriors)
     notes = []
     for a, b in stretches(starts, ends, firsts):
-        if not unfit(starts[a:b], ends[a:b], confidence[a:b]):
+        if not unfit(starts[a:b], ends[a:b], posterior[a:b]):
             continue
         start, end = float(starts[a]), float(ends[b - 1])
         for k, (onset, offset) in zip(range(a, b), spread_over_peaks(audio, start, end, b - a)):
