@@ -26,6 +26,10 @@ analyse.LOW_CONFIDENCE, the share more than 50 ms off (precision), of those off,
 flagged (recall), and their F1; with the median signed onset error (a constant lead or lag
 against a reference's convention) and, for the analyser's sets, the number of stretches the
 analyser timed again over loudness peaks (stretches.py).
+
+`python -m bench.align fit` fits the aligner's miss model (align.MISS_BIAS, MISS_WEIGHTS: the
+confidence) on the aligner-alone tuning pool and prints the out-of-fold F1 of the low-confidence
+flag per threshold (folds of FOLD recordings), from which analyse.LOW_CONFIDENCE is chosen.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from __future__ import annotations
 import csv
 import re
 import subprocess
+import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -41,7 +46,7 @@ from pathlib import Path
 import numpy as np
 import soundfile
 
-from cartoonface.speech.align import align_syllables, initial_class, syllable_type
+from cartoonface.speech.align import FEATURES, align_details, align_syllables, initial_class, syllable_type
 from cartoonface.speech.analyse import LOW_CONFIDENCE, analyse
 from cartoonface.speech import textgrid
 from cartoonface.speech.audio import Audio
@@ -58,7 +63,10 @@ LOOSE = 0.25              # seconds of surrounding silence added to each part in
 PARAGRAPH = 5             # Biaobei recordings joined into one unpunctuated paragraph
 TEMPI = (0.8, 1.25)       # speed factors of the time-stretched copies (issue 17)
 SEMITONES = (-4, 4)       # pitch shifts of the pitch-shifted copies (issue 17)
-THRESHOLDS = (0.2, 0.25, 0.3, 0.35, 0.4)  # low-confidence thresholds scored on the pooled sets
+THRESHOLDS = (0.8, 0.84, 0.87, 0.9, 0.93)  # low-confidence thresholds scored on the pooled sets
+FOLD = 5                  # recordings per cross-validation fold of the miss model (fit_confidence)
+L2 = 1.0                  # weight of the miss model's squared weights (on standardised features)
+MISS_LIMITS = np.round(np.arange(0.02, 0.4, 0.01), 2)  # P(miss) thresholds tried by cross-validation
 PUNCTUATION = re.compile(r"[^\w]|_")  # everything but letters and digits (Han characters are letters)
 
 
@@ -373,6 +381,61 @@ def flag_scores(errors: np.ndarray, confidence: np.ndarray,
     return int(flagged.sum()), int(miss.sum()), precision, recall, f1
 
 
+def onset_table(recordings: list[Recording]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The aligner over every reference part -> (N, len(FEATURES)) align.onset_features, (N,) onset
+    errors in s (rounded as in `Result`), (N,) fold of each onset (its recording's number // FOLD); onsets
+    of duration-prior splits left out."""
+    rows, errors, folds = [], [], []
+    for rec in recordings:
+        for part in rec.parts:
+            timings, features = align_details(rec.audio, Span(part.start, part.end), part.syllables)
+            error = np.round(np.abs(np.array([t.start for t in timings]) - np.array(part.onsets)), 6)
+            rows.append(features)
+            errors.append(error)
+            folds.append(np.full(len(timings), int(rec.name.split("-")[0]) // FOLD))
+    table, error, fold = np.concatenate(rows), np.concatenate(errors), np.concatenate(folds)
+    known = ~np.isnan(table).any(axis=1)
+    return table[known], error[known], fold[known]
+
+
+def fit_logistic(table: np.ndarray, miss: np.ndarray, l2: float = L2) -> tuple[float, np.ndarray]:
+    """(N, F) features, (N,) bool misses -> (bias, (F,) weights) of P(miss) = logistic(bias +
+    features . weights), maximum likelihood with l2 times the squared weights of the standardised
+    features subtracted (Newton's method)."""
+    mean, scale = table.mean(axis=0), table.std(axis=0) + 1e-9
+    design = np.c_[np.ones(len(table)), (table - mean) / scale]
+    ridge = l2 * np.diag(np.r_[0.0, np.ones(table.shape[1])])
+    w = np.zeros(design.shape[1])
+    for _ in range(50):
+        p = 1.0 / (1.0 + np.exp(-design @ w))
+        hessian = (design * (p * (1 - p))[:, None]).T @ design + ridge
+        w -= np.linalg.solve(hessian, design.T @ (p - miss) + ridge @ w)
+    weights = w[1:] / scale
+    return float(w[0] - weights @ mean), weights
+
+
+def fit_confidence() -> None:
+    """Fit the miss model (align.MISS_BIAS, MISS_WEIGHTS) on the aligner-alone tuning pool and
+    choose the low-confidence threshold by cross-validation on it: print the coefficients, the
+    out-of-fold F1 per P(miss) threshold and the best one as a confidence threshold."""
+    tuning = [r for r in biaobei() if int(r.name) in TUNING]
+    sets = [tuning, *(stretched(tuning, t) for t in TEMPI), *(pitched(tuning, s) for s in SEMITONES), paragraphs(tuning)]
+    tables = [onset_table(s) for s in sets]
+    table, error, fold = (np.concatenate([t[k] for t in tables]) for k in range(3))
+    miss = error > 0.05
+    held = np.zeros(miss.size)
+    for k in np.unique(fold):
+        bias, weights = fit_logistic(table[fold != k], miss[fold != k])
+        held[fold == k] = 1.0 / (1.0 + np.exp(-(bias + table[fold == k] @ weights)))
+    scores = [flag_scores(error, 1.0 - held, 1.0 - limit)[4] for limit in MISS_LIMITS]
+    best = MISS_LIMITS[int(np.argmax(scores))]
+    bias, weights = fit_logistic(table, miss)
+    print(f"tuning pool: {miss.sum()} of {miss.size} onsets off by > 50 ms")
+    print("MISS_BIAS =", round(bias, 3), "MISS_WEIGHTS =", {n: round(float(w), 3) for n, w in zip(FEATURES, weights)})
+    print("out-of-fold F1 per P(miss) threshold: " + " ".join(f"{t:g}: {100 * f:.1f}" for t, f in zip(MISS_LIMITS, scores)))
+    print(f"best: P(miss) >= {best:g}, i.e. confidence below {1 - best:g}")
+
+
 def by_class(result: Result) -> str:
     """Per initial class over the inner onsets: count, median signed error (ms; positive = the
     aligner's onset is later than the reference) and share within 50 ms."""
@@ -496,4 +559,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    fit_confidence() if sys.argv[1:] == ["fit"] else main()

@@ -194,7 +194,9 @@ def test_noise_lowers_the_confidence_but_keeps_the_count():
     sure = align_syllables(clean, span, syllables)
     unsure = align_syllables(noisy, span, syllables)
     check_shape(unsure, span, len(syllables))
-    assert np.mean([t.confidence for t in unsure]) < np.mean([t.confidence for t in sure]) - 0.2
+    assert np.mean([t.posterior for t in unsure]) < np.mean([t.posterior for t in sure]) - 0.2
+    # the miss model's probability of being within 50 ms falls with it
+    assert np.mean([t.confidence for t in unsure]) < np.mean([t.confidence for t in sure])
 
 
 def hiss(seconds: float, rng: np.random.Generator) -> np.ndarray:
@@ -276,9 +278,11 @@ def test_an_onset_that_nothing_marks_is_the_least_sure():
     check_shape(timings, span, 6)
     starts = np.array([t.start for t in timings])
     inside = int(np.flatnonzero((starts > onsets[2] + 0.05) & (starts < onsets[3] - 0.05))[0])
+    posterior = np.array([t.posterior for t in timings])
+    assert posterior[inside] == posterior.min()
+    assert np.delete(posterior, inside).min() > posterior[inside] + 0.2
     confidence = np.array([t.confidence for t in timings])
     assert confidence[inside] == confidence.min()
-    assert np.delete(confidence, inside).min() > confidence[inside] + 0.2
 
 
 def test_a_stretch_read_twice_as_fast_as_the_one_before_keeps_its_syllables():
@@ -304,3 +308,39 @@ def test_a_stretch_read_twice_as_fast_as_the_one_before_keeps_its_syllables():
     check_shape(timings, span, 20)
     errors = np.abs(np.array([t.start for t in timings]) - np.array(onsets))
     assert np.mean(errors <= 0.05) >= 0.8 and errors.max() < 0.15
+
+
+def test_onset_features_describe_each_onset_its_stretch_and_the_syllable_before():
+    from cartoonface.speech.align import FEATURES, onset_features
+    # four syllables of 10 frames, a pause of 10 frames after the second; the first lasts twice
+    # its expected duration; a deep dip inside the third
+    starts, ends = np.array([0, 10, 30, 40]), np.array([10, 20, 40, 50])
+    expected = np.array([5.0, 10.0, 10.0, 10.0])
+    posterior = np.array([0.9, 0.5, 0.4, 0.6])
+    dips = np.zeros(51)
+    dips[35] = 6.0
+    edges = np.zeros((2, 51))
+    edges[0, 20], edges[1, 30] = 2.0, 3.0
+    table = onset_features(posterior, starts, ends, expected, dips, edges)
+    column = {name: table[:, k] for k, name in enumerate(FEATURES)}
+    assert table.shape == (4, len(FEATURES))
+    assert np.all(np.diff(column["posterior"][[2, 1, 3, 0]]) > 0)  # log odds keep the order
+    stretch = column["stretch"]
+    assert stretch[0] == stretch[1] and stretch[2] == stretch[3] and stretch[0] != stretch[2]
+    assert column["duration_before"][0] == 0 and column["duration_before"][1] > column["duration_before"][2]
+    assert column["dips_before"][3] > 0 and np.all(column["dips_before"][:3] == 0)
+    # the pause's fall belongs to the syllable before it, its rise to the onset after it
+    assert column["pause_edge"][1] == 2.0 and column["pause_edge"][2] == 3.0
+    assert column["pause_edge"][0] == 0 and column["pause_edge"][3] == 0
+
+
+def test_the_miss_model_trusts_a_sure_posterior_and_doubts_a_lopsided_syllable_before():
+    from cartoonface.speech.align import FEATURES, within_probability
+    base = np.zeros((1, len(FEATURES)))
+    sure, unsure, lopsided = base.copy(), base.copy(), base.copy()
+    sure[0, FEATURES.index("posterior")] = 3.0
+    unsure[0, FEATURES.index("posterior")] = -3.0
+    lopsided[0, FEATURES.index("duration_before")] = 1.0
+    p = within_probability(np.concatenate([sure, base, unsure, lopsided]))
+    assert np.all((p > 0) & (p < 1))
+    assert p[0] > p[1] > p[2] and p[3] < p[1]

@@ -32,12 +32,14 @@ does not push syllables over it. Syllables are ordered, do not overlap and
 lie inside the span; without detected silence at the edges the first starts at span.start
 and the last ends at span.end.
 
-Confidence: the posterior probability that a syllable's onset lies within 50 ms of where the
-best cut puts it, over all cuts weighted by exp(score / TEMPERATURE) (forward-backward: the same
-dynamic programme summed instead of maximised, forward and on the time-reversed problem), times
-the part's signal quality (its loudness range), with each stretch at the rate the best cut
-chose. It is low where other cuts score nearly as well, also when they move a whole stretch by
-one syllable.
+Confidence: the probability, by a small miss model (logistic regression, MISS_WEIGHTS), that the
+onset lies within 50 ms of the truth, from the aligner's posterior and the evidence around the
+onset (onset_features). The posterior is the probability that the onset lies within 50 ms of
+where the best cut puts it, over all cuts weighted by exp(score / TEMPERATURE) (forward-backward:
+the same dynamic programme summed instead of maximised, forward and on the time-reversed
+problem), times the part's signal quality (its loudness range), with each stretch at the rate the
+best cut chose. It is low where other cuts score nearly as well, also when they move a whole
+stretch by one syllable; it is kept with each syllable (SyllableTiming.posterior).
 
 Never fails: a part too short for its syllables, silence or noise, an empty or odd pinyin
 all give a duration-prior split with low confidence.
@@ -74,11 +76,14 @@ class SpanLike(Protocol):
 
 @dataclass(frozen=True)
 class SyllableTiming:
-    """One syllable: start and end in seconds (absolute in the recording), confidence 0..1."""
+    """One syllable: start and end in seconds (absolute in the recording), confidence 0..1 (the
+    miss model's probability that the onset lies within 50 ms: within_probability) and the
+    aligner's own posterior 0..1 it rests on (the stretch check, stretches.unfit, judges by it)."""
 
     start: float
     end: float
     confidence: float
+    posterior: float
 
 
 @dataclass(frozen=True)
@@ -222,6 +227,21 @@ BAND = 50                  # frames: the posterior sums over cuts ending each sy
                            # the best cut's end (0.5 s, a slip of two syllables; summing over the whole
                            # part took 2.3-2.9x the time and ranked misses no better)
 LOW_CONFIDENCE = 0.1       # confidence of a fallback (duration-prior) split
+# The confidence shipped is a miss model over the posterior and the evidence around the onset
+# (onset_features): the probability that the onset lies within 50 ms, 1 - logistic(MISS_BIAS +
+# sum of MISS_WEIGHTS times FEATURES). Fitted by L2-regularised logistic regression (weight 1 on the
+# standardised features) on the aligner-alone tuning pool only: Biaobei 000001-000035 as parts, its
+# tempo 0.8x / 1.25x, pitch -4 / +4 copies and paragraphs of 5 (`.venv/bin/python -m bench.align fit`,
+# docs/BENCHMARKS.md). The features were chosen among those candidates by grouped cross-validation
+# on that pool (7 folds of 5 recordings): the posterior alone, with its stretch's mean, and with the
+# syllable before's duration, dips and the pause edges.
+FEATURES = ("posterior", "stretch", "duration_before", "dips_before", "pause_edge")
+MISS_BIAS = -3.418
+MISS_WEIGHTS = {"posterior": -0.922, "stretch": -0.739, "duration_before": 3.196, "dips_before": 0.221,
+                "pause_edge": 0.183}
+DEEP_DIP_DB = 3.0          # dB: a dip this deep inside a syllable parts two loudness peaks
+DIP_EDGE_FRAMES = 3        # frames at each end of a syllable where its dips are not counted
+LOGIT_FLOOR = 1e-3         # probabilities are kept this far from 0 and 1 before their log odds
 # Frames by which a class's onset precedes the peak of its evidence (negative: follows it).
 # The dip of a nasal, lateral or r is deepest inside the consonant, about 20 ms after the
 # consonant (and the syllable) starts; a glide's after ~10 ms; the steepest fall into a stop
@@ -268,13 +288,13 @@ def _dip(band: np.ndarray) -> np.ndarray:
     return np.clip(np.where(band <= nearby + MINIMUM_TOLERANCE_DB, dip, 0.0), 0.0, DIP_CAP)
 
 
-def onset_evidence(low: np.ndarray, mid: np.ndarray) -> dict[str, np.ndarray]:
+def onset_evidence(low: np.ndarray, mid: np.ndarray, low_dip: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """(T,) smoothed 100-1000 Hz and 1000-3000 Hz dB per boundary position -> for each initial
     class, (T,) evidence that a syllable of that class starts there (higher is likelier), each
-    moved by the class's ONSET_LEAD."""
+    moved by the class's ONSET_LEAD. `low_dip`: `_dip(low)` when already computed."""
     pad = np.pad(low, CHANGE_FRAMES, mode="edge")
     fall = FALL_WEIGHT * np.clip(pad[:-2 * CHANGE_FRAMES] - pad[2 * CHANGE_FRAMES:], 0.0, CHANGE_CAP_DB)
-    dip = DIP_WEIGHT * np.maximum(_dip(low), MID_DIP_SHARE * _dip(mid))
+    dip = DIP_WEIGHT * np.maximum(_dip(low) if low_dip is None else low_dip, MID_DIP_SHARE * _dip(mid))
     measure = {"closure": fall, "aspirated": fall, "frication": fall, "sonorant": dip, "glide": dip, "none": dip}
     return {c: _earlier(x, ONSET_LEAD[c]) for c, x in measure.items()}
 
@@ -482,7 +502,7 @@ def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> 
     weights = relative_durations(syllables)
     edges = span.start + max(span.end - span.start, 0.0) * np.concatenate([[0.0], np.cumsum(weights)]) / max(weights.sum(), 1e-9)
     edges[-1] = max(span.end, span.start)
-    return tuple(SyllableTiming(float(a), float(b), confidence) for a, b in zip(edges[:-1], edges[1:]))
+    return tuple(SyllableTiming(float(a), float(b), confidence, confidence) for a, b in zip(edges[:-1], edges[1:]))
 
 
 def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
@@ -497,12 +517,21 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     pauses). Never raises for odd input: an empty list gives (), a span too short, silent or
     outside the audio gives a duration-prior split with low confidence.
     """
+    return align_details(audio, span, syllables, words)[0]
+
+
+def align_details(audio: Audio, span: SpanLike, syllables: Sequence[str],
+                  words: Sequence[int] | None = None) -> tuple[tuple[SyllableTiming, ...], np.ndarray]:
+    """`align_syllables` (same arguments) and the (N, len(FEATURES)) `onset_features` its
+    confidences were computed from (rows of nan for a duration-prior split), for fitting the
+    miss model (bench/align.py)."""
+    unknown = np.full((len(syllables), len(FEATURES)), np.nan)
     n = len(syllables)
     if n == 0:
-        return ()
+        return (), unknown
     total = int(round((span.end - span.start) / HOP))
     if total < n * MIN_FRAMES or audio.rate <= 0:
-        return prior_split(span, syllables, LOW_CONFIDENCE)
+        return prior_split(span, syllables, LOW_CONFIDENCE), unknown
     first = int(round(span.start * audio.rate)) - MARGIN * int(round(HOP * audio.rate))
     last = int(round(span.end * audio.rate)) + MARGIN * int(round(HOP * audio.rate))
     clip = np.asarray(audio.samples[max(first, 0):max(last, 0)], dtype=np.float64)
@@ -519,13 +548,14 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     loud = np.percentile(inner, LOUD_PERCENTILE)
     floor = np.percentile(low, FLOOR_PERCENTILE)
     if not np.isfinite(loud) or loud - floor < MIN_RANGE_DB:
-        return prior_split(span, syllables, LOW_CONFIDENCE)
+        return prior_split(span, syllables, LOW_CONFIDENCE), unknown
     threshold = floor + SILENCE_SHARE * (loud - floor)
     silence = np.minimum(np.clip((threshold - inner) / SILENCE_SCALE, *SILENCE_CLIP),
                          _high_band_silence(high, index[:-1]))
     speech_frames = max(float(np.sum(inner > threshold)), n * MIN_FRAMES)
     means = relative_durations(syllables) * speech_frames / n
-    by_class = onset_evidence(low, mid)
+    low_dip = _dip(low)
+    by_class = onset_evidence(low, mid, low_dip)
     evidence = np.stack([by_class[initial_class(syllable_type(p).initial)][index] for p in syllables])
     edges = edge_evidence(low, high)[:, index]
     evidence[0] = 0.0
@@ -536,11 +566,57 @@ def align_syllables(audio: Audio, span: SpanLike, syllables: Sequence[str],
     for a, b, r in zip(starts, ends, rate):
         pace[a:b + 1] = np.log(RATES[r])
     quality = float(np.clip((loud - floor - MIN_RANGE_DB) / QUALITY_RANGE_DB, 0.0, 1.0))
-    confidence = quality * _onset_posteriors(evidence, silence, edges, means, penalty, pace, starts, ends, TEMPERATURE)
+    posterior = quality * _onset_posteriors(evidence, silence, edges, means, penalty, pace, starts, ends, TEMPERATURE)
+    features = onset_features(posterior, starts, ends, means * RATES[rate], low_dip[index], edges)
+    confidence = within_probability(features)
     # boundary k of `total` sits at span.start + k * HOP; stretched by under half a frame so
     # that k = 0 and k = total are exactly the span's ends
     times = span.start + (span.end - span.start) * np.stack([starts, ends], axis=1) / total
-    return tuple(SyllableTiming(float(a), float(b), float(c)) for (a, b), c in zip(times, confidence))
+    return tuple(SyllableTiming(float(a), float(b), float(c), float(p))
+                 for (a, b), c, p in zip(times, confidence, posterior)), features
+
+
+def _logit(p: np.ndarray) -> np.ndarray:
+    """(N,) probabilities -> (N,) log odds, the probabilities kept within LOGIT_FLOOR of 0 and 1."""
+    q = np.clip(p, LOGIT_FLOOR, 1.0 - LOGIT_FLOOR)
+    return np.log(q / (1.0 - q))
+
+
+def onset_features(posterior: np.ndarray, starts: np.ndarray, ends: np.ndarray, expected: np.ndarray,
+                   dips: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """The evidence on each onset of the best cut that the miss model weighs (MISS_WEIGHTS).
+
+    posterior: (N,) confidences of the onsets (posterior times signal quality); starts, ends: (N,)
+    boundary indices of the best cut (a syllable followed by a pause ends before the next starts);
+    expected: (N,) expected frames of each syllable at its stretch's rate; dips: (T + 1,) dB depth
+    of the 100-1000 Hz dip at each boundary (`_dip`); edges: (2, T + 1) `edge_evidence`.
+    Returns (N, len(FEATURES)), one column per name in FEATURES:
+    posterior: log odds of the onset's own posterior; stretch: log odds of the mean posterior of its
+    stretch (the syllables between two pauses of the best cut); duration_before: |log(duration /
+    expected)| of the syllable before (0 for the first); dips_before: dips of at least DEEP_DIP_DB
+    inside the syllable before (away from its edges: a second loudness peak, a syllable it may have
+    swallowed); pause_edge: the fall / rise evidence of a pause that ends at the onset or starts at
+    the end of its syllable (0 with no pause next to it).
+    """
+    n = posterior.size
+    gap_before = np.r_[False, starts[1:] > ends[:-1]]
+    gap_after = np.r_[gap_before[1:], False]
+    stretch = np.cumsum(gap_before)
+    stretch_mean = (np.bincount(stretch, weights=posterior) / np.bincount(stretch))[stretch]
+    duration = np.abs(np.log((ends - starts) / expected))
+    inner = [dips[a + DIP_EDGE_FRAMES:max(b - DIP_EDGE_FRAMES, a + DIP_EDGE_FRAMES)] for a, b in zip(starts, ends)]
+    deep = np.array([np.sum(d >= DEEP_DIP_DB) for d in inner], dtype=float)
+    pause_edge = np.where(gap_before, edges[1, starts], 0.0) + np.where(gap_after, edges[0, ends], 0.0)
+    before = np.r_[0.0, np.ones(n - 1)]
+    return np.stack([_logit(posterior), _logit(stretch_mean), before * np.r_[0.0, duration[:-1]],
+                     before * np.r_[0.0, deep[:-1]], pause_edge], axis=1)
+
+
+def within_probability(features: np.ndarray) -> np.ndarray:
+    """(N, len(FEATURES)) `onset_features` -> (N,) the miss model's probability that each onset lies
+    within 50 ms of the truth: 1 - logistic(MISS_BIAS + features . MISS_WEIGHTS)."""
+    weights = np.array([MISS_WEIGHTS[name] for name in FEATURES])
+    return 1.0 / (1.0 + np.exp(MISS_BIAS + features @ weights))
 
 
 def _lift_digital_silence(band: np.ndarray, recorded: np.ndarray, most_below: float | None) -> np.ndarray:

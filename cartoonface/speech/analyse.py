@@ -43,10 +43,12 @@ from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 MAX_RATE = 12.0
 FAST_RATE = 8.0
 MIN_RATE = 1.0
-# Syllables below this confidence are reported as low-confidence: the threshold of best F1 for
-# "more than 50 ms off" over Biaobei 000001-000035 and its tempo, pitch and paragraph copies (bench/align.py:
-# 0.25 / 0.3 / 0.35 / 0.4 gave F1 23.5 / 36.5 / 32.5 / 28.6 % for the aligner alone; docs/BENCHMARKS.md).
-LOW_CONFIDENCE = 0.3
+# Syllables below this confidence (align.within_probability: the miss model's probability of the onset
+# lying within 50 ms) are reported as low-confidence: the threshold of best out-of-fold F1 for "more
+# than 50 ms off" over the aligner-alone tuning pool (Biaobei 000001-000035, its tempo, pitch and
+# paragraph copies; 7 folds of 5 recordings): `.venv/bin/python -m bench.align fit`, F1 33.0 / 34.3 /
+# 35.7 / 34.0 / 32.4 % at P(miss) 0.11 / 0.12 / 0.13 / 0.14 / 0.15 (docs/BENCHMARKS.md).
+LOW_CONFIDENCE = 0.87
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
 # cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
 MAX_JOINT = 60.0
@@ -101,7 +103,7 @@ def analyse(
     counts = [len(piece.syllables) for piece in pieces]
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
     spans = reconcile(audio, parts, counts)
-    aligned: list[Sentence] = []
+    aligned: list[tuple[Sentence, tuple[float, ...]]] = []
     for block in _blocks(spans, owners):
         report("align", len(aligned) / len(pieces))
         span = Span(spans[block[0]].start, spans[block[-1]].end)
@@ -115,10 +117,12 @@ def analyse(
     report("align", 1.0)
     sentences = []
     for number, sentence in enumerate(spoken):
-        syllables = tuple(s for piece, owner in zip(aligned, owners) if owner == number for s in piece.syllables)
+        syllables = tuple(s for (piece, _), owner in zip(aligned, owners) if owner == number for s in piece.syllables)
         sentences.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
-    notes += _merge_notes(sentences, parts) + _split_notes(aligned, owners, spans, parts)
-    sentences, fallback_notes = _fall_back(audio, sentences)
+    notes += _merge_notes(sentences, parts) + _split_notes([piece for piece, _ in aligned], owners, spans, parts)
+    posteriors = [p for number in range(len(spoken)) for (_, piece), owner in zip(aligned, owners) if owner == number
+                  for p in piece]
+    sentences, fallback_notes = _fall_back(audio, sentences, posteriors)
     notes += fallback_notes
     low = [s for sentence in sentences for s in sentence.syllables if s.confidence < LOW_CONFIDENCE]
     if low:
@@ -197,25 +201,29 @@ def word_lengths(texts: Sequence[str]) -> list[int]:
     return lengths
 
 
-def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[Sentence]:
+def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[tuple[Sentence, tuple[float, ...]]]:
     """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`
-    (pauses likelier between words, and always possible between sentences)."""
+    (pauses likelier between words, and always possible between sentences): each sentence with
+    the aligner's posterior of each of its syllables (SyllableTiming.posterior)."""
     pinyin = [syllable.pinyin for sentence in texts for syllable in sentence.syllables]
     words = [n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])]
-    timings = iter(align_syllables(audio, span, pinyin, words))
+    timings = list(align_syllables(audio, span, pinyin, words))
     sentences = []
     for sentence in texts:
+        mine, timings = timings[:len(sentence.syllables)], timings[len(sentence.syllables):]
         syllables = tuple(
             Syllable(text.text, text.pinyin, tuple(text.shapes), timing.start, timing.end, timing.confidence)
-            for text, timing in zip(sentence.syllables, timings)
+            for text, timing in zip(sentence.syllables, mine)
         )
-        sentences.append(Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables))
+        sentences.append((Sentence(sentence.text, syllables[0].start, syllables[-1].end, syllables),
+                          tuple(t.posterior for t in mine)))
     return sentences
 
 
-def _fall_back(audio: Audio, sentences: list[Sentence]) -> tuple[list[Sentence], list[str]]:
+def _fall_back(audio: Audio, sentences: list[Sentence], posteriors: list[float]) -> tuple[list[Sentence], list[str]]:
     """Sentences with each stretch (run of syllables between pauses, stretches.py) whose timing is
-    unfit timed again over its loudness peaks; and a note naming each such sentence and time range."""
+    unfit (judged by the aligner's posteriors, one per syllable in order) timed again over its
+    loudness peaks; and a note naming each such sentence and time range."""
     timed = [s for sentence in sentences for s in sentence.syllables]
     firsts: set[int] = set()
     owner: list[int] = []
@@ -224,10 +232,10 @@ def _fall_back(audio: Audio, sentences: list[Sentence]) -> tuple[list[Sentence],
         owner += [number] * len(sentence.syllables)
     starts = np.array([s.start for s in timed])
     ends = np.array([s.end for s in timed])
-    confidence = np.array([s.confidence for s in timed])
+    posterior = np.array(posteriors)
     notes = []
     for a, b in stretches(starts, ends, firsts):
-        if not unfit(starts[a:b], ends[a:b], confidence[a:b]):
+        if not unfit(starts[a:b], ends[a:b], posterior[a:b]):
             continue
         start, end = float(starts[a]), float(ends[b - 1])
         for k, (onset, offset) in zip(range(a, b), spread_over_peaks(audio, start, end, b - a)):

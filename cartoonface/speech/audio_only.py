@@ -67,7 +67,7 @@ MOUTH_CLASSES: dict[str, str] = {
 }
 # No transcript confirms the timing: every syllable gets this confidence (above analyse.LOW_CONFIDENCE,
 # so that the whole recording is not flagged syllable by syllable; the note says why instead).
-AUDIO_ONLY_CONFIDENCE = 0.5
+AUDIO_ONLY_CONFIDENCE = 0.9
 
 
 def transcribed(alignment: Alignment) -> bool:

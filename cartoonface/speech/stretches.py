@@ -3,7 +3,8 @@
 A stretch is a run of aligned syllables with no pause between them (a gap of at least
 MIN_GAP between one syllable's end and the next one's start ends it), inside one sentence.
 Its speaking rate is its own: its mean syllable duration. The aligner's
-timing of a stretch is taken as unfit when its mean confidence is below SURE_UNFIT, or below
+timing of a stretch is taken as unfit when the mean of its syllables' posteriors (the aligner's
+own, SyllableTiming.posterior, not the miss model's confidence) is below SURE_UNFIT, or below
 UNFIT_CONFIDENCE while its syllable durations are implausible for the stretch's rate (the
 longest over LONGEST_SHARE times the stretch's mean syllable duration). An unfit stretch is timed again by
 `spread_over_peaks`: one syllable nucleus per loudness peak of the 100-1000 Hz band,
@@ -30,8 +31,8 @@ MIN_GAP = MIN_PAUSE * HOP  # s: a shorter gap between syllables is no pause (the
 # and 95.2 / 95.2 / 95.2 / 92.7 % for a sure-unfit mean of 0.4 / 0.45 / 0.5 / 0.6 (gate 0.6; a gate
 # of 0.7 or 0.8 changed nothing). 0.45 (one tuning stretch better) also fired on the clean espeak-ng
 # sample samples/speech/story.wav, on a stretch the aligner had right (mean 0.43), so 0.4 is kept.
-UNFIT_CONFIDENCE = 0.6     # mean confidence below which a stretch's durations are checked
-SURE_UNFIT = 0.4           # mean confidence below which a stretch is unfit whatever its durations
+UNFIT_CONFIDENCE = 0.6     # mean posterior below which a stretch's durations are checked
+SURE_UNFIT = 0.4           # mean posterior below which a stretch is unfit whatever its durations
 LONGEST_SHARE = 3.0        # a syllable this many times the stretch's mean duration is implausible
 MIN_SYLLABLES = 3          # shorter stretches are left as aligned
 SPREAD_WEIGHT = 0.3        # score lost per squared (shift from the even spread / mean duration)
@@ -48,14 +49,14 @@ def stretches(starts: np.ndarray, ends: np.ndarray, firsts: set[int]) -> list[tu
     return list(zip(cuts, cuts[1:] + [len(starts)]))
 
 
-def unfit(starts: np.ndarray, ends: np.ndarray, confidence: np.ndarray) -> bool:
-    """(n,) starts, ends (s) and confidences of one stretch's syllables -> whether the aligner's timing
-    is unfit: mean confidence below SURE_UNFIT, or below UNFIT_CONFIDENCE with a syllable implausibly
+def unfit(starts: np.ndarray, ends: np.ndarray, posterior: np.ndarray) -> bool:
+    """(n,) starts, ends (s) and aligner posteriors of one stretch's syllables -> whether the aligner's
+    timing is unfit: mean posterior below SURE_UNFIT, or below UNFIT_CONFIDENCE with a syllable implausibly
     long for the stretch's own rate (over LONGEST_SHARE times its mean syllable duration)."""
-    if len(starts) < MIN_SYLLABLES or float(np.mean(confidence)) >= UNFIT_CONFIDENCE:
+    if len(starts) < MIN_SYLLABLES or float(np.mean(posterior)) >= UNFIT_CONFIDENCE:
         return False
     durations = ends - starts
-    return bool(durations.max() > LONGEST_SHARE * durations.mean()) or float(np.mean(confidence)) < SURE_UNFIT
+    return bool(durations.max() > LONGEST_SHARE * durations.mean()) or float(np.mean(posterior)) < SURE_UNFIT
 
 
 def _low_band(audio: Audio, start: float, end: float) -> np.ndarray:
