@@ -12,12 +12,14 @@ scikit-image's astronaut portrait (public domain; docs/photo.md):
   (face/rbf.py WIDTHS) against plain FAPU scaling, which predicts no move for a point it is
   not given.
 - generate: samples/speech/story.wav with its transcript as it is and with a mark on every
-  sentence (MARKED) and a default mood: SVG bytes per minute of audio (30 fps) and the wall
-  time of `pipeline.generate` (median of RUNS).
+  sentence (MARKED) and a default mood: SVG bytes per minute of audio (30 fps), in all and by
+  track (bench/generate.py's bytes_by_track), and the wall time of `pipeline.generate` (median
+  of RUNS).
 
 `python -m bench.emotion --pictures DIR` also writes the contact sheets emotions x mouth
 shapes (emotions-female.png, emotions-male.png), the emotions on the astronaut's face
-(emotions-astronaut.png) and the RBF / plain scaling comparison (emotions-rbf.png) into DIR.
+(emotions-astronaut.png) and the plain scaling / RBF / RBF as drawn comparison (emotions-rbf.png)
+into DIR.
 """
 
 from __future__ import annotations
@@ -33,15 +35,16 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
+from bench.generate import bytes_by_track
 from bench.mouth import CHANGED, ISSUE_CHANGED, changed, face_mask, figure_mask, picture, render
 from cartoonface.animate.timeline import LIPS_SPEAKING
 from cartoonface.data import SAMPLE_FACES
-from cartoonface.face.emotion import EMOTIONS, emotion_displacements, template_fapu, template_points
+from cartoonface.face.emotion import EMOTIONS, drawn_moves, emotion_displacements, template_fapu, template_points
 from cartoonface.face.lift import lift
 from cartoonface.face.model import POINT_NAMES, FaceModel, load_face
 from cartoonface.face.mouth import MOUTH_SYMBOLS
 from cartoonface.face.pose import rig
-from cartoonface.face.rbf import WIDTHS, leave_one_out
+from cartoonface.face.rbf import WIDTHS, deform, leave_one_out
 from cartoonface.face.state import FaceState
 from cartoonface.pipeline import Options, generate
 from cartoonface.render.elements import svg_bytes
@@ -106,8 +109,9 @@ def loo_errors(face: FaceModel) -> dict[str, dict[str, float]]:
     return out
 
 
-def generate_figures() -> dict[str, tuple[float, float]]:
-    """{"plain" / "marked": (SVG MB per minute of audio, median wall seconds of generate)}."""
+def generate_figures() -> dict[str, tuple[float, float, str]]:
+    """{"plain" / "marked": (SVG MB per minute of audio, median wall seconds of generate, the
+    SVG's KB per minute by track: bench/generate.py's bytes_by_track)}."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         marked = Path(tmp) / "marked.txt"
@@ -115,13 +119,13 @@ def generate_figures() -> dict[str, tuple[float, float]]:
         for label, transcript, options in (("plain", STORY / "story.txt", Options()),
                                            ("marked", marked, Options(emotion=DEFAULT_MOOD[0],
                                                                       intensity=DEFAULT_MOOD[1]))):
-            seconds, size, duration = [], 0, 1.0
+            seconds, svg, duration = [], b"", 1.0
             for run in range(RUNS):
                 out_dir = Path(tmp) / f"{label}{run}"
                 result = generate(SAMPLE_FACES / "female.json", STORY / "story.wav", transcript, out_dir, options)
                 seconds.append(result.seconds)
-                size, duration = (out_dir / "animation.svg").stat().st_size, result.duration
-            out[label] = (size / 1e6 * 60 / duration, statistics.median(seconds))
+                svg, duration = (out_dir / "animation.svg").read_bytes(), result.duration
+            out[label] = (len(svg) / 1e6 * 60 / duration, statistics.median(seconds), bytes_by_track(svg, duration / 60))
     return out
 
 
@@ -145,8 +149,8 @@ def main() -> None:
         rig.cache_clear()
         rig(lift(face))
         print(f"  rig with the emotions' RBF transfer: {1000 * (time.perf_counter() - started):.1f} ms")
-    for label, (per_minute, seconds) in generate_figures().items():
-        print(f"story {label}: SVG {per_minute:.2f} MB per minute, generate {seconds:.2f} s (median of {RUNS})")
+    for label, (per_minute, seconds, tracks) in generate_figures().items():
+        print(f"story {label}: SVG {per_minute:.2f} MB per minute, generate {seconds:.2f} s (median of {RUNS}); {tracks}")
 
 
 def contact_sheet(face: FaceModel, shapes: tuple[str, ...] = MOUTH_SYMBOLS, across: bool = False) -> bytes:
@@ -164,16 +168,18 @@ def contact_sheet(face: FaceModel, shapes: tuple[str, ...] = MOUTH_SYMBOLS, acro
 
 
 def rbf_picture(face: FaceModel) -> Image.Image:
-    """Happy, surprise and disgust by plain FAPU scaling (top row) and by the RBF (bottom row),
-    the points only the RBF moves (no template names them) marked in red."""
+    """Happy, surprise and disgust (columns) by plain FAPU scaling (top row), by the RBF with all
+    its moves (middle row) and by the RBF as the animation draws it (face/emotion.py drawn_moves:
+    the ears and the forehead under the hair held, the contour moved only across itself; bottom
+    row), the points no template names marked in red in the two RBF rows."""
+    raw = np.array([deform(face.points, template_points(name), template_fapu(name, face.fapu)) for name in EMOTIONS])
     tiles = []
-    for widths in (None, "cluster"):
-        moves = emotion_displacements(face, widths)
+    for moves, dots in ((emotion_displacements(face, None), False), (raw, True), (drawn_moves(face, raw), True)):
         row = []
         for name in ("happy", "surprise", "disgust"):
             moved = moves[EMOTIONS.index(name)]
             image = picture(face_svg(replace(face, points=face.points + moved), FaceState()))
-            if widths is not None:
+            if dots:
                 draw = ImageDraw.Draw(image)
                 named = set(template_points(name))
                 for point, (x, y) in zip(POINT_NAMES, face.points + moved, strict=True):

@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from cartoonface.errors import OptionError
 from cartoonface.face.emotion import (
-    EMOTIONS, FEATURE_POINTS, LIP_POINTS, emotion_displacements, lip_split, template_fapu, template_points,
+    ACROSS_MIN, CONTOUR, EARS, EMOTIONS, FEATURE_POINTS, FOREHEAD, LIP_POINTS, drawn_moves, emotion_displacements,
+    held_points, lip_split, template_fapu, template_points,
 )
 from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import POINT_INDEX, POINT_NAMES, load_face, scale_face
@@ -67,8 +69,45 @@ def test_rbf_moves_the_named_points_exactly_and_the_others_smoothly(face) -> Non
             largest = np.linalg.norm(plain[k], axis=1).max()
             assert np.linalg.norm(rbf[k, free], axis=1).max() <= largest, (widths, name)
             if widths == "cluster":
-                assert np.abs(rbf[k, free]).max() > 0.005 * face.fapu.d, name  # plain scaling leaves them
+                raw = deform(face.points, template_points(name), template_fapu(name, face.fapu), widths)
+                assert np.abs(raw[free]).max() > 0.005 * face.fapu.d, name  # plain scaling leaves them
                 assert not plain[k, free].any()
+
+
+def test_the_drawn_moves_hold_the_ears_and_forehead_and_move_the_contour_only_across_it(face) -> None:
+    """drawn_moves: the held points never move; a contour point no template names moves along
+    the perpendicular of its neighbours' chord by the RBF move's share that way (the rest of the
+    RBF's move is perpendicular to what is kept), at least ACROSS_MIN d or not at all; other points
+    keep the RBF's move. Some emotion still moves a cheek of the contour across it."""
+    assert held_points(face) == EARS + FOREHEAD  # the samples' hair covers the forehead
+    raw = np.array([deform(face.points, template_points(n), template_fapu(n, face.fapu)) for n in EMOTIONS])
+    drawn = drawn_moves(face, raw)
+    assert np.array_equal(drawn, emotion_displacements(face))
+    held = [POINT_INDEX[p] for p in held_points(face)]
+    assert not drawn[:, held].any() and np.abs(raw[:, held]).max() > 0.01 * face.fapu.d
+    ring = [POINT_INDEX[p] for p in CONTOUR]
+    contour = [k for k, p in enumerate(CONTOUR) if p not in FEATURE_POINTS and POINT_INDEX[p] not in held]
+    for k in contour:
+        row = ring[k]
+        chord = face.points[ring[(k + 1) % len(ring)]] - face.points[ring[k - 1]]
+        kept, dropped = drawn[:, row], raw[:, row] - drawn[:, row]
+        np.testing.assert_allclose(kept @ chord, 0.0, atol=1e-9)
+        np.testing.assert_allclose((kept * dropped).sum(axis=1), 0.0, atol=1e-9)
+        size = np.linalg.norm(kept, axis=1)
+        assert ((size == 0) | (size >= ACROSS_MIN * face.fapu.d)).all()
+    moved = [ring[k] for k in contour]
+    assert np.linalg.norm(drawn[:, moved], axis=2).max() >= ACROSS_MIN * face.fapu.d
+    others = [i for i in range(len(POINT_NAMES)) if i not in held + moved]
+    np.testing.assert_array_equal(drawn[:, others], raw[:, others])
+
+
+def test_a_bare_forehead_follows_the_rbf(face) -> None:
+    """Hair that does not reach above the forehead (no front layer over it): only the ears are held."""
+    top = face.point("11.1")[1]
+    bare = replace(face, hair=face.hair[face.hair[:, 1] > top])
+    assert held_points(bare) == EARS
+    forehead = [POINT_INDEX[p] for p in FOREHEAD]
+    assert np.linalg.norm(emotion_displacements(bare)[:, forehead], axis=2).max() >= ACROSS_MIN * face.fapu.d
 
 
 def test_rbf_is_linear_in_the_moves(face) -> None:

@@ -3,10 +3,12 @@ fitted to them (animate/behaviour.py adapt_to_emotions)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from cartoonface.animate.behaviour import Action, adapt_to_emotions, emotion_at, schedule
-from cartoonface.animate.frames import states_at
+from cartoonface.animate.frames import EASE_STEP, on_twos, states_at
 from cartoonface.animate.timeline import LIPS_SPEAKING, build_timeline
 from cartoonface.face.lift import lift
 from cartoonface.face.model import load_face
@@ -27,16 +29,36 @@ def _alignment() -> Alignment:
 
 def test_an_emotion_eases_in_holds_and_eases_out() -> None:
     timeline = build_timeline(_alignment(), (HAPPY,))
-    times = np.arange(0, 4.0, 0.02)
+    times = np.arange(0, 4.0, 0.005)
     amounts = np.array([dict(s.emotion).get("happy", 0.0) for s in states_at(timeline, times)])
     assert amounts[times < 0.2].max() == 0 and amounts[times > 3.8].max() == 0
     held = amounts[(times >= 0.6) & (times <= 3.3)]
     assert (held == 0.8).all()
-    rise = amounts[(times > 0.2) & (times < 0.6)]
-    assert (np.diff(rise) >= 0).all() and 0 < rise.min() < rise.max() < 0.8
-    # smoothstep: slow at both ends of the rise, the middle step the largest
-    steps = np.diff(amounts[(times >= 0.2) & (times <= 0.6)])
-    assert steps[len(steps) // 2] > 2 * max(steps[0], steps[-1])
+    rise = amounts[(times >= 0.2) & (times <= 0.6)]
+    assert (np.diff(rise) >= 0).all()
+    # in equal steps of at most EASE_STEP (to 0.01), as few as that allows
+    levels = np.unique(rise)
+    assert levels[0] == 0 and levels[-1] == 0.8 and len(levels) - 1 == math.ceil(0.8 / EASE_STEP)
+    assert np.ptp(np.diff(levels)) <= 0.011 and np.diff(levels).max() <= EASE_STEP + 0.005
+    # along smoothstep: slow at both ends of the rise, the middle step the shortest
+    lasting = [int((rise == level).sum()) for level in levels[1:-1]]
+    assert lasting[len(lasting) // 2] < min(lasting[0], lasting[-1])
+
+
+def test_an_ease_is_drawn_on_twos() -> None:
+    """on_twos: every second frame of an emotion's ease shows the emotion and gamma of the frame
+    before, the mouth as it is; the ease's distinct drawings nearly halve."""
+    timeline = build_timeline(_alignment(), (HAPPY,))
+    frames = states_at(timeline, np.arange(0, 24) / 30)
+    held = on_twos(frames)
+    assert [s.mouth for s in held] == [s.mouth for s in frames]
+    for i, (before, after) in enumerate(zip(frames, held, strict=True)):
+        if i % 2:
+            assert (after.emotion, after.lips) == (held[i - 1].emotion, held[i - 1].lips)
+        else:
+            assert after == before
+    shown = [s.emotion for s in frames]
+    assert len(set(held)) < len(set(frames)) and len({s.emotion for s in held}) < len(set(shown))
 
 
 def test_the_lips_blend_gives_way_to_speech_and_comes_back() -> None:

@@ -10,7 +10,9 @@ the way from one key to the next (0..1):
   decelerates like a mass.
 
 Values are quantised so identical consecutive frames compare equal and the SVG
-writer can merge them: angles to 0.1 degree, amounts and mouth weights to 0.01.
+writer can merge them: angles to 0.1 degree, amounts and mouth weights to 0.01. An
+emotion's intensity and the lips' gamma go from key to key in a few equal steps
+(EASE_STEP), along the easing curve: each step redraws the eyes, brows and mouth.
 """
 
 from __future__ import annotations
@@ -31,6 +33,14 @@ EASINGS = {
     "smoothstep": lambda u: u * u * (3.0 - 2.0 * u),
     "cosine": lambda u: 0.5 - 0.5 * np.cos(np.pi * u),
 }
+# An emotion's intensity and the lips' gamma (seed 000 eq. 18) ease from one key to the next in
+# equal steps of at most this much (our choice; docs/emotions.md): each distinct value is a new
+# drawing of the eyes, brows, nose and mouth, for every pose and mouth shape it meets. An eighth
+# of an emotion at full intensity moves no point of the sample faces more than about 3 px
+# (surprise's brows and dropped jaw, 22-24 px in all), as far as a full 0.4 s ease
+# (behaviour.py EMOTION_EASE) moves them in one frame at its fastest (30 fps): the steps merge
+# frames only where the ease is slow.
+EASE_STEP = 0.125
 # A nod bends the head down: Pose.tilt is the rotation about X and positive
 # means the face looks down (face/state.py), so a nod of depth d is tilt +d.
 NOD_SIGN = 1.0
@@ -58,7 +68,7 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
     tilt, turn, nod, gaze_h, gaze_v = (_angle(timeline.track(name), t) for name in ("tilt", "turn", "nod", "gaze_h", "gaze_v"))
     pitch = NOD_SIGN * nod + 0.0
     feelings = _emotions(timeline, t)
-    lips = _amount(timeline.track("lips"), t) if any(feelings) else np.ones_like(t)
+    lips = _stepped(timeline.track("lips"), t) if any(feelings) else np.ones_like(t)
     columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
                   gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
     states: list[FaceState] = []
@@ -77,10 +87,11 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
 
 
 def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float], ...]]:
-    """The emotions at times `t` (ms): ((name, intensity), ...) of those above 0, to 0.01,
-    in EMOTIONS order; () where none is felt (or the timeline has no emotion tracks)."""
+    """The emotions at times `t` (ms): ((name, intensity), ...) of those above 0, to 0.01 and in
+    steps (_stepped), in EMOTIONS order; () where none is felt (or the timeline has no emotion
+    tracks)."""
     names = [name for name in EMOTIONS if f"emotion:{name}" in timeline.names]
-    amounts = [_amount(timeline.track(f"emotion:{name}"), t).tolist() for name in names]
+    amounts = [_stepped(timeline.track(f"emotion:{name}"), t).tolist() for name in names]
     return [tuple((name, a) for name, a in zip(names, column, strict=True) if a > 0)
             for column in zip(*amounts, strict=True)] if names else [()] * len(t)
 
@@ -95,7 +106,10 @@ HOLD_STEP = 0.6  # degrees per frame (18 degrees per second at 30 fps)
 
 def on_twos(states: Sequence[FaceState]) -> tuple[FaceState, ...]:
     """`states` (one per frame) with every second frame of a slow head move holding the pose of
-    the frame before (HOLD_STEP); fast moves, the gaze, the mouth and the rest are unchanged."""
+    the frame before (HOLD_STEP), and every second frame of an emotion's ease holding the
+    emotions and the lips' gamma of the frame before (an ease is slow at both ends and steps
+    by EASE_STEP: held, the fastest part moves two steps at 15 frames a second, as animators
+    draw on twos); fast head moves, the gaze, the mouth and the rest are unchanged."""
     poses = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states]).reshape(-1, 3)
     steps = np.abs(np.diff(poses, axis=0)).max(axis=1) if len(poses) > 1 else np.zeros(0)
     out = list(states)
@@ -103,6 +117,8 @@ def on_twos(states: Sequence[FaceState]) -> tuple[FaceState, ...]:
         after = steps[i] if i < len(steps) else 0.0
         if steps[i - 1] < HOLD_STEP and after < HOLD_STEP and out[i].pose != out[i - 1].pose:
             out[i] = replace(out[i], pose=out[i - 1].pose)
+        if (out[i].emotion, out[i].lips) != (out[i - 1].emotion, out[i - 1].lips):
+            out[i] = replace(out[i], emotion=out[i - 1].emotion, lips=out[i - 1].lips)
     return tuple(out)
 
 
@@ -140,6 +156,18 @@ def _values(track: Track, t: np.ndarray) -> np.ndarray:
 def _amount(track: Track, t: np.ndarray) -> np.ndarray:
     """A 0..1 amount track at times `t` (ms), to 0.01."""
     return np.clip(np.round(_values(track, t), 2), 0.0, 1.0) + 0.0
+
+
+def _stepped(track: Track, t: np.ndarray) -> np.ndarray:
+    """A 0..1 amount track at times `t` (ms), to 0.01, moving from each key to the next in
+    n = ceil(|change| / EASE_STEP) equal steps: the eased share rounded to a multiple of 1 / n,
+    so each key is reached exactly and the steps follow the easing curve (short in the middle)."""
+    values = np.array([key.value for key in track.keys], dtype=float)
+    before, after, eased = _segments(track, t)
+    change = values[after] - values[before]
+    steps = np.maximum(np.ceil(np.round(np.abs(change) / EASE_STEP, 6)), 1.0)
+    stepped = values[before] + change * np.round(eased * steps) / steps
+    return np.clip(np.round(stepped, 2), 0.0, 1.0) + 0.0
 
 
 def _angle(track: Track, t: np.ndarray) -> np.ndarray:

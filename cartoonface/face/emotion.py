@@ -62,6 +62,25 @@ FEATURE_POINTS: tuple[str, ...] = (
     "3.5", "3.6", "2.13", "2.14", "10.1", "10.2",
 )
 
+# Points the RBF would move that every emotion holds still (our choice; docs/emotions.md): the
+# ears' attachments 10.7 / 10.8 (an ear does not move with the face's muscles; moved, its lobe
+# rose with a smile and every emotion redrew the ears) and, where the hair's front layer covers
+# it, the forehead's contour 11.1, 11.2a, 11.3a (face/lift.py: the fringe does not move with
+# emotions; the contour's moves were hidden under it, but where it dipped, in a wink, the skin's
+# top flattened the hairline). Held, their drawings are shared across emotions in an animation.
+EARS = ("10.7", "10.8")
+FOREHEAD = ("11.1", "11.2a", "11.3a")
+# The face's contour, a closed ring (face/lift.py's ring of silhouette points): a point of it
+# that no template names moves only across the contour, along its normal (the chord of its
+# neighbours turned a quarter), and not at all where that move stays under ACROSS_MIN d at
+# intensity 1 (a pixel on the samples, d = 100). The RBF moves the cheeks 10.9 / 10.10 and the temples 11.2 / 11.3 mostly along
+# the contour (up to 5 px at intensity 1 on the samples; across it, the cheeks up to 1.5 px,
+# puffed out by a smile, the temples under 0.7 px): a slide along the outline changes none of
+# its pixels, and the animation's path data are whole pixels (render/pathdata.py), so a move
+# under one pixel only changes which drawings are alike.
+ACROSS_MIN = 0.01
+CONTOUR = ("11.2", "11.2a", "11.1", "11.3a", "11.3", "10.9", "2.13", "2.1", "2.14", "10.10")
+
 Move = tuple[str, float, str, float, str]  # (point, dx coefficient, dx FAPU, dy coefficient, dy FAPU)
 
 
@@ -208,15 +227,41 @@ def emotion_displacements(face: FaceModel, widths: str | None = "cluster") -> np
     """(len(EMOTIONS), P, 2) image displacement of every model point of `face` at intensity 1.
 
     The template's points move by their FAPU terms on this face; `widths` a face/rbf.py
-    width rule moves every other point by the RBF (seed 003, eq. 8-12), None keeps them
-    still (plain FAPU scaling, `scaled_displacements`).
+    width rule moves every other point by the RBF (seed 003, eq. 8-12), as the animation
+    draws it (`drawn_moves`: the contour only across itself, the ears and a covered forehead
+    still); None keeps them still (plain FAPU scaling, `scaled_displacements`).
     """
     if widths is None:
         return scaled_displacements(face)
     out = np.zeros((len(EMOTIONS), len(POINT_NAMES), 2))
     for k, name in enumerate(EMOTIONS):
         out[k] = deform(face.points, template_points(name), template_fapu(name, face.fapu), widths)
+    return drawn_moves(face, out)
+
+
+def drawn_moves(face: FaceModel, moves: np.ndarray) -> np.ndarray:
+    """`moves` ((E, P, 2) pixel displacements of `face`'s points, one row per emotion at
+    intensity 1) as the animation draws them: each CONTOUR point no template names moved only
+    across the contour, by nothing where that is under ACROSS_MIN d; held_points(face) still."""
+    out = moves.copy()
+    ring = np.array([POINT_INDEX[p] for p in CONTOUR])
+    chords = face.points[np.roll(ring, -1)] - face.points[np.roll(ring, 1)]
+    normals = np.column_stack([-chords[:, 1], chords[:, 0]])
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    free = np.array([k for k, p in enumerate(CONTOUR) if p not in FEATURE_POINTS])
+    across = np.einsum("epi,pi->ep", out[:, ring[free]], normals[free])
+    across[np.abs(across) < ACROSS_MIN * face.fapu.d] = 0.0
+    out[:, ring[free]] = across[:, :, None] * normals[free][None]
+    out[:, [POINT_INDEX[p] for p in held_points(face)]] = 0.0
     return out
+
+
+def held_points(face: FaceModel) -> tuple[str, ...]:
+    """The points the emotions of `face` hold still although the RBF would move them: EARS, and
+    FOREHEAD when the hair reaches above the forehead's top 11.1, where the front layer covers it
+    (face/lift.py builds no front layer over a bare forehead)."""
+    covered = len(face.hair) > 0 and float(face.hair[:, 1].min()) < float(face.point("11.1")[1])
+    return EARS + FOREHEAD if covered else EARS
 
 
 def emotion_basis(face: FaceModel) -> np.ndarray:
