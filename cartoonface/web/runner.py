@@ -213,10 +213,9 @@ class Runner:
         """Stop taking jobs; end running ones (marked failed, STOPPED, or queued again with
         `requeue_on_close`); waiting jobs stay in the queue's storage."""
         self._closed.set()
-        with self._lock:
-            running = list(self._running.items())
-        for _folder, (process, _run) in running:
-            process.terminate()
+        with self._lock:  # under the lock: a process leaves _running before it is closed
+            for process, _run in self._running.values():
+                process.terminate()
         if self._consumer is not None:
             self._consumer.shutdown_timeout = timeout
             self._consumer.stop(graceful=True)
@@ -262,6 +261,8 @@ class Runner:
                 if self._closed.is_set():  # close() came while the process was starting
                     process.terminate()
             process.join()
+            with self._lock:
+                self._running.pop(folder, None)
             code = process.exitcode
             process.close()
         finally:
