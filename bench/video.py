@@ -41,8 +41,8 @@ from cartoonface.face.model import load_face
 from cartoonface.pipeline import Options, generate
 from cartoonface.speech.audio import ffmpeg_exe
 from cartoonface.video.clip import Clip, extract_audio, frames, probe
-from cartoonface.video.drive import (MOUTH_CUTOFF, OPEN_GAIN, SLOW_CUTOFF, WIDTH_GAIN, blink_amounts, low_pass,
-                                     mouth_blends, shape_measures)
+from cartoonface.video.drive import (MOUTH_CUTOFF, SLOW_CUTOFF, VIDEO_SHAPES, blink_amounts, low_pass,
+                                     shape_measures, video_mouths)
 from cartoonface.video.track import Tracking, track
 
 GRID = Path(__file__).resolve().parents[1] / ".." / "shared" / "bench" / "av" / "grid"
@@ -109,12 +109,7 @@ def drawn_opening(tracking: Tracking) -> np.ndarray:
     """(n,) the opening (MNS0 of the female sample) of the mouth drive.py draws at each clip frame."""
     face = load_face(SAMPLE_FACES / "female.json")
     shapes = shape_measures(face)
-    mouth = low_pass(np.column_stack([tracking.measure("mouth_open"), tracking.measure("mouth_width")]),
-                     tracking.fps, MOUTH_CUTOFF)
-    mns0 = float(np.median(tracking.measure("nose_mouth")))
-    blends = mouth_blends(mouth[:, 0] / mns0 * OPEN_GAIN, (mouth[:, 1] / np.median(mouth[:, 1]) - 1) * WIDTH_GAIN,
-                          shapes)
-    from cartoonface.video.drive import VIDEO_SHAPES
+    blends = video_mouths(tracking, np.arange(len(tracking.found)) / tracking.fps, face)
     return np.array([sum(w * shapes[VIDEO_SHAPES.index(s), 0] for s, w in blend) for blend in blends])
 
 

@@ -260,10 +260,9 @@ def generate(
         if options.actions is not None:
             actions = load_actions(options.actions, duration)
         else:
-            peaks = () if clip is not None and not clip.has_audio else pitch_peaks(recording, alignment)
-            actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
-                               peaks=peaks, speech=speech_spans(alignment),
-                               breath_pauses=silences_of(alignment))
+            actions = () if not alignment.sentences else schedule(  # a silent clip: nothing to schedule by
+                duration, speech_pauses(alignment), options.seed, style=style, peaks=pitch_peaks(recording, alignment),
+                speech=speech_spans(alignment), breath_pauses=silences_of(alignment))
             spans = marked_spans(alignment, marks)
             if spans is None:
                 alignment = dataclasses.replace(alignment, notes=alignment.notes + (

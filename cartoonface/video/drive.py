@@ -11,7 +11,7 @@ what the video shows, frame i of the cartoon at i / fps s:
 - brow: the brows' height over its median, BROW_FULL of the person's own brow-to-eye distance
   (the FAPU EyebrowH the cartoon's brow raise moves by) raising the cartoon's brows fully, less
   while the eyes close (the mesh lifts its brow points with the lids);
-- mouth: the opening in units of the person's MNS0 (nose to upper lip) and the width change in
+- mouth: the opening above the lips' rest gap (REST_PERCENTILE) in units of the person's MNS0 (nose to upper lip) and the width change in
   units of their MW0 (mouth width at rest), each times a gain, placed among the cartoon's
   VIDEO_SHAPES (the same measures of each shape on the cartoon, from face/mouth.py's table):
   a blend of the two nearest, in steps of MOUTH_STEP. With a transcript (`combine`) the aligned
@@ -19,8 +19,8 @@ what the video shows, frame i of the cartoon at i / fps s:
 
 Smoothing is zero-phase (a Butterworth low-pass run forwards and backwards, SciPy's
 sosfiltfilt), so it removes the mesh's jitter without any lag: the pose and brows at
-SLOW_CUTOFF, the mouth at MOUTH_CUTOFF; the eyes only lose one-frame spikes (a median of
-SPIKE_FRAMES), as a blink lasts a few frames.
+SLOW_CUTOFF, the mouth at MOUTH_CUTOFF; the eyes are not smoothed: a blink's closed part lasts
+one to three frames at 25 fps, which a median or a low-pass would halve (bench/video.py).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
-from scipy.signal import butter, medfilt, sosfiltfilt
+from scipy.signal import butter, sosfiltfilt
 
 from cartoonface.face.model import FaceModel
 from cartoonface.face.mouth import MOUTH_SHAPES, MouthShape, Term
@@ -41,7 +41,6 @@ from cartoonface.video.track import Tracking
 SLOW_CUTOFF = 3.0
 MOUTH_CUTOFF = 8.0
 FILTER_ORDER = 2
-SPIKE_FRAMES = 3  # median window of the eyes' opening (frames, odd)
 # Blinks, tuned on GRID s1_bbaf2n (bench/video.py, bench/video_blinks.csv): the open level is
 # this percentile of the clip's openings; blink 0 at BLINK_START of it, 1 at BLINK_FULL.
 OPEN_PERCENTILE = 90
@@ -52,6 +51,9 @@ BROW_FULL = 0.12
 # Mouth: the cartoon's shapes are drawn larger than people speak (thesis 002 5.2.2, docs/mouth.md):
 # the measured opening (MNS0) and width change (MW0) are scaled by these gains first (GRID s1_bbaf2n).
 OPEN_GAIN = 2.5
+# The lips' gap at rest (the mesh's inner lips rarely meet): this percentile of the clip's openings,
+# taken off every opening (a talking clip has its lips shut for more than a tenth of the time).
+REST_PERCENTILE = 10
 WIDTH_GAIN = 3.0
 # How far one MW0 of width change counts against one MNS0 of opening when the nearest shapes are found.
 WIDTH_WEIGHT = 2.0
@@ -76,11 +78,10 @@ def low_pass(values: np.ndarray, fps: float, cutoff: float) -> np.ndarray:
 def blink_amounts(opening: np.ndarray) -> np.ndarray:
     """(n,) eye openings (lid distance over eye width) -> (n,) blink 0..1, calibrated on these
     openings (OPEN_PERCENTILE is the open level; BLINK_START, BLINK_FULL of it)."""
-    cleaned = medfilt(opening, SPIKE_FRAMES) if len(opening) >= SPIKE_FRAMES else opening
-    level = float(np.percentile(cleaned, OPEN_PERCENTILE))
+    level = float(np.percentile(opening, OPEN_PERCENTILE))
     if level <= 0:
         return np.zeros(len(opening))
-    return np.clip((BLINK_START - cleaned / level) / (BLINK_START - BLINK_FULL), 0.0, 1.0)
+    return np.clip((BLINK_START - opening / level) / (BLINK_START - BLINK_FULL), 0.0, 1.0)
 
 
 def brow_amounts(height: np.ndarray) -> np.ndarray:
@@ -140,6 +141,22 @@ def mix_mouths(first: tuple[tuple[str, float], ...], second: tuple[tuple[str, fl
     return tuple((symbol, count / steps) for symbol, count in counts.items() if count > 0)
 
 
+def video_mouths(tracking: Tracking, times: np.ndarray, face: FaceModel) -> list[tuple[tuple[str, float], ...]]:
+    """The mouth blend (mouth_blends) of the cartoon `face` at each of (n,) `times` (s) from the
+    tracked opening (above the rest gap, in MNS0, times OPEN_GAIN) and width (change in MW0, times
+    WIDTH_GAIN), low-passed at MOUTH_CUTOFF."""
+    mouth = low_pass(np.column_stack([tracking.measure("mouth_open"), tracking.measure("mouth_width")]),
+                     tracking.fps, MOUTH_CUTOFF)
+    clip_times = np.arange(len(mouth)) / tracking.fps
+    mns0 = float(np.median(tracking.measure("nose_mouth")))
+    mw0 = float(np.median(mouth[:, 1]))
+    shut = float(np.percentile(mouth[:, 0], REST_PERCENTILE))
+    opening = np.maximum(mouth[:, 0] - shut, 0) / mns0 * OPEN_GAIN
+    width = (mouth[:, 1] / mw0 - 1) * WIDTH_GAIN
+    return mouth_blends(np.interp(times, clip_times, opening), np.interp(times, clip_times, width),
+                        shape_measures(face))
+
+
 def drive(tracking: Tracking, base: Sequence[FaceState], fps: int, face: FaceModel,
           combine: bool = False) -> tuple[FaceState, ...]:
     """The cartoon's states at `fps` (frame i at i / fps s, one per state of `base`) with pose,
@@ -159,12 +176,7 @@ def drive(tracking: Tracking, base: Sequence[FaceState], fps: int, face: FaceMod
     brow = at_frames(brow_amounts(low_pass((tracking.measure("brow_left") + tracking.measure("brow_right")) / 2,
                                            rate, SLOW_CUTOFF)))
     brow *= 1 - blink  # the mesh lifts its brow points as the lids close: no raise while blinking
-    mouth = low_pass(np.column_stack([tracking.measure("mouth_open"), tracking.measure("mouth_width")]),
-                     rate, MOUTH_CUTOFF)
-    mns0 = float(np.median(tracking.measure("nose_mouth")))
-    mw0 = float(np.median(mouth[:, 1]))
-    blends = mouth_blends(at_frames(np.maximum(mouth[:, 0], 0) / mns0 * OPEN_GAIN),
-                          at_frames((mouth[:, 1] / mw0 - 1) * WIDTH_GAIN), shape_measures(face))
+    blends = video_mouths(tracking, times, face)
     angles = np.column_stack([at_frames(pose[:, k]) for k in range(3)]).round(1)
     states = []
     for i, state in enumerate(base):

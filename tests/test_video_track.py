@@ -1,0 +1,73 @@
+"""video/track.py: the face mesh followed through a real GRID clip; a lost face held and eased back."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cartoonface.video.clip import VideoError, probe
+from cartoonface.video.track import EASE, HOLD, MEASURES, fill_lost, track
+from tests.test_video_clip import GRID, make_clip
+
+LABELS = Path(__file__).resolve().parent.parent / "bench" / "video_blinks.csv"
+
+
+@pytest.fixture(scope="module")
+def tracking():
+    return track(probe(GRID))
+
+
+def test_the_face_is_found_in_every_frame(tracking):
+    assert tracking.found.all() and tracking.measures.shape == (len(tracking.found), len(MEASURES))
+    assert np.isfinite(tracking.pose).all() and np.isfinite(tracking.measures).all()
+    # the speaker faces the camera: small angles
+    assert np.all(np.abs(np.median(tracking.pose, axis=0)) < 15)
+
+
+def test_the_eyes_measure_closed_on_the_hand_labelled_blinks(tracking):
+    with LABELS.open(encoding="utf-8") as handle:
+        closed = [range(int(r["first"]), int(r["last"]) + 1) for r in csv.DictReader(handle) if r["clip"] == GRID.stem]
+    opening = (tracking.measure("eye_left") + tracking.measure("eye_right")) / 2
+    shut = np.zeros(len(opening), dtype=bool)
+    for run in closed:
+        shut[list(run)] = True
+    assert closed and opening[shut].max() < 0.6 * np.median(opening[~shut])
+
+
+def test_the_mouth_opens_in_the_words_and_rests_in_the_silences(tracking):
+    words = [line.split() for line in GRID.with_suffix(".align").read_text().splitlines()]
+    times = np.arange(len(tracking.found)) / tracking.fps
+    speaking = np.zeros(len(times), dtype=bool)
+    for start, end, word in words:
+        if word not in ("sil", "sp"):
+            speaking |= (times >= int(start) / 25000) & (times < int(end) / 25000)
+    opening = tracking.measure("mouth_open")
+    assert np.percentile(opening[speaking], 75) > 3 * np.median(opening[~speaking])
+
+
+def test_a_lost_face_holds_then_eases_to_the_median():
+    fps = 20.0
+    values = np.column_stack([np.linspace(0, 1, 100), np.full(100, 2.0)])
+    found = np.ones(100, dtype=bool)
+    found[:5] = False
+    found[40:80] = False
+    filled = fill_lost(values, found, fps)
+    median = np.median(values[found], axis=0)
+    assert np.array_equal(filled[found], values[found])
+    assert np.allclose(filled[:5], median)
+    held = round(HOLD * fps)
+    assert np.allclose(filled[40:40 + held], values[39])
+    back = 40 + round((HOLD + EASE) * fps)
+    assert np.allclose(filled[back:80], median)
+    steps = np.diff(filled[40:back, 0])
+    assert np.all(steps * np.sign(median[0] - values[39, 0]) >= 0)  # eased monotonically towards the median
+
+
+def test_a_video_without_a_face_is_refused(tmp_path):
+    clip = probe(make_clip(tmp_path / "pattern.mp4", "-f", "lavfi", "-i", "testsrc=size=320x240:rate=10",
+                           "-t", "1", "-c:v", "libx264", "-preset", "ultrafast"))
+    with pytest.raises(VideoError, match="face was found in 0 of 10 frames"):
+        track(clip)
