@@ -5,7 +5,8 @@
 what the video shows, frame i of the cartoon at i / fps s:
 
 - pose: mesh_pose less the clip's median (the cartoon faces the viewer when the person faces
-  their usual direction; a camera a little off to the side is no turn), clamped to +-MAX_ANGLE;
+  their usual direction; a camera a little off to the side is no turn), clamped to +-MAX_ANGLE,
+  in steps of POSE_STEP;
 - blink: from the eyes' opening, calibrated per clip: the open level is the OPEN_PERCENTILE of
   the clip's openings; the lids are down by BLINK_START of it and shut at BLINK_FULL;
 - brow: the brows' height over its median, BROW_FULL of the person's own brow-to-eye distance
@@ -59,6 +60,9 @@ WIDTH_GAIN = 3.0
 WIDTH_WEIGHT = 2.0
 # The shapes a video can tell apart by opening and width (f's bite, r's and n's tongue cannot be seen).
 VIDEO_SHAPES = ("m", "z", "h'", "h", "a", "i", "e", "u", "o")
+# The pose is drawn in steps of this many degrees: each distinct pose is a drawing in the SVG, and
+# 0.5 makes 1.9 MB per minute of the joined GRID clips against 3.1 for 0.1 degrees (bench/video.py).
+POSE_STEP = 0.5
 MOUTH_STEP = 0.1  # blend weights are multiples of this (fewer distinct drawings in the SVG)
 ALIGNED_SHARE = 0.5  # with a transcript: the aligned shapes' share of the mouth, the video's the rest
 
@@ -177,7 +181,7 @@ def drive(tracking: Tracking, base: Sequence[FaceState], fps: int, face: FaceMod
                                            rate, SLOW_CUTOFF)))
     brow *= 1 - blink  # the mesh lifts its brow points as the lids close: no raise while blinking
     blends = video_mouths(tracking, times, face)
-    angles = np.column_stack([at_frames(pose[:, k]) for k in range(3)]).round(1)
+    angles = np.round(np.column_stack([at_frames(pose[:, k]) for k in range(3)]) / POSE_STEP) * POSE_STEP
     states = []
     for i, state in enumerate(base):
         mix = mix_mouths(state.mouth, blends[i], ALIGNED_SHARE) if combine else blends[i]
