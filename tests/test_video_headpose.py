@@ -25,7 +25,8 @@ if not MISSING:
     from cartoonface.face.pose import rotation_matrix
     from cartoonface.face.state import Pose
     from cartoonface.photo.landmarks import landmarker
-    from cartoonface.video.headpose import angles, mesh_axes, mesh_pose
+    from cartoonface.video.headpose import (FLIP, Start, angles, mesh_axes, mesh_pose, mesh_start, pose_rotation,
+                                             rotation_pose, track_cylinder)
 
 # How close the mesh's roll follows an exact in-plane rotation of the picture, degrees.
 ROLL_BOUND = 1.5
@@ -33,6 +34,15 @@ ROLL_BOUND = 1.5
 # from the original's), degrees: the mesh network itself is not exactly mirror-symmetric
 # (on the astronaut the two differ by up to 1.4 degrees).
 MIRROR_BOUND = 2.0
+# The cylinder tracker: a still clip (sensor noise only) moves less than STILL_BOUND on
+# any axis; a roll of the picture comes back within TRACK_ROLL_BOUND, and the other axes
+# stay within TRACK_OTHER_BOUND (an image rotation about a point off the optical axis is
+# not exactly a head roll under perspective).
+STILL_BOUND = 0.2
+TRACK_ROLL_BOUND = 1.0
+TRACK_OTHER_BOUND = 3.0
+# Sensor noise added to each frame of the still clip (gray levels, standard deviation).
+NOISE = 2.0
 
 
 @functools.lru_cache(maxsize=1)
@@ -88,3 +98,73 @@ def test_a_rigidly_rotated_mesh_gives_face_pose_convention_angles(pose: tuple[fl
     posed = frontal @ rotation_matrix(Pose(*pose)).T + centre
     assert np.allclose(mesh_pose(posed * flip), pose, atol=1e-6)
     assert np.allclose(angles(rotation_matrix(Pose(*pose))), pose, atol=1e-9)
+    # the tracker's OpenCV-frame rotation is the same rotation, and goes back to the pose
+    assert np.allclose(FLIP @ pose_rotation(pose) @ FLIP, rotation_matrix(Pose(*pose)), atol=1e-12)
+    assert np.allclose(rotation_pose(pose_rotation(pose)), pose, atol=1e-9)
+
+
+def gray(rgb: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+
+
+def start_of(rgb: np.ndarray) -> Start:
+    return mesh_start(points(rgb))
+
+
+def relocate(index: int, frame: np.ndarray) -> Start | None:
+    """The mesh on a gray frame: the Start the tracker re-initialises from, or None."""
+    found = landmarker().find(np.ascontiguousarray(np.repeat(frame[:, :, None], 3, axis=2)))
+    return None if found is None else mesh_start(found.points)
+
+
+def moved(frame: np.ndarray, dx: float, dy: float) -> np.ndarray:
+    matrix = np.array([[1.0, 0.0, dx], [0.0, 1.0, dy]])
+    return cv2.warpAffine(frame, matrix, (frame.shape[1], frame.shape[0]), borderMode=cv2.BORDER_REPLICATE)
+
+
+def test_a_still_clip_gives_a_still_pose() -> None:
+    rng = np.random.default_rng(3)
+    still = gray(photo()).astype(float)
+    frames = [np.clip(still + rng.normal(0.0, NOISE, still.shape), 0, 255).astype(np.uint8) for _ in range(15)]
+    start = start_of(photo())
+    poses = track_cylinder(frames, start)
+    assert poses.shape == (15, 3)
+    assert np.allclose(poses[0], start.pose, atol=1e-6)
+    assert np.ptp(poses, axis=0).max() < STILL_BOUND
+
+
+def test_the_tracker_follows_a_rolling_picture() -> None:
+    still = photo()
+    centre = face_centre(still)
+    frames = [gray(rolled(still, 10.0 * i / 14, centre)) for i in range(15)]
+    poses = track_cylinder(frames, start_of(still))
+    change = poses[-1] - poses[0]
+    assert abs(change[2] - 10.0) < TRACK_ROLL_BOUND
+    assert np.abs(change[:2]).max() < TRACK_OTHER_BOUND
+    # it rolls steadily: every step the same way
+    assert (np.diff(poses[:, 2]) > 0).all()
+
+
+def test_a_lost_track_holds_its_pose_then_re_initialises_from_the_mesh() -> None:
+    # the face, a blank stretch (nothing to track), then the face rolled 8 degrees and
+    # moved far from where the track left it
+    still = photo()
+    face = gray(still)
+    blank = np.full_like(face, 128)
+    back = moved(gray(rolled(still, 8.0, face_centre(still))), 120, 150)
+    frames = [face] * 4 + [blank] * 8 + [back] * 4
+    start = start_of(still)
+    calls: list[int] = []
+
+    def counted(index: int, frame: np.ndarray) -> Start | None:
+        calls.append(index)
+        return relocate(index, frame)
+
+    poses = track_cylinder(frames, start, counted)
+    assert np.allclose(poses[:12], poses[0], atol=1e-6)  # held through the blank
+    assert calls and calls[-1] == 12 and all(i >= 4 for i in calls)
+    again = relocate(0, back)
+    assert again is not None
+    assert np.allclose(poses[12:], again.pose, atol=STILL_BOUND)
+    # without a way to re-initialise, it keeps holding the last pose
+    assert np.allclose(track_cylinder(frames, start), poses[0], atol=1e-6)
