@@ -119,3 +119,15 @@ def test_audio_and_video_are_one_or_the_other(tmp_path):
     assert done.returncode == 2 and "not allowed with" in done.stderr
     done = run_cli("generate", "--face", str(FACE), "-o", str(tmp_path / "site"))
     assert done.returncode == 2 and "--audio" in done.stderr and "--from-video" in done.stderr
+
+
+def test_a_transcript_aligns_the_clip_sound_and_the_mp4_export_still_works(tmp_path):
+    text = tmp_path / "words.txt"
+    text.write_text("place blue at i six please", encoding="utf-8")
+    out, mp4 = tmp_path / "site", tmp_path / "cartoon.mp4"
+    done = run_cli("generate", "--face", str(FACE), "--from-video", str(GRID), "--transcript", str(text),
+                   "-o", str(out), "--video", str(mp4), "--size", "160x120")
+    assert done.returncode == 0, done.stderr
+    grid = (out / "alignment.TextGrid").read_text(encoding="utf-8")
+    assert "please" in grid and "six" in grid
+    assert mp4.stat().st_size > 1000

@@ -114,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
     """Generate the folder; print the summary and any notes. Returns 0."""
     from cartoonface.exports.video import parse_size, write_video
     from cartoonface.pipeline import Options, generate
+    from cartoonface.render.pages import AUDIO_STEM
 
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
@@ -129,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
         result = generate(args.face, args.audio, args.transcript, args.output, options, bar, video=args.from_video)
         if args.video is not None:
             write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration,
-                        result.out_dir / "audio.m4a" if args.audio is None else args.audio, args.video, size, bar)
+                        result.out_dir / f"{AUDIO_STEM}.m4a" if args.audio is None else args.audio, args.video, size, bar)
     finally:
         bar.close()
     for note in result.notes:
