@@ -81,7 +81,8 @@ def probe(path: str | Path) -> Clip:
         raise VideoError(f"{file}: not a readable video ({_ffmpeg_reason(done.stderr)}); {EXPECTED}")
     if container not in FORMATS:
         raise VideoError(f"{file}: a {container} file is not supported; {EXPECTED}")
-    video = next((line for line in header if _VIDEO.search(line)), None)
+    # a picture attached to a recording (an M4A's or MP3's cover) is no video
+    video = next((line for line in header if _VIDEO.search(line) and "attached pic" not in line), None)
     if video is None:
         raise VideoError(f"{file}: the file holds no pictures (no video stream); {EXPECTED}")
     width, height = (int(v) for v in _VIDEO.search(video).groups())  # type: ignore[union-attr]
