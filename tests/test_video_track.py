@@ -71,3 +71,18 @@ def test_a_video_without_a_face_is_refused(tmp_path):
                            "-t", "1", "-c:v", "libx264", "-preset", "ultrafast"))
     with pytest.raises(VideoError, match="face was found in 0 of 10 frames"):
         track(clip)
+
+
+def test_a_face_hidden_for_a_while_is_held_then_eased_back(tmp_path):
+    hidden = make_clip(tmp_path / "hidden.mp4", "-i", str(GRID), "-vf",
+                       "drawbox=x=0:y=0:w=iw:h=ih:color=gray:t=fill:enable='between(t,1,2.2)'",
+                       "-c:v", "libx264", "-preset", "ultrafast")
+    tracking = track(probe(hidden))
+    times = np.arange(len(tracking.found)) / tracking.fps
+    lost = ~tracking.found
+    assert lost[(times > 1.05) & (times < 2.15)].all() and tracking.found[times < 0.95].all()
+    first = int(np.argmax(lost))
+    held = tracking.measures[first:first + int(HOLD * tracking.fps)]
+    assert np.allclose(held, tracking.measures[first - 1])
+    eased = first + int((HOLD + EASE) * tracking.fps) + 1
+    assert np.allclose(tracking.measures[eased:eased + 3], np.median(tracking.measures[tracking.found], axis=0))
