@@ -8,10 +8,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cartoonface.data import SAMPLE_FACES
+from cartoonface.face.model import load_face
+from cartoonface.face.state import MAX_ANGLE, FaceState
 from cartoonface.video.clip import VideoError, probe
+from cartoonface.video.drive import drive
 from cartoonface.video.track import EASE, HOLD, MEASURES, fill_lost, track
 from tests.test_video_clip import GRID, make_clip
 
+FACE = SAMPLE_FACES / "female.json"
 LABELS = Path(__file__).resolve().parent.parent / "bench" / "video_blinks.csv"
 
 
@@ -86,3 +91,18 @@ def test_a_face_hidden_for_a_while_is_held_then_eased_back(tmp_path):
     assert np.allclose(held, tracking.measures[first - 1])
     eased = first + int((HOLD + EASE) * tracking.fps) + 1
     assert np.allclose(tracking.measures[eased:eased + 3], np.median(tracking.measures[tracking.found], axis=0))
+
+
+def test_a_rolling_head_rolls_the_cartoon_within_the_range(tmp_path):
+    # the picture turned clockwise by up to 0.35 rad (20 degrees): the head's top to the image right
+    rolled = make_clip(tmp_path / "roll.mp4", "-i", str(GRID), "-vf", "rotate=0.35*sin(2*PI*t/1.5):fillcolor=gray",
+                       "-c:v", "libx264", "-preset", "ultrafast")
+    tracking = track(probe(rolled))
+    times = np.arange(len(tracking.found)) / tracking.fps
+    truth = -np.degrees(0.35 * np.sin(2 * np.pi * times / 1.5))  # Pose: + is the top to the image left
+    states = drive(tracking, (FaceState(),) * len(times), round(tracking.fps), load_face(FACE))
+    roll = np.array([s.pose.roll for s in states])
+    inside = np.abs(truth) < MAX_ANGLE - 3
+    assert np.corrcoef(truth[inside], roll[inside])[0, 1] > 0.98
+    assert np.median(np.abs(roll[inside] - truth[inside])) < 1.5
+    assert np.abs(roll).max() == MAX_ANGLE
