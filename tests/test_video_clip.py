@@ -102,3 +102,16 @@ def test_a_truncated_clip_yields_the_pictures_it_holds_or_a_clear_error(tmp_path
         assert str(cut) in str(exc)
     else:
         assert 0 < len(pictures) < 75
+
+
+def test_a_phone_clip_turned_by_its_display_matrix_is_decoded_as_shown(tmp_path):
+    plain = make_clip(tmp_path / "plain.mp4", "-i", str(GRID), "-c:v", "libx264", "-preset", "ultrafast")
+    turned = make_clip(tmp_path / "turned.mp4", "-display_rotation", "90", "-i", str(plain), "-c", "copy")
+    clip = probe(turned)
+    assert (clip.width, clip.height) == (288, 360)
+    picture = next(frames(clip))
+    assert picture.shape == (360, 288, 3)
+    # the picture is the plain one turned a quarter (ffmpeg's display matrix: counter-clockwise)
+    first = next(frames(probe(plain))).astype(float)
+    error = min(np.abs(np.rot90(first, k).astype(float) - picture).mean() for k in (1, 3))
+    assert error < 12
