@@ -19,9 +19,12 @@ Figures, per clip and over the clips:
   `turned`). Error per frame: estimate on the warped clip minus the
   same estimator on the unwarped clip minus the synthetic angle (the speaker's own
   motion cancels), on the moved axis and on the other two (cross-talk);
-- speed: frames per second of CPU time (time.process_time) for the mesh (network and
-  mesh_pose) and for the cylinder tracker alone (it runs on top of the mesh in the
+- speed: frames per second of CPU time (time.process_time, all threads) and of wall
+  time for the mesh (network and mesh_pose) and for the cylinder tracker alone (it runs on top of the mesh in the
   driving code), at 360 x 288 and scaled to 900 x 720.
+
+`python bench/video_pose.py OUT.png` draws docs/video.md's picture; `python
+bench/video_pose.py --clip OUT.mp4` writes a clip with larger head movement (write_clip).
 
 The known-motion figures were tuned on s1_bbaf2n (the tuning half) and are reported
 on the other two clips (held out); agreement and jitter on all three.
@@ -33,6 +36,7 @@ import functools
 import math
 import re
 import subprocess
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -55,6 +59,8 @@ LARGE = (900, 720)
 # The face oval's points at the ears (image left, image right): the head turns about
 # their depth.
 EARS = (234, 454)
+# (CPU, wall) seconds.
+Seconds = tuple[float, float]
 
 
 def decode(path: Path, size: tuple[int, int] | None = None) -> np.ndarray:
@@ -91,24 +97,25 @@ class VideoMesh:
         self._mesh.close()
 
 
-def mesh_run(frames: np.ndarray) -> tuple[np.ndarray, list[np.ndarray | None], float]:
+def mesh_run(frames: np.ndarray) -> tuple[np.ndarray, list[np.ndarray | None], Seconds]:
     """Mesh pose per frame (n, 3) (a frame without a face holds the last), the meshes and
-    the CPU seconds taken."""
+    the (CPU, wall) seconds taken."""
     mesh = VideoMesh()
-    started = time.process_time()
+    started = time.process_time(), time.perf_counter()
     meshes = [mesh.points(frame) for frame in frames]
     poses, last = [], (0.0, 0.0, 0.0)
     for points in meshes:
         last = last if points is None else mesh_pose(points)
         poses.append(last)
-    seconds = time.process_time() - started
+    seconds = time.process_time() - started[0], time.perf_counter() - started[1]
     mesh.close()
     return np.array(poses), meshes, seconds
 
 
-def cylinder_run(frames: np.ndarray, meshes: list[np.ndarray | None]) -> tuple[np.ndarray, float]:
+def cylinder_run(frames: np.ndarray, meshes: list[np.ndarray | None]) -> tuple[np.ndarray, Seconds]:
     """Cylinder pose per frame (n, 3) from the first frame's mesh (re-initialised from the
-    frame's mesh when lost) and the CPU seconds the tracker took (the meshes are given)."""
+    frame's mesh when lost) and the (CPU, wall) seconds the tracker took (the meshes are
+    given)."""
     import cv2
 
     first = next(i for i, points in enumerate(meshes) if points is not None)
@@ -118,10 +125,10 @@ def cylinder_run(frames: np.ndarray, meshes: list[np.ndarray | None]) -> tuple[n
         points = meshes[first + index]
         return None if points is None else mesh_start(points)
 
-    started = time.process_time()
+    started = time.process_time(), time.perf_counter()
     start = mesh_start(meshes[first])  # type: ignore[arg-type]
     poses = track_cylinder(grays, start, relocate)
-    seconds = time.process_time() - started
+    seconds = time.process_time() - started[0], time.perf_counter() - started[1]
     return np.concatenate([np.repeat(poses[:1], first, axis=0), poses]), seconds
 
 
@@ -214,6 +221,11 @@ def synthetic(frames: np.ndarray, meshes: list[np.ndarray | None], axis: int) ->
     return warped, angles
 
 
+def rate(frames: int, seconds: Seconds) -> str:
+    """'cpu / wall' frames per second."""
+    return f"{frames / seconds[0]:.0f} / {frames / seconds[1]:.0f}"
+
+
 def jitter(poses: np.ndarray) -> np.ndarray:
     """(3,) median |frame-to-frame change| per axis, degrees."""
     return np.median(np.abs(np.diff(poses, axis=0)), axis=0)
@@ -233,7 +245,7 @@ def still_clip(frame: np.ndarray) -> np.ndarray:
     return np.clip(noisy, 0, 255).astype(np.uint8)
 
 
-def _both(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+def _both(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray, Seconds, Seconds]:
     mesh, meshes, mesh_seconds = mesh_run(frames)
     cylinder, cylinder_seconds = cylinder_run(frames, meshes)
     return mesh, cylinder, mesh_seconds, cylinder_seconds
@@ -251,7 +263,7 @@ def main(report: Callable[[str], None] = print) -> None:
         mesh, cylinder, mesh_seconds, cylinder_seconds = _both(frames)
         agree.append(cylinder - mesh)
         whole.append((jitter(mesh), jitter(cylinder)))
-        rates.append((len(frames) / mesh_seconds, len(frames) / cylinder_seconds))
+        rates.append((len(frames) / np.array(mesh_seconds), len(frames) / np.array(cylinder_seconds)))
         report(f"{clip.stem}: {len(frames)} frames; |cylinder - mesh| median / p90: {spread(cylinder - mesh)}")
         report(f"  jitter (median step) mesh {np.round(jitter(mesh), 2)}  cylinder {np.round(jitter(cylinder), 2)}")
         s_mesh, s_cylinder, _, _ = _both(still_clip(frames[0]))
@@ -269,8 +281,8 @@ def main(report: Callable[[str], None] = print) -> None:
                 report(f"  {half} {AXES[axis]} +-{AMPLITUDE:g}: {name:8s} error median / p90: {spread(error)}")
         large = decode(clip, LARGE)
         _, _, l_mesh, l_cylinder = _both(large)
-        report(f"  speed {LARGE[0]}x{LARGE[1]}: mesh {len(large) / l_mesh:.0f} fps, "
-               f"cylinder {len(large) / l_cylinder:.0f} fps (CPU time)")
+        report(f"  speed {LARGE[0]}x{LARGE[1]} fps (CPU, wall): mesh {rate(len(large), l_mesh)}, "
+               f"cylinder {rate(len(large), l_cylinder)}")
     report("== over the clips")
     report(f"agreement |cylinder - mesh| median / p90: {spread(np.concatenate(agree))}")
     report(f"jitter whole clips (median of clips): mesh {np.round(np.median([m for m, _ in whole], axis=0), 2)}"
@@ -279,9 +291,98 @@ def main(report: Callable[[str], None] = print) -> None:
            f"  cylinder {np.round(np.median([c for _, c in still], axis=0), 3)}")
     for (name, axis), errors in sorted(known.items()):
         report(f"held-out {AXES[axis]} +-{AMPLITUDE:g}: {name:8s} error median / p90: {spread(np.concatenate(errors))}")
-    report(f"speed 360x288 (median of clips, CPU time): mesh {np.median([m for m, _ in rates]):.0f} fps, "
-           f"cylinder {np.median([c for _, c in rates]):.0f} fps")
+    report("speed 360x288 fps (CPU, wall; median of clips): "
+           f"mesh {np.round(np.median([m for m, _ in rates], axis=0))}, "
+           f"cylinder {np.round(np.median([c for _, c in rates], axis=0))}")
+
+
+def figure(path: Path, clip: str = "s1_lbak3a") -> None:
+    """Write docs/video.md's picture to `path` (PNG, 256 colours): a held-out GRID clip
+    (CC BY 4.0) at the synthetic poses (top) and each estimator's response to the
+    synthetic motions against the truth (bottom)."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    frames = decode(GRID / f"{clip}.mpg")
+    mesh, meshes, _ = mesh_run(frames)
+    cylinder, _ = cylinder_run(frames, meshes)
+    fig = plt.figure(figsize=(12, 6.4))
+    picks = ((1, -AMPLITUDE), (1, AMPLITUDE), (0, -AMPLITUDE), (0, AMPLITUDE), (2, -AMPLITUDE), (2, AMPLITUDE))
+    points = meshes[0]
+    assert points is not None
+    x, y = points[:FACE_POINTS, :2].mean(axis=0)
+    for k, (axis, angle) in enumerate(picks):
+        shown = rolled(frames[0], (float(x), float(y)), angle) if axis == 2 else turned(frames[0], points, axis, angle)
+        ax = fig.add_subplot(2, 6, k + 1)
+        ax.imshow(shown[20:270, 40:320])
+        ax.set_title(f"{AXES[axis]} {angle:+g}", fontsize=9)
+        ax.axis("off")
+    for k, axis in enumerate((1, 0, 2)):
+        warped, truth = synthetic(frames, meshes, axis)
+        w_mesh, w_cylinder, _, _ = _both(warped)
+        ax = fig.add_subplot(2, 3, 4 + k)
+        ax.plot(truth, "k--", label="synthetic")
+        ax.plot(w_mesh[:, axis] - mesh[:, axis], label="mesh")
+        ax.plot(w_cylinder[:, axis] - cylinder[:, axis], label="cylinder")
+        ax.set_title(f"{AXES[axis]}: response to the synthetic motion", fontsize=9)
+        ax.set_xlabel("frame (25 fps)", fontsize=8)
+        ax.set_ylabel("degrees", fontsize=8)
+        if k == 0:
+            ax.legend(fontsize=8)
+    fig.suptitle(f"GRID {clip} (CC BY 4.0), held out: synthetic poses and the estimators' response", fontsize=10)
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=72)
+    Image.open(buffer).convert("RGB").quantize(256).save(path, optimize=True)
+
+
+def write_clip(path: Path) -> None:
+    """Write a clip with larger head movement (CC BY 4.0, from GRID) to `path` (MP4,
+    H.264 + AAC) and its known motion to `path` with suffix .csv: the three GRID clips
+    joined, each warped by one synthetic sine of AMPLITUDE over its whole length (turn,
+    tilt, roll in clip order), with their own sound. Columns: frame, then the synthetic
+    tilt, turn, roll in degrees (Pose's signs), added to the speaker's own pose."""
+    clips = sorted(GRID.glob("*.mpg"))
+    parts, truth = [], []
+    for clip, axis in zip(clips, (1, 0, 2)):
+        frames = decode(clip)
+        _, meshes, _ = mesh_run(frames)
+        count = len(frames)
+        angles = AMPLITUDE * np.sin(2 * math.pi * np.arange(count) / count)
+        warped = frames.copy()
+        for i, (points, angle) in enumerate(zip(meshes, angles)):
+            if points is None:
+                continue
+            x, y = points[:FACE_POINTS, :2].mean(axis=0)
+            warped[i] = (rolled(frames[i], (float(x), float(y)), float(angle)) if axis == 2
+                         else turned(frames[i], points, axis, float(angle)))
+        parts.append(warped)
+        rows = np.zeros((count, 3))
+        rows[:, axis] = angles
+        truth.append(rows)
+    video = np.concatenate(parts)
+    height, width = video.shape[1:3]
+    sounds = [str(clip.with_suffix(".wav")) for clip in clips]
+    inputs = [arg for sound in sounds for arg in ("-i", sound)]
+    joined = "".join(f"[{k + 1}:a]" for k in range(len(sounds))) + f"concat=n={len(sounds)}:v=0:a=1[a]"
+    subprocess.run([ffmpeg_exe(), "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
+                    "-s", f"{width}x{height}", "-r", "25", "-i", "-", *inputs, "-filter_complex", joined,
+                    "-map", "0:v", "-map", "[a]", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "20",
+                    "-c:a", "aac", "-shortest", str(path)], input=video.tobytes(), check=True)
+    table = np.column_stack([np.arange(len(video)), np.concatenate(truth)])
+    np.savetxt(path.with_suffix(".csv"), table, fmt=["%d", "%.3f", "%.3f", "%.3f"], delimiter=",",
+               header="frame,tilt,turn,roll", comments="")
 
 
 if __name__ == "__main__":
-    main()
+    if len(sys.argv) > 2 and sys.argv[1] == "--clip":
+        write_clip(Path(sys.argv[2]))
+    elif len(sys.argv) > 1:
+        figure(Path(sys.argv[1]))
+    else:
+        main()

@@ -8,6 +8,12 @@ the median tilt is 1-1.3 degrees). Angles are in the project's Pose convention
 (face/state.py, face/pose.py rotation_matrix: Rz(roll) Rx(tilt) Ry(turn) in a frame
 x right, y up, z towards the viewer): tilt + looks down, turn + moves the nose to the
 image right, roll + moves the top of the head to the image left.
+
+track_cylinder is seed 003's section 2: a cylindrical head model started from the mesh
+(mesh_start), its surface points tracked frame to frame with pyramidal Lucas-Kanade and
+its rigid motion fitted to them, with template update, re-registration to the first
+frame against drift and re-initialisation when lost. docs/video.md ("Head pose")
+compares the two (bench/video_pose.py); the driving code uses mesh_pose.
 """
 
 from __future__ import annotations
