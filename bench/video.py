@@ -16,6 +16,9 @@ On the three GRID clips of ../shared/bench/av/grid/ (speaker 1, 360 x 288 at 25 
   best cross-correlation), beside a causal filter of the same cut-off, and how much jitter is left
   (RMS of the second difference, smoothed over raw) on the turn and the mouth opening.
 
+- larger head movement: bench/video_pose.py's clip (the GRID clips warped by +-15 degree sines of
+  turn, tilt and roll, with their known angles): the cartoon's pose against them.
+
 `python -m bench video`; `python -m bench.video sheet OUT.png` draws the contact sheet of
 docs/video.md (video frames above the cartoon's frames at the same times).
 """
@@ -41,7 +44,8 @@ from cartoonface.face.model import load_face
 from cartoonface.pipeline import Options, generate
 from cartoonface.speech.audio import ffmpeg_exe
 from cartoonface.video.clip import Clip, extract_audio, frames, probe
-from cartoonface.video.drive import (MOUTH_CUTOFF, SLOW_CUTOFF, VIDEO_SHAPES, blink_amounts, low_pass,
+from cartoonface.face.state import FaceState
+from cartoonface.video.drive import (MOUTH_CUTOFF, SLOW_CUTOFF, VIDEO_SHAPES, blink_amounts, drive, low_pass,
                                      shape_measures, video_mouths)
 from cartoonface.video.track import Tracking, track
 
@@ -182,6 +186,30 @@ def smoothing(tracking: Tracking) -> None:
               f"jitter left {jitter[2] / jitter[0]:.0%}")
 
 
+def large_motion() -> None:
+    """Print how the cartoon's pose follows bench/video_pose.py's clip with larger head movement (the
+    GRID clips warped by +-15 degree sines of turn, then tilt, then roll): per moved axis, the
+    correlation and the median / 90th percentile error of drive's pose against the known angles."""
+    from bench.video_pose import write_clip
+
+    with tempfile.TemporaryDirectory(prefix="bench-video-") as tmp:
+        path = Path(tmp) / "large.mp4"
+        write_clip(path)
+        truth = np.loadtxt(path.with_suffix(".csv"), delimiter=",", skiprows=1)[:, 1:]
+        tracking = track(probe(path))
+    count = min(len(truth), len(tracking.found))
+    face = load_face(SAMPLE_FACES / "female.json")
+    states = drive(tracking, (FaceState(),) * count, round(tracking.fps), face)
+    got = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states])
+    part = count // 3
+    for k, (axis, name) in enumerate(((1, "turn"), (0, "tilt"), (2, "roll"))):
+        moved = slice(k * part, (k + 1) * part)
+        error = np.abs(got[moved, axis] - truth[moved, axis])
+        print(f"larger movement, {name} +-15: r = {np.corrcoef(got[moved, axis], truth[moved, axis])[0, 1]:.3f}, "
+              f"error median {np.median(error):.1f} / 90th percentile {np.percentile(error, 90):.1f} degrees "
+              f"(drawn {got[moved, axis].min():+.1f} .. {got[moved, axis].max():+.1f})")
+
+
 def sheet(out: Path, name: str = CLIPS[0]) -> None:
     """Write the contact sheet: frames of GRID `name` at SHEET_TIMES above the female sample's
     cartoon at the same times (made by generate --from-video), a 256-colour PNG."""
@@ -213,6 +241,7 @@ def main() -> None:
     """Print every figure."""
     speed()
     accuracy()
+    large_motion()
 
 
 if __name__ == "__main__":
