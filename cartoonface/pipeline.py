@@ -19,6 +19,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+import soundfile
+
 from cartoonface.animate.actions import actions_to_json, load_actions
 from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedule, silences_of, speech_pauses, speech_spans
 from cartoonface.animate.body import body_motion
@@ -41,9 +44,12 @@ from cartoonface.speech.audio_only import transcribed
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.english import LANGUAGES
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import load_audio, page_copy
+from cartoonface.speech.audio import Audio, load_audio, page_copy
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
+from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
+from cartoonface.video.drive import drive
+from cartoonface.video.track import track
 
 # Share of the whole job done when each stage starts (measured on a 4-minute recording, the
 # sample story ten times: drawing the SVG takes 80 % of the time; docs/web.md, "Progress").
@@ -52,6 +58,13 @@ STAGES = (("decode", 0.0), ("segment", 0.01), ("align", 0.07), ("schedule", 0.14
 # An edited TextGrid may end this much after the audio (Praat rounds its times).
 ALIGNMENT_SLACK = 0.05  # seconds
 MAX_TITLE = 200  # characters
+# Driven by a video: the scheduled actions kept (the video moves the head, eyes, brows and mouth).
+VIDEO_KEEPS = ("emotion", "breath")
+# Share of a video job spent decoding the clip and tracking the face (bench/video.py: about 1 of the 2.5
+# CPU seconds of the joined GRID clips).
+TRACK_SHARE = 0.4
+SILENT_RATE = 16000  # Hz of the silence a clip without sound gets as the page's clock
+SILENT_NOTE = "the video has no sound: the page is silent and its mouth follows the video alone"
 
 
 @dataclass(frozen=True)
@@ -157,13 +170,36 @@ def check_out_dir(out_dir: Path) -> None:
         raise OptionError(f"{out_dir}: cannot write the output folder ({ancestor} is not a writable folder)")
 
 
+def video_input(video: Path, text: str | None) -> Clip:
+    """The probed clip at `video` (VideoError when unusable); VideoError when a transcript
+    (`text`) is given for a clip without sound."""
+    clip = probe(video)
+    if not clip.has_audio and text is not None:
+        raise VideoError(f"{video}: the clip has no sound track to align the transcript with; "
+                         "expected a video with the speech, or no transcript")
+    return clip
+
+
+def clip_sound(clip: Clip, staging: Path) -> tuple[Path, Audio]:
+    """(WAV path in `staging`, decoded Audio) of the clip's sound; for a clip without sound,
+    silence as long as the clip (SILENT_RATE), which the page plays as its clock."""
+    wav = staging / "clip-sound.wav"
+    if clip.has_audio:
+        extract_audio(clip, wav)
+        return wav, load_audio(wav)
+    samples = np.zeros(round(clip.duration * SILENT_RATE), dtype=np.float32)
+    soundfile.write(wav, samples, SILENT_RATE, subtype="PCM_16")
+    return wav, Audio(samples=samples, rate=SILENT_RATE, source=str(clip.path))
+
+
 def generate(
     face: Path | FaceModel,
-    audio: Path,
+    audio: Path | None,
     transcript: Path | str | None,
     out_dir: Path,
     options: Options = Options(),
     progress: Callable[[str, float], None] | None = None,
+    video: Path | None = None,
 ) -> Result:
     """Make the page folder `out_dir` from a face model, a recording and its transcript.
 
@@ -174,10 +210,17 @@ def generate(
     STAGES starts (and as segmentation and alignment go on) with the fraction
     0..1 of the whole job, and once more at ("pages", 1.0). Raises InputError (a
     subclass) for any bad input; then nothing is left at `out_dir`.
+
+    `video`: a clip of a talking person (video/clip.py) instead of `audio` (then None): its
+    sound is the recording, and the head, eyes, brows and mouth follow the face in it
+    (video/track.py, video/drive.py; tracked during the "decode" stage); a clip without sound
+    makes a silent page (said in the notes).
     """
     started = time.perf_counter()
     names = [name for name, _ in STAGES]
     bounds = [share for _, share in STAGES] + [1.0]
+    if video is not None:  # tracking the face is part of "decode": the other stages share the rest
+        bounds = [0.0] + [TRACK_SHARE + (1 - TRACK_SHARE) * share for share in bounds[1:]]
 
     def report(stage: str, within: float = 0.0) -> None:
         """Tell `progress` that `stage` is `within` (0..1) done."""
@@ -193,14 +236,24 @@ def generate(
             else read_user_text(transcript, TranscriptError, "transcript file"))
     source = "transcript" if transcript is None or isinstance(transcript, str) else str(transcript)
     marks = () if text is None else emotion_marks(text, source)
+    clip = None if video is None else video_input(video, text)
     report("decode")
-    recording = load_audio(audio)
     # the page's compressed audio is made by ffmpeg on the other core while the animation is drawn
     # (the pool is left, waiting for ffmpeg, before its folder is removed)
     with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool:
-        compressed = pool.submit(page_copy, audio, staging, AUDIO_STEM)
+        tracking = None
+        if clip is not None:
+            tracking = track(clip, lambda done: report("decode", done))
+            sound, recording = clip_sound(clip, Path(staging))
+        elif audio is not None:
+            sound, recording = audio, load_audio(audio)
+        else:
+            raise OptionError("no recording: expected an audio file or a video")
+        compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
         duration = recording.duration
-        if options.alignment is not None:
+        if clip is not None and not clip.has_audio:
+            alignment = Alignment((), duration, (SILENT_NOTE,))
+        elif options.alignment is not None:
             report("segment")
             report("align")
             alignment = edited_alignment(options.alignment, duration)
@@ -212,18 +265,25 @@ def generate(
         if options.actions is not None:
             actions = load_actions(options.actions, duration)
         else:
-            actions = schedule(duration, speech_pauses(alignment), options.seed, style=style,
-                               peaks=pitch_peaks(recording, alignment), speech=speech_spans(alignment),
-                               breath_pauses=silences_of(alignment))
+            actions = () if not alignment.sentences else schedule(  # a silent clip: nothing to schedule by
+                duration, speech_pauses(alignment), options.seed, style=style, peaks=pitch_peaks(recording, alignment),
+                speech=speech_spans(alignment), breath_pauses=silences_of(alignment))
             spans = marked_spans(alignment, marks)
             if spans is None:
                 alignment = dataclasses.replace(alignment, notes=alignment.notes + (
                     "the transcript's emotion marks were not used: the alignment holds other syllables",))
             default = None if options.emotion is None else (options.emotion, options.intensity)
             actions += emotion_actions(spans or (), duration, default)
+        if tracking is not None:  # the video moves the head, eyes, brows and mouth: only moods and breaths stay
+            actions = tuple(action for action in actions if action.kind in VIDEO_KEEPS)
         report("frames")
         timeline = build_timeline(alignment, actions)
-        states = on_twos(with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak))
+        if tracking is not None:
+            states = drive(tracking, sample_frames(timeline, options.fps), options.fps, model,
+                           combine=transcribed(alignment))
+        else:
+            states = with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak)
+        states = on_twos(states)
         body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
@@ -232,7 +292,7 @@ def generate(
         report("pages")
         try:
             with atomic_directory(target) as folder:
-                sources = copy_audio(audio, folder, keep_original=options.keep_original,
+                sources = copy_audio(sound, folder, keep_original=options.keep_original,
                                      compressed=compressed.result())
                 captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
                 html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,

@@ -19,7 +19,7 @@ from cartoonface.errors import OptionError
 if TYPE_CHECKING:
     from cartoonface.pipeline import Result
 
-HELP = "make the talking-face pages from a face, a recording and its transcript"
+HELP = "make the talking-face pages from a face, a recording (or a video) and its transcript"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -37,8 +37,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Make a folder with index.html (audio book or virtual announcer), animation.svg, the "
                     "audio, alignment.TextGrid and actions.json. Open index.html in a browser (docs/output.md).")
     parser.add_argument("--face", type=Path, required=True, metavar="FACE.json", help="face model (docs/face-model.md)")
-    parser.add_argument("--audio", type=Path, required=True, metavar="SPEECH",
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--audio", type=Path, metavar="SPEECH",
                         help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
+    source.add_argument("--from-video", type=Path, metavar="CLIP",
+                        help="instead of --audio: a video of a person talking (MP4, WebM, MOV or MPEG-1, at most "
+                             "10 minutes); the cartoon moves its head, eyes, brows and mouth as the person does and "
+                             "the page plays the clip's sound (docs/video.md)")
     parser.add_argument("--transcript", type=Path, metavar="TEXT.txt",
                         help="what is said, UTF-8 text; without it the lip sync comes from the audio alone "
                              "and the page shows no text")
@@ -109,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
     """Generate the folder; print the summary and any notes. Returns 0."""
     from cartoonface.exports.video import parse_size, write_video
     from cartoonface.pipeline import Options, generate
+    from cartoonface.render.pages import AUDIO_STEM
 
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
@@ -121,10 +127,10 @@ def run(args: argparse.Namespace) -> int:
         check_video_path(args.video)
     bar = ProgressBar(sys.stderr)
     try:
-        result = generate(args.face, args.audio, args.transcript, args.output, options, bar)
+        result = generate(args.face, args.audio, args.transcript, args.output, options, bar, video=args.from_video)
         if args.video is not None:
-            write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration, args.audio,
-                        args.video, size, bar)
+            write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration,
+                        result.out_dir / f"{AUDIO_STEM}.m4a" if args.audio is None else args.audio, args.video, size, bar)
     finally:
         bar.close()
     for note in result.notes:

@@ -30,6 +30,7 @@ from cartoonface.photo.model_from_photo import face_from_photo, load_photo
 from cartoonface.animate.actions import load_actions
 from cartoonface.pipeline import MAX_TITLE, edited_alignment
 from cartoonface.speech.audio import load_audio
+from cartoonface.video.clip import VideoError, probe
 from cartoonface.speech.transcript import emotion_marks, parse_transcript
 
 PAGES = {"audiobook": "Audio book", "announcer": "Virtual announcer"}
@@ -96,6 +97,12 @@ class Submission:
     files: Mapping[str, bytes]
 
 
+# Containers that may hold a video (sniffed extension), and the job's file extension of each
+# video/clip.py format.
+VIDEO_CONTAINERS = ("m4a", "webm", "mpg")
+VIDEO_EXTENSIONS = {"MP4/MOV": "mp4", "WebM": "webm", "MPEG-1": "mpg"}
+
+
 def megabytes(size: int) -> str:
     """A byte count in MB (2**20 bytes) for messages: '200', '0.5'."""
     return f"{size / 2**20:.3g}"
@@ -115,6 +122,26 @@ def sniff_audio(head: bytes) -> str | None:
     if len(head) >= 12 and head[4:8] == b"ftyp":
         return "m4a"
     return None
+
+
+def sniff_video(head: bytes) -> str | None:
+    """The video container the first bytes of a file announce that sniff_audio does not: "webm"
+    (Matroska's EBML header) or "mpg" (an MPEG program stream's pack or sequence header), else None.
+    (MP4 and MOV start as M4A does, "ftyp": check_audio tells them apart by their streams.)"""
+    if head[:4] == b"\x1a\x45\xdf\xa3":
+        return "webm"
+    if head[:4] in (b"\x00\x00\x01\xba", b"\x00\x00\x01\xb3"):
+        return "mpg"
+    return None
+
+
+def has_pictures(path: Path) -> bool:
+    """Whether the file at `path` (an ftyp file: MP4, MOV or M4A) holds a video stream."""
+    try:
+        probe(path)
+    except VideoError as exc:
+        return "no pictures" not in str(exc)  # other problems: reported when it is read as a video
+    return True
 
 
 def sniff_image(head: bytes) -> str | None:
@@ -237,15 +264,19 @@ def check_audio(files: MultiDict[str, FileStorage], limits: Limits,
     if too_big:
         errors["audio"] = f"{name}: the recording is larger than {megabytes(limits.upload_bytes)} MB."
         return None, "", name, 0.0
-    ext = sniff_audio(data[:16])
+    ext = sniff_audio(data[:16]) or sniff_video(data[:16])
     if ext is None:
         errors["audio"] = (f"{name}: not a recording this app reads (by its content); "
-                           "expected WAV, MP3, OGG, M4A or FLAC.")
+                           "expected WAV, MP3, OGG, M4A or FLAC, or a video (MP4, MOV, WebM or MPEG-1).")
         return None, "", name, 0.0
     with tempfile.TemporaryDirectory(prefix="cartoonface-upload-") as tmp:
         path = Path(tmp) / f"recording.{ext}"
         path.write_bytes(data)
         try:
+            if ext in VIDEO_CONTAINERS:  # an MP4 may hold only sound (M4A): then it is a recording
+                clip = probe(path) if ext != "m4a" or has_pictures(path) else None
+                if clip is not None:
+                    return data, VIDEO_EXTENSIONS[clip.format], name, clip.duration
             audio = load_audio(path)
         except InputError as exc:
             errors["audio"] = str(exc).replace(str(path), name)
@@ -375,6 +406,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "face_notes": list(face_notes),
         "audio_label": audio_label,
         "audio_file": f"audio.{ext}",
+        "video": ext in VIDEO_EXTENSIONS.values(),  # a video of the speaker (pipeline.generate's video=)
         "duration": duration,
         "transcript_chars": len(transcript),
     }

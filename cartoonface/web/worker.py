@@ -147,8 +147,10 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
                       actions=folder / str(spec["actions_file"]) if spec.get("actions_file") else None)
     transcript = folder / "transcript.txt"  # absent when the form's transcript was left empty
     try:
-        result = generate(folder / "face.json", folder / str(spec["audio_file"]),
-                          transcript if transcript.is_file() else None, folder / SITE, options, progress)
+        given = folder / str(spec["audio_file"])  # a recording, or a video of the speaker
+        result = generate(folder / "face.json", None if spec.get("video") else given,
+                          transcript if transcript.is_file() else None, folder / SITE, options, progress,
+                          video=given if spec.get("video") else None)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
