@@ -63,9 +63,9 @@ from cartoonface.render.elements import DECIMALS, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
-from cartoonface.render.svg import face_defs, face_group
+from cartoonface.render.svg import face_defs, face_parts
 
-# The track of each part of render/svg.py's face_group (by its class), in drawing order.
+# The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
 # The mouth and the jaw's shadow on the neck move with the jaw, so they share the track of the
 # face outline; the mouth is then drawn before the nose, brows and eyes rather than after them,
@@ -150,10 +150,9 @@ def runs(keys: Sequence[int]) -> tuple[Run, ...]:
     return tuple(merged)
 
 
-def track_of(part: etree._Element) -> str:
-    """The track a top-level part of a face group belongs to (TRACK_OF by its class)."""
-    name = (part.get("class") or "").split()
-    return TRACK_OF.get(name[0], name[0]) if name else "face"
+def track_of(name: str) -> str:
+    """The track a part of render/svg.py's face_parts belongs to (TRACK_OF by its name)."""
+    return TRACK_OF.get(name, name)
 
 
 @dataclass
@@ -362,7 +361,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
             key = (unrolled(state), tuple(np.round(posed.pupils, 1).ravel().tolist()))
             parts = drawn.get(key)
             if parts is None:
-                parts = drawn[key] = writer.collect(face_group(face, posed, UID))
+                parts = drawn[key] = writer.collect(face_parts(face, posed, UID))
             by_state[state] = parts
         frames.append((state, parts))
     mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied))

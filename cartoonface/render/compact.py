@@ -1,6 +1,6 @@
 """The SVG compactor of render/animation.py: many drawings of one face written small.
 
-`Writer` takes every state's drawing (a `<g>` of parts, render/svg.py's face_group),
+`Writer` takes every state's drawing (the texts of its parts, render/svg.py's face_parts),
 keeps each distinct part once, and tidies it: path data in whole pixels as relative
 commands (render/pathdata.py), groups that only pass on style dissolved into their
 children, positions rounded, every other presentation attribute moved to a CSS class
@@ -15,16 +15,16 @@ from __future__ import annotations
 import html
 import re
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from lxml import etree
 
-from cartoonface.render.elements import SVG, element
+from cartoonface.render.elements import SVG, Part, element, parse_elements
 from cartoonface.render.pathdata import compact_paths
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
-# face_group) go with the part, renamed so each distinct part drawing has its own.
+# face_parts) go with the part, renamed so each distinct part drawing has its own.
 DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
                                                   "pattern", "filter", "marker", "symbol"))
 # Attributes that place an element (rounded to whole pixels, kept on it). Every other
@@ -39,47 +39,43 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_PATH_DATA = re.compile(rb' d="([^"]*)"')
+_PATH_DATA = re.compile(r' d="([^"]*)"')
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
 
 @dataclass(frozen=True)
 class RawPart:
-    """A part as face_group drew it (serialized: a drawing of every state would not fit in
+    """A part as face_parts drew it (text: a drawing of every state would not fit in
     memory as lxml trees), with the per-state definitions it references and the `label`
     the Writer's `label_of` gave it."""
 
     label: str
-    element: bytes
-    definitions: tuple[bytes, ...]
+    element: str
+    definitions: tuple[str, ...]
 
 
 class Writer:
     """Collects the drawn states, then writes the distinct part drawings compactly.
-    `label_of` names the group a top-level part belongs to (kept as RawPart.label)."""
+    `label_of` names the group a top-level part belongs to by the part's name (kept as RawPart.label)."""
 
-    def __init__(self, label_of: Callable[[etree._Element], str]) -> None:
+    def __init__(self, label_of: Callable[[str], str]) -> None:
         self.label_of = label_of
-        self.raw_ids: dict[bytes, int] = {}
+        self.raw_ids: dict[tuple[str, tuple[str, ...]], int] = {}
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
 
-    def collect(self, group: etree._Element) -> tuple[int, ...]:
-        """Take one face_group drawing; return the raw part numbers, in drawing order."""
-        definitions = {node.get("id"): node for node in group.iter(*DEFINITIONS) if node.get("id")}
+    def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
+        """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
+        in drawing order."""
         numbers = []
-        for part in group:
-            if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
-                continue
-            raw = etree.tostring(part)
-            used = tuple(etree.tostring(node) for name, node in definitions.items() if f"#{name})".encode() in raw)
-            key = raw + b"".join(used)
+        for part in parts:
+            key = (part.text, part.clips)
             number = self.raw_ids.get(key)
             if number is None:
                 number = self.raw_ids[key] = len(self.raw)
-                self.raw.append(RawPart(self.label_of(part), raw, used))
+                self.raw.append(RawPart(self.label_of(part.name), part.text, part.clips))
             numbers.append(number)
         return tuple(numbers)
 
@@ -125,8 +121,7 @@ class Writer:
     def _tidy_part(self, part: RawPart, compact: dict[str, str]) -> list[etree._Element]:
         """The part with compact paths, groups that only pass on style dissolved, style as
         classes: its definitions (ids "c0", "c1", ...), then its elements in drawing order."""
-        drawn = etree.fromstring(part.element)
-        definitions = [etree.fromstring(raw) for raw in part.definitions]
+        drawn, *definitions = parse_elements((part.element, *part.definitions))
         tops = (drawn, *definitions)
         paths = [node for top in tops for node in top.iter() if node.get("d")]
         for node in paths:
@@ -281,10 +276,9 @@ def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element
     return elements
 
 
-def _text(value: bytes) -> str:
-    """An attribute value as serialized by lxml, back to its text."""
-    text = value.decode()
-    return html.unescape(text) if "&" in text else text
+def _text(value: str) -> str:
+    """An attribute value as written in a part's text, back to its value."""
+    return html.unescape(value) if "&" in value else value
 
 
 def _dissolve(top: etree._Element) -> list[etree._Element]:
