@@ -40,6 +40,13 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
 _PATH_DATA = re.compile(r' d="([^"]*)"')
+# Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
+# the attributes it takes out (path data and positions), a path data's token, and the
+# placeholder positions (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
+_VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS))})="([^"]*)"')
+_TOKEN = re.compile(r'="@(\d+)@"')
+SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions
+_FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
@@ -89,18 +96,22 @@ class Writer:
         compact = compact_paths(_text(d) for part in self.raw
                                 for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
-        tidy_ids: dict[bytes, int] = {}
+        templates: dict[str, str] = {}
+        tidy_ids: dict[str, int] = {}
         tidy: list[list[etree._Element]] = []
         mapping = []
         for index, part in enumerate(self.raw):
             if progress is not None and index % PROGRESS_PARTS == 0:
                 progress(index / len(self.raw))
-            elements = self._tidy_part(part, compact)
-            key = b"".join(etree.tostring(node) for node in elements)
-            number = tidy_ids.get(key)
+            skeleton, values = _skeleton((part.element, *part.definitions), compact)
+            template = templates.get(skeleton)
+            if template is None:
+                template = templates[skeleton] = self._template(skeleton)
+            text = template.format(*values)
+            number = tidy_ids.get(text)
             if number is None:
-                number = tidy_ids[key] = len(tidy)
-                tidy.append(elements)
+                number = tidy_ids[text] = len(tidy)
+                tidy.append(parse_elements((text,)))
             mapping.append(number)
         self.definitions = _hoist(tidy)
         for number, elements in enumerate(tidy):
@@ -118,10 +129,23 @@ class Writer:
             node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
 
-    def _tidy_part(self, part: RawPart, compact: dict[str, str]) -> list[etree._Element]:
-        """The part with compact paths, groups that only pass on style dissolved, style as
-        classes: its definitions (ids "c0", "c1", ...), then its elements in drawing order."""
-        drawn, *definitions = parse_elements((part.element, *part.definitions))
+    def _template(self, skeleton: str) -> str:
+        """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
+        positions SENTINEL + j) as a format string of its values (compact path data, then rounded
+        positions). Style classes are made here, so in the order the parts come."""
+        distinct = len(set(_TOKEN.findall(skeleton)))
+        elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
+        holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
+        holder.extend(elements)
+        text = etree.tostring(holder, encoding="unicode")
+        inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
+        return _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
+
+    def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
+        """The part drawn by `texts` (the part's element, then its definitions) with compact
+        paths, groups that only pass on style dissolved, style as classes: its definitions
+        (ids "c0", "c1", ...), then its elements in drawing order."""
+        drawn, *definitions = parse_elements(texts)
         tops = (drawn, *definitions)
         paths = [node for top in tops for node in top.iter() if node.get("d")]
         for node in paths:
@@ -170,6 +194,28 @@ class Writer:
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
+
+
+def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, list[str]]:
+    """A part's `texts` (its element, then its definitions) with the values that tidying only
+    passes on taken out: each path data as "@k@", k numbering its distinct compact forms
+    (`compact`, compact_paths') in order, so paths alike after compacting stay alike (an
+    outline and its clip path); each position (POSITIONS) as SENTINEL + j, j counting them.
+    Returns the text and the values: the distinct compact path data, then the positions
+    rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
+    distinct: dict[str, int] = {}
+    positions: list[str] = []
+
+    def field(match: re.Match[str]) -> str:
+        name, value = match.groups()
+        if name == "d":
+            number = distinct.setdefault(compact[_text(value)], len(distinct))
+            return f' d="@{number}@"'
+        positions.append(str(round(float(value))))
+        return f' {name}="{SENTINEL + len(positions) - 1}"'
+
+    text = _VALUE.sub(field, "".join(texts))
+    return text, [*distinct, *positions]
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
