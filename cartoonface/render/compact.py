@@ -96,9 +96,10 @@ class Writer:
         compact = compact_paths(_text(d) for part in self.raw
                                 for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
-        templates: dict[str, str] = {}
+        templates: dict[str, tuple[str, int]] = {}
         tidy_ids: dict[str, int] = {}
-        tidy: list[list[etree._Element]] = []
+        texts: list[str] = []
+        counts: list[int] = []
         mapping = []
         for index, part in enumerate(self.raw):
             if progress is not None and index % PROGRESS_PARTS == 0:
@@ -107,12 +108,17 @@ class Writer:
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
-            text = template.format(*values)
+            text = template[0].format(*values)
             number = tidy_ids.get(text)
             if number is None:
-                number = tidy_ids[text] = len(tidy)
-                tidy.append(parse_elements((text,)))
+                number = tidy_ids[text] = len(texts)
+                texts.append(text)
+                counts.append(template[1])
             mapping.append(number)
+        # one parse of all (5x faster than one per drawing); the elements stay in the parsed
+        # holder, which declares the namespace for all of them, until they go into the document
+        nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
+        tidy = [[next(nodes) for _ in range(count)] for count in counts]
         self.definitions = _hoist(tidy)
         for number, elements in enumerate(tidy):
             _own_ids(elements, short_id("k", number))
@@ -129,17 +135,18 @@ class Writer:
             node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
 
-    def _template(self, skeleton: str) -> str:
+    def _template(self, skeleton: str) -> tuple[str, int]:
         """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
         positions SENTINEL + j) as a format string of its values (compact path data, then rounded
-        positions). Style classes are made here, so in the order the parts come."""
+        positions), and its number of elements. Style classes are made here, so in the order the
+        parts come."""
         distinct = len(set(_TOKEN.findall(skeleton)))
         elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
         holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
         holder.extend(elements)
         text = etree.tostring(holder, encoding="unicode")
         inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
-        return _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
+        return _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner), len(elements)
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
