@@ -45,6 +45,7 @@ clock from the audio (static/cartoonface.js).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing
 import os
@@ -61,8 +62,8 @@ from lxml import etree
 from cartoonface.animate.body import BodyMotion
 from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
-from cartoonface.face.pose import pose_face, rig, unroll, unrolled
-from cartoonface.face.state import FaceState
+from cartoonface.face.pose import pose_face, rig, unroll
+from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Writer, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
@@ -317,8 +318,21 @@ def _body(dressed: etree._Element, body: BodyMotion, figure: Figure, fps: int) -
         _move([dressed[0]], keys, fps, "translate", text)
 
 
+DrawingKey = tuple[object, ...]  # _draw's key of a drawing: the fields of the state but its roll, the pupils
+
+
+_STATE_FIELDS = tuple(f.name for f in dataclasses.fields(FaceState) if f.name != "pose")
+_POSE_FIELDS = tuple(f.name for f in dataclasses.fields(Pose) if f.name != "roll")
+
+
+def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
+    """The fields of face/pose.py's unrolled(state) (the state without roll), as a tuple: equal
+    for equal unrolled states, without making (and checking) a FaceState per frame."""
+    return (*(getattr(state.pose, name) for name in _POSE_FIELDS), *(getattr(state, name) for name in _STATE_FIELDS))
+
+
 def _draw(face: FaceModel, states: Sequence[FaceState],
-          progress: Callable[[float], None] | None = None) -> list[tuple[tuple[FaceState, tuple[float, ...]], tuple[Part, ...]]]:
+          progress: Callable[[float], None] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
     """Draw each of `states` (render/svg.py's face_parts, uid UID): its key and its parts. The
     head's roll is not drawn (the layers turn): the face is posed with it and turned back by the
     roll as written (ROLL_DECIMALS; the two turns cancel exactly). The drawing depends on the
@@ -335,7 +349,7 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
             progress(index / len(states))
         roll = round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS
         posed = unroll(pose_face(lifted, state), roll, origin)
-        key = (unrolled(state), tuple(np.round(posed.pupils, 1).ravel().tolist()))
+        key = (*_unrolled_fields(state), *np.round(posed.pupils, 1).ravel().tolist())
         drawings.append((key, tuple(known.setdefault(part, part) for part in face_parts(face, posed, UID))))
     return drawings
 
@@ -349,7 +363,7 @@ def drawing_workers() -> int:
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
-              progress: Callable[[float], None]) -> list[tuple[tuple[FaceState, tuple[float, ...]], tuple[Part, ...]]]:
+              progress: Callable[[float], None]) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
     """_draw of `states`, in order; with `workers` 2 and at least POOL_STATES states the second
     half is drawn by a forked process meanwhile. When that process cannot be started or fails
     (no memory, no thread, a broken pool) its half is drawn here."""
@@ -408,7 +422,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     distinct = list(dict.fromkeys(states))
     drawings = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
     # states whose drawings have one key share the first one's drawing
-    drawn: dict[tuple[FaceState, tuple[float, ...]], tuple[int, ...]] = {}
+    drawn: dict[DrawingKey, tuple[int, ...]] = {}
     by_state = {state: drawn.get(key) or drawn.setdefault(key, writer.collect(parts))
                 for state, (key, parts) in zip(distinct, drawings, strict=True)}
     frames = [(state, by_state[state]) for state in states]
