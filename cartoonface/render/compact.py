@@ -8,6 +8,12 @@ children, positions rounded, every other presentation attribute moved to a CSS c
 as a `<use>` of it, per-state definitions (clip paths) renamed by content with short
 base-36 ids. `share` then puts a part shown in several drawings once into `<defs>` and
 shows it with `<use>`.
+
+Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
+part depends only on its skeleton, the text with its path data (numbered by their compact
+forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
+tidied as lxml elements and the others' values are filled into its text. The distinct tidy
+drawings are then parsed in one go.
 """
 
 from __future__ import annotations
