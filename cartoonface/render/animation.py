@@ -49,7 +49,6 @@ import dataclasses
 import math
 import multiprocessing
 import os
-import resource
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from concurrent.futures import ProcessPoolExecutor
@@ -355,9 +354,14 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
 
 
 def drawing_workers() -> int:
-    """How many processes animation_svg may draw with: 2 on a machine with two cores or more,
-    unless this process has a CPU-time limit (a web job's, web/worker.py: the limit counts per
-    process, so the job's work stays in it) or is a daemon (which may not start processes)."""
+    """How many processes animation_svg may draw with: 2 on a machine with two cores or more that
+    can fork, unless this process has a CPU-time limit (a web job's, web/worker.py: the limit
+    counts per process, so the job's work stays in it) or is a daemon (which may not start
+    processes)."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 1  # the pool forks (no pickling of the face and its caches)
+    import resource  # POSIX only, like fork
+
     limited = resource.getrlimit(resource.RLIMIT_CPU)[0] != resource.RLIM_INFINITY
     return 1 if limited or multiprocessing.current_process().daemon or (os.cpu_count() or 1) < 2 else 2
 
