@@ -6,8 +6,9 @@ another with 0.4 s of silence between them, repeated until 3 minutes are reached
 transcript is their Hanzi, one utterance a line ending in "。".
 
 Figures (issue 4, "Done means"):
-- wall time of `pipeline.generate` (median of RUNS, in-process; target < 6 s, >= 30x real time)
-  and the share of each stage;
+- wall time of `pipeline.generate` (median of RUNS, in-process; target < 6 s, >= 30x real time),
+  CPU time of the process and its children (ffmpeg, the second drawing process) and the share of
+  each stage; `--profile`: a cProfile of one run instead;
 - peak memory (max RSS of a child process doing one run);
 - SVG bytes per minute of audio, raw and gzipped (targets < 1.5 MB and < 200 KB at 30 fps),
   and how they split between the shared definitions and the part tracks;
@@ -39,6 +40,7 @@ THCHS = ROOT.parent / "shared" / "bench" / "zh" / "thchs30_mfa_example"
 TARGET_SECONDS = 180.0
 GAP = 0.4  # seconds of silence between utterances
 RUNS = 3
+PROFILE_LINES = 40  # functions `--profile` prints
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
 
@@ -63,15 +65,22 @@ def build_input(folder: Path, target: float = TARGET_SECONDS) -> tuple[Path, Pat
     return audio, transcript, total
 
 
+def children_cpu() -> float:
+    """CPU seconds of this process's ended children (ffmpeg, the second drawing process)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def timed_run(face: Path, audio: Path, transcript: Path, out: Path) -> tuple[float, float, dict[str, float], Result]:
-    """One generate(); return wall seconds, CPU seconds of this process, wall seconds per stage, the Result.
+    """One generate(); return wall seconds, CPU seconds of this process and its children, wall
+    seconds per stage, the Result.
 
     The machine is shared: CPU time shows the work done even when other jobs stretch the wall time.
     """
     marks: list[tuple[str, float]] = []
-    started, cpu = time.perf_counter(), time.process_time()
+    started, cpu = time.perf_counter(), time.process_time() + children_cpu()
     result = generate(face, audio, transcript, out, Options(), lambda stage, _: marks.append((stage, time.perf_counter())))
-    end, cpu = time.perf_counter(), time.process_time() - cpu
+    end, cpu = time.perf_counter(), time.process_time() + children_cpu() - cpu
     stages: dict[str, float] = {}
     for (stage, at), (_, after) in zip(marks, [*marks[1:], ("end", end)], strict=True):
         stages[stage] = stages.get(stage, 0.0) + after - at
@@ -128,9 +137,25 @@ def bytes_by_track(svg: bytes, minutes: float) -> str:
     return "KB per minute raw/gzipped: " + ", ".join(texts)
 
 
+def profile(face: Path, audio: Path, transcript: Path, out: Path, lines: int = PROFILE_LINES) -> None:
+    """Print where one generate() spends its time (cProfile, this process only: the second
+    drawing process and ffmpeg are not in it): the `lines` functions of most cumulative time."""
+    import cProfile
+    import pstats
+
+    profiler = cProfile.Profile()
+    profiler.runcall(generate, face, audio, transcript, out, Options())
+    pstats.Stats(profiler, stream=sys.stdout).sort_stats("cumulative").print_stats(lines)
+
+
 def main() -> None:
-    """Build the input, run generate RUNS times, print the figures."""
+    """Build the input, run generate RUNS times, print the figures (`--profile`: one profiled
+    run instead)."""
     face = sorted(SAMPLE_FACES.glob("*.json"))[0]
+    if "--profile" in sys.argv[1:]:
+        with tempfile.TemporaryDirectory(prefix="cartoonface-bench-") as tmp:
+            profile(face, *build_input(Path(tmp))[:2], Path(tmp) / "out")
+        return
     with tempfile.TemporaryDirectory(prefix="cartoonface-bench-") as tmp:
         folder = Path(tmp)
         audio, transcript, seconds = build_input(folder)
@@ -143,7 +168,7 @@ def main() -> None:
             stage_runs.append(stages)
         wall = statistics.median(walls)
         print(f"generate wall time: median {wall:.2f} s of {RUNS} (runs {', '.join(f'{w:.2f}' for w in walls)}); "
-              f"{result.duration / wall:.0f}x real time; CPU time median {statistics.median(cpus):.2f} s; "
+              f"{result.duration / wall:.0f}x real time; CPU time (with children) median {statistics.median(cpus):.2f} s; "
               f"{result.frames} frames at 30 fps; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
         shares = {stage: statistics.median(s.get(stage, 0.0) for s in stage_runs) for stage in stage_runs[0]}
         print("stages (median s): " + ", ".join(f"{stage} {value:.2f}" for stage, value in shares.items()))

@@ -37,7 +37,7 @@ from cartoonface.exports.cues import cues_name, cues_text, mouth_cues
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
 from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
-from cartoonface.render.animation import animation_svg
+from cartoonface.render.animation import animation_svg, drawing_workers
 from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.audio_only import transcribed
@@ -288,7 +288,7 @@ def generate(
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                             wide=options.page == "announcer", title=options.title, body=body,
-                            progress=lambda done: report("svg", done))
+                            progress=lambda done: report("svg", done), workers=drawing_workers())
         report("pages")
         try:
             with atomic_directory(target) as folder:

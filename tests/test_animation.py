@@ -282,6 +282,15 @@ def test_other_path_commands_are_left_alone():
     assert compact_paths(odd) == {d: d for d in odd}
 
 
+def test_paths_of_one_skeleton_with_other_counts_are_left_alone():
+    """Path data with the same command letters but numbers repeating a command (implicit
+    linetos) are not read as one skeleton; written ones are, numbers in any form."""
+    odd = ["M1 2 3 4", "M1 2", "M-1.5-2"]
+    assert compact_paths(odd) == {d: d for d in odd}
+    plain = ["M1.4,2L-3.6 .5Z", "M10 20L30-.5Z"]  # whole pixels (.5 to even: 0), relative
+    assert compact_paths(plain) == {plain[0]: "m1,2l-5-2z", plain[1]: "m10,20l20-20z"}
+
+
 def test_smooth_joins_drop_the_mirrored_control_point():
     rng = np.random.default_rng(2)
     paths = []

@@ -94,3 +94,85 @@ def test_a_frame_with_shared_clip_paths_looks_as_with_its_own(face, frame):
     assert after.shape == own.shape
     differ = np.abs(after - own).max(axis=2) > 2
     assert differ.mean() < 1e-4, f"{differ.sum()} pixels differ"
+
+
+def talking_about(count: int) -> list[FaceState]:
+    """`count` frames of a head turning, tilting, rolling and glancing while it talks: many
+    distinct states, each part shape seen under many positions."""
+    mouths = "amfoeiunhrz"
+    return [FaceState(pose=Pose(turn=12 * np.sin(i / 23), tilt=6 * np.sin(i / 17), roll=4 * np.sin(i / 29)),
+                      gaze_h=5 * np.sin(i / 7), blink=float(i % 41 == 0), smile=0.5 * (i % 3 == 0),
+                      mouth=((mouths[i % len(mouths)], 0.7), (mouths[i // 3 % len(mouths)], 0.3)),
+                      emotion=(("happy", 0.6),) if i % 5 == 0 else ())
+            for i in range(count)]
+
+
+def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
+    """Writer.finish tidies one part of each skeleton and fills in the others' values: every
+    tidy drawing it gives is the one _tidy_part makes of that raw part by itself."""
+    from cartoonface.face.lift import lift
+    from cartoonface.face.pose import pose_face
+    from cartoonface.render.animation import track_of
+    from cartoonface.render.compact import _PATH_DATA, Writer
+    from cartoonface.render.pathdata import compact_paths
+    from cartoonface.render.svg import face_parts
+
+    writer = Writer(track_of)
+    lifted = lift(face)
+    for state in talking_about(60):
+        writer.collect(face_parts(face, pose_face(lifted, state), "u"))
+    raw = list(writer.raw)
+    compact = compact_paths(d for part in raw for text in (part.element, *part.definitions)
+                            for d in _PATH_DATA.findall(text))
+    alone = Writer(track_of)
+    expected = [b"".join(etree.tostring(node) for node in alone._tidy_part((part.element, *part.definitions), compact))
+                for part in raw]
+    mapping, tidy = writer.finish()
+    assert len(set(expected)) == len(tidy) > 20
+    # the same drawings, numbered alike, before finish renames their ids and classes
+    renamed = [b"".join(etree.tostring(node) for node in tidy[number]) for number in mapping]
+    firsts = {}
+    for number, text in zip(mapping, expected, strict=True):
+        assert firsts.setdefault(number, text) == text, "one tidy drawing per distinct expected drawing"
+    assert len(set(renamed)) == len(tidy)
+    assert list(alone.styles) == list(writer.styles), "style classes made in the same order"
+
+
+def test_two_processes_draw_the_same_bytes(face):
+    """Drawing the states in two processes gives the document one process gives."""
+    from cartoonface.render.animation import POOL_STATES
+
+    states = talking_about(POOL_STATES + 50)
+    assert len(set(states)) >= POOL_STATES
+    assert animation_svg(face, states, FPS, workers=2) == animation_svg(face, states, FPS)
+
+
+def test_no_second_process_under_a_cpu_limit():
+    """A process with a CPU-time limit (a web job) draws alone: the limit counts per process."""
+    import resource
+
+    from cartoonface.render.animation import drawing_workers
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_CPU)
+    if soft != resource.RLIM_INFINITY:
+        pytest.skip("this test process already has a CPU limit")
+    resource.setrlimit(resource.RLIMIT_CPU, (10 ** 6, hard))
+    try:
+        assert drawing_workers() == 1
+    finally:
+        resource.setrlimit(resource.RLIMIT_CPU, (soft, hard))
+    assert drawing_workers() in (1, 2)
+
+
+def test_a_pool_that_cannot_start_falls_back_to_one_process(face, monkeypatch):
+    """When the second process cannot be started (no memory, no thread) the states are drawn here."""
+    import cartoonface.render.animation as animation
+
+    class NoFork:
+        def __init__(self, *args, **named):
+            raise OSError(12, "Cannot allocate memory")
+
+    states = talking_about(animation.POOL_STATES + 10)
+    expected = animation_svg(face, states, FPS)
+    monkeypatch.setattr(animation, "ProcessPoolExecutor", NoFork)
+    assert animation_svg(face, states, FPS, workers=2) == expected

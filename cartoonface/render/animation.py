@@ -45,9 +45,14 @@ clock from the audio (static/cartoonface.js).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import multiprocessing
+import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from itertools import count
 
 import numpy as np
@@ -56,16 +61,16 @@ from lxml import etree
 from cartoonface.animate.body import BodyMotion
 from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
-from cartoonface.face.pose import pose_face, rig, unroll, unrolled
-from cartoonface.face.state import FaceState
+from cartoonface.face.pose import pose_face, rig, unroll
+from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Writer, share, short_id
-from cartoonface.render.elements import DECIMALS, element, svg_root
+from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
-from cartoonface.render.svg import face_defs, face_group
+from cartoonface.render.svg import face_defs, face_parts
 
-# The track of each part of render/svg.py's face_group (by its class), in drawing order.
+# The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
 # The mouth and the jaw's shadow on the neck move with the jaw, so they share the track of the
 # face outline; the mouth is then drawn before the nose, brows and eyes rather than after them,
@@ -101,6 +106,9 @@ ROLL_DECIMALS = 2
 # animation_svg tells its progress every this many frames while it draws them (a new state takes
 # ~1 ms to draw: a report every ~0.1 s at most).
 PROGRESS_FRAMES = 64
+# animation_svg draws in two processes (drawing_workers) from this many distinct states (~1 ms
+# each to draw; starting the process and sending the drawings back take ~0.1 s).
+POOL_STATES = 400
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the shared parts are found and when the tracks are
 # written; the rest makes the document's bytes (measured on a 4-minute recording:
@@ -150,10 +158,9 @@ def runs(keys: Sequence[int]) -> tuple[Run, ...]:
     return tuple(merged)
 
 
-def track_of(part: etree._Element) -> str:
-    """The track a top-level part of a face group belongs to (TRACK_OF by its class)."""
-    name = (part.get("class") or "").split()
-    return TRACK_OF.get(name[0], name[0]) if name else "face"
+def track_of(name: str) -> str:
+    """The track a part of render/svg.py's face_parts belongs to (TRACK_OF by its name)."""
+    return TRACK_OF.get(name, name)
 
 
 @dataclass
@@ -310,9 +317,79 @@ def _body(dressed: etree._Element, body: BodyMotion, figure: Figure, fps: int) -
         _move([dressed[0]], keys, fps, "translate", text)
 
 
+DrawingKey = tuple[object, ...]  # _draw's key of a drawing: the fields of the state but its roll, the pupils
+
+
+_STATE_FIELDS = tuple(f.name for f in dataclasses.fields(FaceState) if f.name != "pose")
+_POSE_FIELDS = tuple(f.name for f in dataclasses.fields(Pose) if f.name != "roll")
+
+
+def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
+    """The fields of face/pose.py's unrolled(state) (the state without roll), as a tuple: equal
+    for equal unrolled states, without making (and checking) a FaceState per frame."""
+    return (*(getattr(state.pose, name) for name in _POSE_FIELDS), *(getattr(state, name) for name in _STATE_FIELDS))
+
+
+def _draw(face: FaceModel, states: Sequence[FaceState],
+          progress: Callable[[float], None] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
+    """Draw each of `states` (render/svg.py's face_parts, uid UID): its key and its parts. The
+    head's roll is not drawn (the layers turn): the face is posed with it and turned back by the
+    roll as written (ROLL_DECIMALS; the two turns cancel exactly). The drawing depends on the
+    state without roll and on the pupils (written to 0.1 px), the key: states that share it
+    differ by a turn of under 0.005 degrees (the roll's rounding), which moves no point by more
+    than 0.02 px. Equal parts are one object (a pickle then holds each once).
+    `progress(fraction)` is told the share drawn every PROGRESS_FRAMES states."""
+    lifted = lift(face)
+    origin = rig(lifted).origin
+    known: dict[Part, Part] = {}
+    drawings = []
+    for index, state in enumerate(states):
+        if progress is not None and index % PROGRESS_FRAMES == 0:
+            progress(index / len(states))
+        roll = round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS
+        posed = unroll(pose_face(lifted, state), roll, origin)
+        key = (*_unrolled_fields(state), *np.round(posed.pupils, 1).ravel().tolist())
+        drawings.append((key, tuple(known.setdefault(part, part) for part in face_parts(face, posed, UID))))
+    return drawings
+
+
+def drawing_workers() -> int:
+    """How many processes animation_svg may draw with: 2 on a machine with two cores or more that
+    can fork, unless this process has a CPU-time limit (a web job's, web/worker.py: the limit
+    counts per process, so the job's work stays in it) or is a daemon (which may not start
+    processes)."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 1  # the pool forks (no pickling of the face and its caches)
+    import resource  # POSIX only, like fork
+
+    limited = resource.getrlimit(resource.RLIMIT_CPU)[0] != resource.RLIM_INFINITY
+    return 1 if limited or multiprocessing.current_process().daemon or (os.cpu_count() or 1) < 2 else 2
+
+
+def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
+              progress: Callable[[float], None]) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
+    """_draw of `states`, in order; with `workers` 2 and at least POOL_STATES states the second
+    half is drawn by a forked process meanwhile. When that process cannot be started or fails
+    (no memory, no thread, a broken pool) its half is drawn here."""
+    if workers < 2 or len(states) < POOL_STATES:
+        return _draw(face, states, progress)
+    half = len(states) // 2
+    try:
+        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
+            other = pool.submit(_draw, face, states[half:])
+            first = _draw(face, states[:half], lambda done: progress(done / 2))
+            try:
+                return first + other.result()
+            except (BrokenProcessPool, OSError, MemoryError):
+                return first + _draw(face, states[half:], lambda done: progress((1 + done) / 2))
+    except (BrokenProcessPool, OSError, RuntimeError):  # fork / thread start failed
+        return _draw(face, states, progress)
+
+
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
-                  body: BodyMotion | None = None, progress: Callable[[float], None] | None = None) -> bytes:
+                  body: BodyMotion | None = None, progress: Callable[[float], None] | None = None,
+                  workers: int = 1) -> bytes:
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
@@ -325,6 +402,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     the mouth track's drawings carry `data-shape`, the dominant basic mouth shape they show.
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
     drawn (every PROGRESS_FRAMES frames) and tidied, and 1.0 at the end.
+    `workers`: processes to draw with (drawing_workers(); 1: this one alone), same bytes.
     """
     report = progress or (lambda fraction: None)
     width, height = float(face.width), float(face.height)
@@ -341,30 +419,17 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     figure = figure_of(face, box)
     root.append(background_layer(background, figure, defs))
     writer = Writer(track_of)
-    lifted = lift(face)
-    origin = rig(lifted).origin
-    by_state: dict[FaceState, tuple[int, ...]] = {}
-    drawn: dict[tuple[FaceState, tuple[float, ...]], tuple[int, ...]] = {}
-    frames = []
+    origin = rig(lift(face)).origin
     rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
     # the neck's lean in each frame, in steps of LEAN_DECIMALS: it follows the roll as written
     leans = [round(lean(figure, origin, roll / 10 ** ROLL_DECIMALS) * 10 ** LEAN_DECIMALS) for roll in rolls]
-    for index, (state, roll) in enumerate(zip(states, rolls, strict=True)):
-        if index % PROGRESS_FRAMES == 0:
-            report(DRAWN_SHARE * index / len(states))
-        parts = by_state.get(state)
-        if parts is None:
-            # turned back by the roll as written (the two turns cancel exactly)
-            posed = unroll(pose_face(lifted, state), roll / 10 ** ROLL_DECIMALS, origin)
-            # the drawing depends on the state without roll and on the pupils (written to 0.1 px);
-            # states that share it differ by a turn of under 0.005 degrees (the roll's rounding),
-            # which moves no point by more than 0.02 px
-            key = (unrolled(state), tuple(np.round(posed.pupils, 1).ravel().tolist()))
-            parts = drawn.get(key)
-            if parts is None:
-                parts = drawn[key] = writer.collect(face_group(face, posed, UID))
-            by_state[state] = parts
-        frames.append((state, parts))
+    distinct = list(dict.fromkeys(states))
+    drawings = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
+    # states whose drawings have one key share the first one's drawing
+    drawn: dict[DrawingKey, tuple[int, ...]] = {}
+    by_state = {state: drawn.get(key) or drawn.setdefault(key, writer.collect(parts))
+                for state, (key, parts) in zip(distinct, drawings, strict=True)}
+    frames = [(state, by_state[state]) for state in states]
     mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied))
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)

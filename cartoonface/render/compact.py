@@ -1,6 +1,6 @@
 """The SVG compactor of render/animation.py: many drawings of one face written small.
 
-`Writer` takes every state's drawing (a `<g>` of parts, render/svg.py's face_group),
+`Writer` takes every state's drawing (the texts of its parts, render/svg.py's face_parts),
 keeps each distinct part once, and tidies it: path data in whole pixels as relative
 commands (render/pathdata.py), groups that only pass on style dissolved into their
 children, positions rounded, every other presentation attribute moved to a CSS class
@@ -8,6 +8,12 @@ children, positions rounded, every other presentation attribute moved to a CSS c
 as a `<use>` of it, per-state definitions (clip paths) renamed by content with short
 base-36 ids. `share` then puts a part shown in several drawings once into `<defs>` and
 shows it with `<use>`.
+
+Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
+part depends only on its skeleton, the text with its path data (numbered by their compact
+forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
+tidied as lxml elements and the others' values are filled into its text. The distinct tidy
+drawings are then parsed in one go.
 """
 
 from __future__ import annotations
@@ -15,16 +21,16 @@ from __future__ import annotations
 import html
 import re
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from lxml import etree
 
-from cartoonface.render.elements import SVG, element
+from cartoonface.render.elements import SVG, Part, element, parse_elements
 from cartoonface.render.pathdata import compact_paths
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
-# face_group) go with the part, renamed so each distinct part drawing has its own.
+# face_parts) go with the part, renamed so each distinct part drawing has its own.
 DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", "radialGradient", "mask",
                                                   "pattern", "filter", "marker", "symbol"))
 # Attributes that place an element (rounded to whole pixels, kept on it). Every other
@@ -39,47 +45,50 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_PATH_DATA = re.compile(rb' d="([^"]*)"')
+_PATH_DATA = re.compile(r' d="([^"]*)"')
+# Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
+# the attributes it takes out (path data and positions), a path data's token, and the
+# placeholder positions (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
+_VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS))})="([^"]*)"')
+_TOKEN = re.compile(r'="@(\d+)@"')
+SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions
+_FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
 
 @dataclass(frozen=True)
 class RawPart:
-    """A part as face_group drew it (serialized: a drawing of every state would not fit in
+    """A part as face_parts drew it (text: a drawing of every state would not fit in
     memory as lxml trees), with the per-state definitions it references and the `label`
     the Writer's `label_of` gave it."""
 
     label: str
-    element: bytes
-    definitions: tuple[bytes, ...]
+    element: str
+    definitions: tuple[str, ...]
 
 
 class Writer:
     """Collects the drawn states, then writes the distinct part drawings compactly.
-    `label_of` names the group a top-level part belongs to (kept as RawPart.label)."""
+    `label_of` names the group a top-level part belongs to by the part's name (kept as RawPart.label)."""
 
-    def __init__(self, label_of: Callable[[etree._Element], str]) -> None:
+    def __init__(self, label_of: Callable[[str], str]) -> None:
         self.label_of = label_of
-        self.raw_ids: dict[bytes, int] = {}
+        self.raw_ids: dict[tuple[str, tuple[str, ...]], int] = {}
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
 
-    def collect(self, group: etree._Element) -> tuple[int, ...]:
-        """Take one face_group drawing; return the raw part numbers, in drawing order."""
-        definitions = {node.get("id"): node for node in group.iter(*DEFINITIONS) if node.get("id")}
+    def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
+        """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
+        in drawing order."""
         numbers = []
-        for part in group:
-            if not isinstance(part.tag, str) or part.tag == f"{{{SVG}}}defs":
-                continue
-            raw = etree.tostring(part)
-            used = tuple(etree.tostring(node) for name, node in definitions.items() if f"#{name})".encode() in raw)
-            key = raw + b"".join(used)
+        for part in parts:
+            key = (part.text, part.clips)
             number = self.raw_ids.get(key)
             if number is None:
                 number = self.raw_ids[key] = len(self.raw)
-                self.raw.append(RawPart(self.label_of(part), raw, used))
+                self.raw.append(RawPart(self.label_of(part.name), part.text, part.clips))
             numbers.append(number)
         return tuple(numbers)
 
@@ -93,19 +102,29 @@ class Writer:
         compact = compact_paths(_text(d) for part in self.raw
                                 for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
-        tidy_ids: dict[bytes, int] = {}
-        tidy: list[list[etree._Element]] = []
+        templates: dict[str, tuple[str, int]] = {}
+        tidy_ids: dict[str, int] = {}
+        texts: list[str] = []
+        counts: list[int] = []
         mapping = []
         for index, part in enumerate(self.raw):
             if progress is not None and index % PROGRESS_PARTS == 0:
                 progress(index / len(self.raw))
-            elements = self._tidy_part(part, compact)
-            key = b"".join(etree.tostring(node) for node in elements)
-            number = tidy_ids.get(key)
+            skeleton, values = _skeleton((part.element, *part.definitions), compact)
+            template = templates.get(skeleton)
+            if template is None:
+                template = templates[skeleton] = self._template(skeleton)
+            text = template[0].format(*values)
+            number = tidy_ids.get(text)
             if number is None:
-                number = tidy_ids[key] = len(tidy)
-                tidy.append(elements)
+                number = tidy_ids[text] = len(texts)
+                texts.append(text)
+                counts.append(template[1])
             mapping.append(number)
+        # one parse of all (5x faster than one per drawing); the elements stay in the parsed
+        # holder, which declares the namespace for all of them, until they go into the document
+        nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
+        tidy = [[next(nodes) for _ in range(count)] for count in counts]
         self.definitions = _hoist(tidy)
         for number, elements in enumerate(tidy):
             _own_ids(elements, short_id("k", number))
@@ -122,11 +141,24 @@ class Writer:
             node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
 
-    def _tidy_part(self, part: RawPart, compact: dict[str, str]) -> list[etree._Element]:
-        """The part with compact paths, groups that only pass on style dissolved, style as
-        classes: its definitions (ids "c0", "c1", ...), then its elements in drawing order."""
-        drawn = etree.fromstring(part.element)
-        definitions = [etree.fromstring(raw) for raw in part.definitions]
+    def _template(self, skeleton: str) -> tuple[str, int]:
+        """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
+        positions SENTINEL + j) as a format string of its values (compact path data, then rounded
+        positions), and its number of elements. Style classes are made here, so in the order the
+        parts come."""
+        distinct = len(set(_TOKEN.findall(skeleton)))
+        elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
+        holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
+        holder.extend(elements)
+        text = etree.tostring(holder, encoding="unicode")
+        inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
+        return _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner), len(elements)
+
+    def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
+        """The part drawn by `texts` (the part's element, then its definitions) with compact
+        paths, groups that only pass on style dissolved, style as classes: its definitions
+        (ids "c0", "c1", ...), then its elements in drawing order."""
+        drawn, *definitions = parse_elements(texts)
         tops = (drawn, *definitions)
         paths = [node for top in tops for node in top.iter() if node.get("d")]
         for node in paths:
@@ -175,6 +207,28 @@ class Writer:
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
+
+
+def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, list[str]]:
+    """A part's `texts` (its element, then its definitions) with the values that tidying only
+    passes on taken out: each path data as "@k@", k numbering its distinct compact forms
+    (`compact`, compact_paths') in order, so paths alike after compacting stay alike (an
+    outline and its clip path); each position (POSITIONS) as SENTINEL + j, j counting them.
+    Returns the text and the values: the distinct compact path data, then the positions
+    rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
+    distinct: dict[str, int] = {}
+    positions: list[str] = []
+
+    def field(match: re.Match[str]) -> str:
+        name, value = match.groups()
+        if name == "d":
+            number = distinct.setdefault(compact[_text(value)], len(distinct))
+            return f' d="@{number}@"'
+        positions.append(str(round(float(value))))
+        return f' {name}="{SENTINEL + len(positions) - 1}"'
+
+    text = _VALUE.sub(field, "".join(texts))
+    return text, [*distinct, *positions]
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
@@ -281,10 +335,9 @@ def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element
     return elements
 
 
-def _text(value: bytes) -> str:
-    """An attribute value as serialized by lxml, back to its text."""
-    text = value.decode()
-    return html.unescape(text) if "&" in text else text
+def _text(value: str) -> str:
+    """An attribute value as written in a part's text, back to its value."""
+    return html.unescape(value) if "&" in value else value
 
 
 def _dissolve(top: etree._Element) -> list[etree._Element]:

@@ -4,11 +4,17 @@ Every render module builds its SVG with `element` (and `svg_root` for a document
 attribute names and number formats follow one rule: keyword names are written with
 hyphens ("stroke_width" -> "stroke-width"), numbers to 0.1 with
 `cartoonface.render.numbers.decimal_text`; a mapping of attributes is written as given.
+
+The one exception is the hot path of an animation, a face drawn in thousands of states
+(render/svg.py's face_parts): its parts are written as text (`Part`, `attributes_text`) and
+parsed with `parse_elements` only where a tree is needed.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import html
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 
 from lxml import etree
 
@@ -41,3 +47,36 @@ def svg_root(attrs: Mapping[str, str]) -> etree._Element:
 def svg_bytes(root: etree._Element) -> bytes:
     """The document `root` as UTF-8 SVG bytes with an XML declaration."""
     return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+
+
+@dataclass(frozen=True, slots=True)
+class Part:
+    """One top-level part of a drawing as SVG text, without a namespace declaration (parse it
+    with parse_elements): `name` its class ("hair", "eye-l", ...), `text` the element, `clips`
+    the texts of the definitions (clip paths) it refers to, in document order."""
+
+    name: str
+    text: str
+    clips: tuple[str, ...] = ()
+
+
+def attributes_text(attrs: Mapping[str, str]) -> str:
+    """`attrs` as the text of attributes inside a start tag, each after a space, values escaped:
+    {"fill": "#fff", "opacity": "0.5"} -> ' fill="#fff" opacity="0.5"'."""
+    return "".join(f' {name}="{html.escape(value)}"' for name, value in attrs.items())
+
+
+def element_text(node: etree._Element, extra: Mapping[str, str] | None = None) -> str:
+    """A childless lxml `node` of the SVG namespace as text like a Part's (no namespace
+    declaration), with the attributes `extra` added after its own."""
+    return f"<{etree.QName(node).localname}{attributes_text({**node.attrib, **(extra or {})})}/>"
+
+
+def parse_elements(texts: Iterable[str]) -> list[etree._Element]:
+    """Parse SVG element texts written without a namespace declaration (Part texts, in the SVG
+    namespace); returns them as free elements, in order."""
+    holder = etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>')
+    nodes = list(holder)
+    for node in nodes:
+        holder.remove(node)
+    return nodes

@@ -23,6 +23,7 @@ left as they are.
 from __future__ import annotations
 
 import functools
+import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -36,6 +37,7 @@ _ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "Z": 0}
 _LETTERS = "".join(chr(c) for c in range(65, 91)) + "".join(chr(c) for c in range(97, 123))
 _ONLY_LETTERS = {ord(c): None for c in "0123456789.,+- \t\n\r"}
 _LETTERS_TO_SPACES = {ord(c): " " for c in _LETTERS + ","}
+_SEPARATOR = "|"  # between the paths _plain_numbers splits together
 
 
 @dataclass(frozen=True)
@@ -212,6 +214,27 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     return ["".join(row) + plan.tail for row in pieces.tolist()]
 
 
+class _Values(dict[str, float]):
+    """Number texts and their values, each text converted once (float()); _SEPARATOR is nan."""
+
+    def __missing__(self, text: str) -> float:
+        value = self[text] = math.nan if text == _SEPARATOR else float(text)
+        return value
+
+
+def _plain_numbers(paths: list[str], values: _Values) -> np.ndarray | None:
+    """The numbers of `paths` (path data of plain numbers: letters, commas, spaces and signs
+    between them) as an (n, k) float array, k each; None when they hold different counts. One
+    split of all of them and a look-up per number text (which repeat: coordinates in tenths)."""
+    tokens = f" {_SEPARATOR} ".join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").split()
+    flat = np.fromiter(map(values.__getitem__, tokens), float, len(tokens))
+    ends = np.flatnonzero(np.isnan(flat))
+    counts = np.diff(np.concatenate(([-1], ends, [len(flat)]))) - 1
+    if np.any(counts != counts[0]):
+        return None
+    return flat[~np.isnan(flat)].reshape(len(paths), int(counts[0]))
+
+
 def compact_paths(paths: Iterable[str]) -> dict[str, str]:
     """Map each path data string of `paths` to its compact form (see the module docstring)."""
     groups: dict[str, list[str]] = {}
@@ -220,17 +243,19 @@ def compact_paths(paths: Iterable[str]) -> dict[str, str]:
         letters = d.translate(_ONLY_LETTERS)
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
     compact: dict[str, str] = {}
+    values = _Values()
     for skeleton, members in groups.items():
         members.sort()
         if "#" in skeleton:
-            numbers = [_NUMBER.findall(d) for d in members]
+            texts = [_NUMBER.findall(d) for d in members]
+            numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
         else:
-            numbers = [d.translate(_LETTERS_TO_SPACES).replace("-", " -").split() for d in members]
-        commands = _commands(skeleton, len(numbers[0])) if len({len(row) for row in numbers}) == 1 else None
-        if commands is None:
+            numbers = _plain_numbers(members, values)
+        commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
+        if commands is None or numbers is None:
             compact.update((d, d) for d in members)
             continue
-        rounded = np.rint(np.array(numbers, dtype=float)).astype(np.int64)
+        rounded = np.rint(numbers).astype(np.int64)
         spans = _spans(commands)
         kept = _kept(commands, spans, rounded[0])
         smooth = _smooth(commands, spans, kept, rounded)

@@ -33,7 +33,7 @@ from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
-from cartoonface.render.elements import SVG, element, svg_root
+from cartoonface.render.elements import SVG, Part, attributes_text, element, element_text, svg_root
 from cartoonface.render.geometry import face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
@@ -159,9 +159,50 @@ def _styles(face: FaceModel) -> dict[str, dict[str, str]]:
     }
 
 
+@functools.lru_cache(maxsize=16)
+def _style_texts(face: FaceModel) -> dict[str, str]:
+    """_styles(face) as attribute texts (elements.attributes_text), and the pupil's fill."""
+    texts = {part: attributes_text(attrs) for part, attrs in _styles(face).items()}
+    texts["pupil"] = attributes_text({"fill": face.palette.pupil})
+    return texts
+
+
 # Rows of posed.xy read by the cheeks and the eyes: the eye outlines of "l" and "r", the mouth
 # corners 8.4 and 8.3.
 _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
+# The chin shadow's paint, after the outline render/scenery.py's chin_shadow gives.
+_CHIN_SHADOW = {"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY}
+
+
+def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> tuple[Part, ...]:
+    """One state's drawing of `face` posed as `posed`, over a neck leaned by `neck_lean` degrees
+    (render/scenery.py's lean; 0 for an upright one), as the texts of its parts (elements.Part),
+    in drawing order: "hair" (the back layer), "ear-l", "ear-r", "chin-shadow" (the jaw's shadow
+    on the neck, under the posed chin: render/scenery.py's chin_shadow), "face", "fringe" (the
+    hair's front layer, over the forehead), "cheeks", "nose", "brow-l", "brow-r", "eye-l",
+    "eye-r", "mouth". Their clip paths' ids end in "-{uid}" (`uid`: letters, digits, "-").
+    Fills use face_defs' gradients. Written as text: the hot path of render/animation.py.
+    """
+    style = _style_texts(face)
+    shapes = face_shapes(posed)
+    points = posed.xy[_ROWS].tolist()
+    figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
+    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])))
+    eyes = [_eye(shapes, side, eyeball, uid, style) for side, eyeball in zip("lr", _eyeballs(posed, points))]
+    return (
+        Part("hair", f'<path class="hair" d="{shapes["hair"]}"{style["hair"]}/>'),
+        *(Part(f"ear-{side}", f'<path class="ear-{side}" d="{shapes[f"ear_{side}"]}"{style["skin"]}/>')
+          for side in "lr"),
+        Part("chin-shadow", element_text(shadow, _CHIN_SHADOW)),
+        Part("face", f'<path class="face" d="{shapes["face"]}"{style["skin"]}/>'),
+        Part("fringe", f'<path class="fringe" d="{shapes["fringe"]}"{style["fringe"]}/>'),
+        Part("cheeks", _cheeks(points, face.fapu.d, style)),
+        Part("nose", f'<path class="nose" d="{shapes["nose"]}"{style["nose"]}/>'),
+        *(Part(f"brow-{side}", f'<path class="brow-{side}" d="{shapes[f"brow_{side}"]}"{style["brow"]}/>')
+          for side in "lr"),
+        *eyes,
+        _mouth(posed, uid, style, face.fapu.d),
+    )
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> etree._Element:
@@ -169,45 +210,28 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     leaned by `neck_lean` degrees (render/scenery.py's lean; 0 for an upright one).
 
     Children, in drawing order: a `<defs>` with this state's clip paths (ids end in
-    "-{uid}"), then the parts "hair" (the back layer), "ear-l", "ear-r", "chin-shadow" (the
-    jaw's shadow on the neck, under the posed chin: render/scenery.py's chin_shadow), "face",
-    "fringe" (the hair's front layer, over the forehead), "cheeks", "nose",
-    "brow-l", "brow-r", "eye-l", "eye-r", "mouth". Fills use face_defs' gradients.
+    "-{uid}"), then the parts of face_parts (by class: "hair", "ear-l", "ear-r",
+    "chin-shadow", "face", "fringe", "cheeks", "nose", "brow-l", "brow-r", "eye-l", "eye-r",
+    "mouth").
     """
-    style = _styles(face)
-    shapes = face_shapes(posed)
-    points = posed.xy[_ROWS].tolist()
-    group = element(None, "g", {"class": "cf-face"})
-    defs = element(group, "defs", {})
-    element(group, "path", {"class": "hair", "d": shapes["hair"], **style["hair"]})
-    for side in "lr":
-        element(group, "path", {"class": f"ear-{side}", "d": shapes[f"ear_{side}"], **style["skin"]})
-    figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
-    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])))
-    shadow.attrib.update({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
-    group.append(shadow)
-    element(group, "path", {"class": "face", "d": shapes["face"], **style["skin"]})
-    element(group, "path", {"class": "fringe", "d": shapes["fringe"], **style["fringe"]})
-    _cheeks(group, points, face.fapu.d, style)
-    element(group, "path", {"class": "nose", "d": shapes["nose"], **style["nose"]})
-    for side in "lr":
-        element(group, "path", {"class": f"brow-{side}", "d": shapes[f"brow_{side}"], **style["brow"]})
-    for side, eyeball in zip("lr", _eyeballs(posed, points)):
-        _eye(group, defs, shapes, side, eyeball, face, uid, style)
-    _mouth(group, defs, posed, uid, style, face.fapu.d)
+    parts = face_parts(face, posed, uid, neck_lean)
+    clips = "".join(clip for part in parts for clip in part.clips)
+    group = etree.fromstring(f'<g xmlns="{SVG}" class="cf-face"><defs>{clips}</defs>'
+                             + "".join(part.text for part in parts) + "</g>")
     return group
 
 
-def _cheeks(group: etree._Element, points: list[list[float]], d: float, style: dict[str, dict[str, str]]) -> None:
-    """Blush under each eye, between the eye's lower lid and the mouth corner on its side.
-    `points`: the posed rows _ROWS as [x, y] lists."""
-    cheeks = element(group, "g", {"class": "cheeks", "fill": "url(#cf-cheek)"})
+def _cheeks(points: list[list[float]], d: float, style: dict[str, str]) -> str:
+    """Blush under each eye, between the eye's lower lid and the mouth corner on its side, as
+    the text of a `<g class="cheeks">`. `points`: the posed rows _ROWS as [x, y] lists."""
+    ellipses = []
     for first, mouth_corner in ((0, points[8]), (4, points[9])):
         (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
         width = math.hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
         cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - CHEEK_LIFT * d
-        element(cheeks, "ellipse", {"cx": number_text(CHEEK_OUTER * ox + CHEEK_INNER * ix), "cy": number_text(cy),
-                                    "rx": number_text(CHEEK[0] * d * min(width, CHEEK_STRETCH)), **style["cheek_ry"]})
+        ellipses.append(f'<ellipse cx="{number_text(CHEEK_OUTER * ox + CHEEK_INNER * ix)}" cy="{number_text(cy)}" '
+                        f'rx="{number_text(CHEEK[0] * d * min(width, CHEEK_STRETCH))}"{style["cheek_ry"]}/>')
+    return f'<g class="cheeks" fill="url(#cf-cheek)">{"".join(ellipses)}</g>'
 
 
 def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
@@ -222,55 +246,51 @@ def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float,
     return (x1, y1, r1), (x0, y0, r0)
 
 
-def _eye(group: etree._Element, defs: etree._Element, shapes: dict[str, str], side: str,
-         eyeball: tuple[float, float, float], face: FaceModel, uid: str, style: dict[str, dict[str, str]]) -> None:
-    """Append eye `side`: white, clipped iris + pupil + the lid's shadow + highlight, outline,
-    upper lid."""
-    outline = shapes[f"eye_{side}"]
+def _eye(shapes: dict[str, str], side: str, eyeball: tuple[float, float, float], uid: str,
+         style: dict[str, str]) -> Part:
+    """Eye `side`: white, clipped iris + pupil + the lid's shadow + highlight, outline, upper
+    lid; its clip path the eye outline."""
+    outline, lid = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
     clip_id = f"cf-eye-{side}-{uid}"
-    element(element(defs, "clipPath", {"id": clip_id}), "path", {"d": outline})
-    eye = element(group, "g", {"class": f"eye-{side}"})
-    element(eye, "path", {"d": outline, **style["white"]})
-    ball = element(eye, "g", {"clip-path": f"url(#{clip_id})"})
     x, y, r = eyeball
     cx, cy = number_text(x), number_text(y)
-    element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(r), "fill": "url(#cf-iris)"})
-    element(ball, "circle", {"cx": cx, "cy": cy, "r": number_text(PUPIL * r), "fill": face.palette.pupil})
-    element(ball, "path", {"d": shapes[f"lid_{side}"], **style["lid_shadow"]})
-    element(ball, "circle", {"cx": number_text(x - GLINT_LEFT * r), "cy": number_text(y - GLINT_UP * r),
-                             "r": number_text(GLINT * r), "fill": "#ffffff", "opacity": GLINT_OPACITY})
-    element(eye, "path", {"d": outline, **style["eye_line"]})
-    element(eye, "path", {"d": shapes[f"lid_{side}"], **style["lid"]})
+    text = (f'<g class="eye-{side}"><path d="{outline}"{style["white"]}/><g clip-path="url(#{clip_id})">'
+            f'<circle cx="{cx}" cy="{cy}" r="{number_text(r)}" fill="url(#cf-iris)"/>'
+            f'<circle cx="{cx}" cy="{cy}" r="{number_text(PUPIL * r)}"{style["pupil"]}/>'
+            f'<path d="{lid}"{style["lid_shadow"]}/>'
+            f'<circle cx="{number_text(x - GLINT_LEFT * r)}" cy="{number_text(y - GLINT_UP * r)}" '
+            f'r="{number_text(GLINT * r)}" fill="#ffffff" opacity="{GLINT_OPACITY}"/></g>'
+            f'<path d="{outline}"{style["eye_line"]}/><path d="{lid}"{style["lid"]}/></g>')
+    return Part(f"eye-{side}", text, (f'<clipPath id="{clip_id}"><path d="{outline}"/></clipPath>',))
 
 
-def _mouth(group: etree._Element, defs: etree._Element, posed: PosedFace, uid: str,
-           style: dict[str, dict[str, str]], d: float) -> None:
-    """Append the mouth (render/mouth.py): lips; the opening, its outline the line where the
+def _mouth(posed: PosedFace, uid: str, style: dict[str, str], d: float) -> Part:
+    """The mouth (render/mouth.py): lips; the opening, its outline the line where the
     lips meet; the tongue and the lower and upper teeth clipped to it (when it is open by a
     pixel or more; each row when it shows a pixel or more); the upper teeth on the lower lip
     (f, clipped by the lips); a gloss on the lower lip. `d` is the FAPU d in pixels."""
     outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
     text = mouth_texts(outlines)
-    mouth = element(group, "g", {"class": "mouth", "stroke-linejoin": "round", "stroke-linecap": "round"})
-    element(mouth, "path", {"d": text["lips"], **style["lips"]})
-    element(mouth, "path", {"d": text["opening"], **style["opening"]})
+    pieces = ['<g class="mouth" stroke-linejoin="round" stroke-linecap="round">',
+              f'<path d="{text["lips"]}"{style["lips"]}/>', f'<path d="{text["opening"]}"{style["opening"]}/>']
+    clips = []
     if text["tongue_ry"] != "0":  # open by a pixel or more (sizes are whole pixels)
         clip_id = f"cf-mouth-{uid}"
-        element(element(defs, "clipPath", {"id": clip_id}), "path", {"d": text["opening"]})
-        inside = element(mouth, "g", {"clip-path": f"url(#{clip_id})"})
-        element(inside, "ellipse", {"cx": text["tongue_cx"], "cy": text["tongue_cy"], "rx": text["tongue_rx"],
-                                "ry": text["tongue_ry"], **style["tongue"]})
-        for row in ("lower", "upper"):
-            if text[f"{row}_width"] != "0":
-                element(inside, "path", {"d": text[f"{row}_teeth"], **style[f"{row}_teeth"],
-                                     "stroke-width": text[f"{row}_width"]})
+        clips.append(f'<clipPath id="{clip_id}"><path d="{text["opening"]}"/></clipPath>')
+        pieces += [f'<g clip-path="url(#{clip_id})">',
+                   f'<ellipse cx="{text["tongue_cx"]}" cy="{text["tongue_cy"]}" rx="{text["tongue_rx"]}" '
+                   f'ry="{text["tongue_ry"]}"{style["tongue"]}/>']
+        pieces += [f'<path d="{text[f"{row}_teeth"]}"{style[f"{row}_teeth"]} stroke-width="{text[f"{row}_width"]}"/>'
+                   for row in ("lower", "upper") if text[f"{row}_width"] != "0"]
+        pieces.append("</g>")
     if text["bite_width"] != "0":
         lips_id = f"cf-lips-{uid}"
-        element(element(defs, "clipPath", {"id": lips_id}), "path", {"d": text["lips"]})
-        element(element(mouth, "g", {"clip-path": f"url(#{lips_id})"}), "path",
-            {"d": text["bite"], **style["upper_teeth"], "stroke-width": text["bite_width"]})
-    element(mouth, "ellipse", {"cx": text["gloss_cx"], "cy": text["gloss_cy"], "rx": text["gloss_rx"],
-                           "ry": text["gloss_ry"], **style["gloss"]})
+        clips.append(f'<clipPath id="{lips_id}"><path d="{text["lips"]}"/></clipPath>')
+        pieces.append(f'<g clip-path="url(#{lips_id})"><path d="{text["bite"]}"{style["upper_teeth"]} '
+                      f'stroke-width="{text["bite_width"]}"/></g>')
+    pieces += [f'<ellipse cx="{text["gloss_cx"]}" cy="{text["gloss_cy"]}" rx="{text["gloss_rx"]}" '
+               f'ry="{text["gloss_ry"]}"{style["gloss"]}/>', "</g>"]
+    return Part("mouth", "".join(pieces), tuple(clips))
 
 
 def face_svg(face: FaceModel, state: FaceState, background: str = "plain", clothes: str = "shirt") -> etree._Element:
