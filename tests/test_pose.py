@@ -10,22 +10,13 @@ import numpy as np
 import pytest
 
 from cartoonface.errors import OptionError
-from cartoonface.face.lift import FRONT_NAMES, LIFTED_INDEX, LIFTED_NAMES, lift
-from cartoonface.face.model import POINT_NAMES, face_from_dict, face_to_dict, load_face
+from cartoonface.face.lift import FRONT_NAMES, LIFTED_INDEX, lift
+from cartoonface.face.model import POINT_NAMES, load_face
 from cartoonface.face.pose import pose_face, rotate, rotation_matrix
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.geometry import inside
+from tests.mirror import SWAP, mirrored
 
-# Left-right partner of every lifted point (docs/face-model.md); unlisted points lie on the midline.
-PAIRS = [
-    ("2.13", "2.14"), ("3.1", "3.2"), ("3.3", "3.4"), ("3.5", "3.6"), ("3.7", "3.12"), ("3.8", "3.11"),
-    ("4.1", "4.2"), ("4.3", "4.4"), ("4.3a", "4.4a"), ("4.5", "4.6"), ("8.3", "8.4"), ("8.9", "8.10"),
-    ("9.1", "9.2"), ("9.4", "9.5"), ("9.6", "9.7"), ("9.13", "9.14"), ("10.1", "10.2"), ("10.7", "10.8"),
-    ("10.9", "10.10"), ("11.2", "11.3"), ("11.2a", "11.3a"),
-    ("A", "B"), ("D", "E"), ("F", "I"), ("G", "H"), ("J", "K"), ("L", "M"), ("N", "Q"), ("R", "S"),
-]
-PARTNER = {n: n for n in LIFTED_NAMES} | {a: b for a, b in PAIRS} | {b: a for a, b in PAIRS}
-SWAP = np.array([LIFTED_INDEX[PARTNER[n]] for n in LIFTED_NAMES])
 # The front layer mirrored: the crown runs left to right and the hairline right to left,
 # so a mirror image reverses each.
 _CROWN = [i for i, n in enumerate(FRONT_NAMES) if n.startswith("crown")]
@@ -38,26 +29,6 @@ def face(request):
     from tests.conftest import ROOT
 
     return load_face(ROOT / "samples" / "faces" / f"{request.param}.json")
-
-
-def mirrored(face, skew=0.0):
-    """The face reflected left-right about x = width / 2, names swapped; `skew`
-    first moves some image-left points so the face is not symmetric."""
-    obj = face_to_dict(face)
-    points = {n: list(p) for n, p in obj["points"].items()}
-    if skew:
-        for name in ("3.12", "4.6", "8.4", "11.2a", "10.10"):
-            points[name] = [points[name][0] - skew, points[name][1] + skew / 2]
-        obj["points"] = points
-        face = face_from_dict(obj, "skewed")
-        obj = face_to_dict(face)
-        points = obj["points"]
-    w = obj["canvas"][0]
-    flipped = dict(obj)
-    flipped["points"] = {PARTNER[n]: [w - x, y] for n, (x, y) in points.items()}
-    flipped["hair"] = [[w - x, y] for x, y in obj["hair"]]
-    flipped["fapu"] = dict(obj["fapu"], r1=obj["fapu"]["r2"], r2=obj["fapu"]["r1"])
-    return face, face_from_dict(flipped, "mirrored")
 
 
 def test_neutral_frontal_pose_reproduces_the_model(face):

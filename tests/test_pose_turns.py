@@ -11,15 +11,23 @@ from scipy.spatial import ConvexHull
 
 from cartoonface.face.lift import FRONT_NAMES, lift
 from cartoonface.face.model import load_face
-from cartoonface.face.pose import PosedFace, pose_face
+from cartoonface.face.pose import PosedFace, pose_face, unroll
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.geometry import FACE_CONTOUR, contour, inside
 from cartoonface.render.svg import OUTLINE
+from tests.mirror import SWAP, mirrored
 
 ANGLES = (-15.0, -7.5, 0.0, 10.0, 15.0)
 POSES = [Pose(*angles) for angles in itertools.product(ANGLES, repeat=3)]
 MOUTHS = ("m", "a", "o")
 SAMPLES_PER_PIECE = 12
+# Looking up, the chin stays below each jaw corner by at least this share of its frontal
+# drop below it (the jaw line flattens a little; before the jaw's floor, tilt -15 left a
+# fifth of it: a flat-bottomed box).
+CHIN_DROP_KEPT = 0.5
+# The drawn outline turns across a jaw corner at most this many degrees more than at the
+# frontal view (pure turns reach 6; before the jaw's floor, tilt -15 reached 22).
+CORNER_SLACK = 12.0
 
 
 @pytest.fixture(params=("female", "male"), scope="module")
@@ -163,3 +171,64 @@ def test_back_layer_stays_behind_the_crown(posed_grid):
     for pose, _mouth, posed in grid:
         up, _, _ = _axes(posed)
         assert np.max(posed.hair @ up) - np.max(posed.front @ up) < 0.05 * face.fapu.d, pose
+
+
+def _unrolled(face, pose: Pose, posed: PosedFace) -> PosedFace:
+    """`posed` turned back by its roll about the rotation origin: its image y is the head's
+    own down axis."""
+    return unroll(posed, pose.roll, lift(face).origin)
+
+
+def _corner_turns(posed: PosedFace) -> tuple[float, float]:
+    """Degrees the drawn face contour turns across the jaw corners 2.13 and 2.14: between its
+    directions in the middle of the piece before each corner and of the piece after it."""
+    arcs = _face_outline(posed)
+    middle = SAMPLES_PER_PIECE // 2
+    turns = []
+    for before, after in ((arcs[1], arcs[2]), (arcs[2], arcs[3])):
+        a = before[-middle] - before[-middle - 2]
+        b = after[middle + 1] - after[middle - 1]
+        turns.append(float(np.degrees(np.arctan2(a[0] * b[1] - a[1] * b[0], a @ b))))
+    return turns[0], turns[1]
+
+
+def test_chin_stays_the_lowest_point_looking_up(posed_grid):
+    """With the face level or looking up (tilt <= 0), along the head's own down axis no
+    point of the drawn contour lies lower than the chin 2.1 (within half the outline's
+    width) and the chin stays below each jaw corner by at least CHIN_DROP_KEPT of its drop
+    below it at the frontal view: a U/V jaw, not a flat-bottomed box."""
+    face, grid = posed_grid
+    frontal = {mouth: posed for pose, mouth, posed in grid if pose == Pose()}
+    for pose, mouth, posed in grid:
+        if pose.tilt > 0:
+            continue
+        level = _unrolled(face, pose, posed)
+        chin = level.p("2.1")[1]
+        lowest = max(arc[:, 1].max() for arc in _face_outline(level))
+        assert lowest - chin < OUTLINE / 2 * face.fapu.d, (pose, mouth, lowest - chin)
+        for corner in ("2.13", "2.14"):
+            drop = frontal[mouth].p("2.1")[1] - frontal[mouth].p(corner)[1]
+            assert chin - level.p(corner)[1] > CHIN_DROP_KEPT * drop, (pose, mouth, corner)
+
+
+def test_jaw_corners_no_sharper_than_frontal(posed_grid):
+    """The drawn contour turns across each jaw corner at most CORNER_SLACK degrees more
+    than at the frontal view with the same mouth, at every pose (no box corner)."""
+    _, grid = posed_grid
+    frontal = {mouth: _corner_turns(posed) for pose, mouth, posed in grid if pose == Pose()}
+    for pose, mouth, posed in grid:
+        for turned, level in zip(_corner_turns(posed), frontal[mouth]):
+            assert turned < level + CORNER_SLACK, (pose, mouth, turned, level)
+
+
+def test_mirrored_poses_mirror_the_face(posed_grid):
+    """The sample face's mirror image posed with the turn and roll reversed is the mirror
+    image of the posed face (points, hair, front layer), at every pose of the grid."""
+    face, grid = posed_grid
+    _, mirror = mirrored(face)
+    lifted = lift(mirror)
+    for pose, mouth, posed in grid:
+        flipped = pose_face(lifted, FaceState(pose=Pose(pose.tilt, -pose.turn, -pose.roll)).with_mouth(mouth))
+        assert np.allclose(face.width - flipped.xy[SWAP, 0], posed.xy[:, 0], atol=1e-6), pose
+        assert np.allclose(flipped.xy[SWAP, 1], posed.xy[:, 1], atol=1e-6), pose
+        assert np.allclose(face.width - flipped.hair[:, 0], posed.hair[:, 0], atol=1e-6), pose

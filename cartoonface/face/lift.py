@@ -94,16 +94,17 @@ DEPTH: dict[str, float] = {
 # Silhouettes (our addition, see the module text). Contour point -> the Table 2.1 point
 # whose depth is the face's front at its height (the front half of its cross-section
 # reaches that depth: the forehead, the nose's sides, the lips), and how deep the back
-# half is, in d: None for as deep as the front (temples and cheeks: the round side of the
-# skull), 0 for flat (the jaw corners: the jaw's angle is the widest point of the lower
-# face, the neck behind it), CHIN_UNDER for the chin, whose front is itself: seen from
-# below, the underside of the chin (about 0.6 d deep, our estimate) forms its outline.
-CHIN_UNDER = 0.6
-SILHOUETTES: dict[str, tuple[str, float | None]] = {
+# half is: None for as deep as the front (temples and cheeks: the round side of the
+# skull), 0.0 d for flat (the jaw corners: the jaw's angle is the widest point of the lower
+# face, the neck behind it), or a point name: back to that point's Table 2.1 depth. The
+# chin's front is itself; seen from below, the underside of the jaw forms its outline, a
+# floor from the chin back to the jaw corners' depth (about 1 d: a shallower one, 0.6 d,
+# let the chin rise nearly to the corners' height at tilt -15, a flat-bottomed box).
+SILHOUETTES: dict[str, tuple[str, float | str | None]] = {
     "11.2": ("11.1", None), "11.3": ("11.1", None),
     "10.10": ("9.14", None), "10.9": ("9.13", None),
     "2.14": ("8.1", 0.0), "2.13": ("8.1", 0.0),
-    "2.1": ("2.1", CHIN_UNDER),
+    "2.1": ("2.1", "2.13"),
 }
 # A rounder head (our addition): Table 2.1 puts the outer eye corners and eyebrow ends
 # (1.19 d, 1.17 d) nearly as far forward as the pupils although they lie close to the
@@ -133,8 +134,12 @@ FRONT_NAMES: tuple[str, ...] = (tuple(f"crown{i}" for i in range(CROWN_POINTS))
 HEAD_BACK = -1.6
 HAIR_FADE = 1.0
 # No cross-section is narrower than MIN_REACH d (a point whose normal passes near the
-# centre of the head would otherwise turn on the spot).
+# centre of the head would otherwise turn on the spot), except the chin's: its reach is
+# the radius of the edge between the chin's front and the jaw's floor, CHIN_ROUND d (our
+# estimate: a nearly sharp edge; with 0.2 d the rounded edge kept the outline near the chin's
+# front, which rose nearly to the jaw corners' height at tilt -15).
 MIN_REACH = 0.2
+CHIN_ROUND = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -324,10 +329,12 @@ def _front_and_silhouette(local: np.ndarray, hair: np.ndarray, fade: np.ndarray,
     middle_x = (at["11.2"][0] + at["11.3"][0]) / 2
     names = tuple(SILHOUETTES)
     normals = np.array([ring_normals[n] for n in names])
-    reach = np.array([(at[n][0] - middle_x) * normal[0] for n, normal in zip(names, normals)])
+    reach = np.array([CHIN_ROUND * d if n == "2.1" else max((at[n][0] - middle_x) * normal[0], MIN_REACH * d)
+                      for n, normal in zip(names, normals)])
     front_depth = np.array([at[SILHOUETTES[n][0]][2] - at[n][2] for n in names])
     backs = [SILHOUETTES[n][1] for n in names]
-    back_depth = np.array([depth if back is None else back * d for back, depth in zip(backs, front_depth)])
+    back_depth = np.array([depth if back is None else at[n][2] - at[back][2] if isinstance(back, str) else back * d
+                           for n, back, depth in zip(names, backs, front_depth)])
 
     centre = np.array([middle_x, (at["3.5"][1] + at["3.6"][1]) / 2])  # EyeMid, local
     outline = hair[:, :2]
@@ -344,7 +351,7 @@ def _front_and_silhouette(local: np.ndarray, hair: np.ndarray, fade: np.ndarray,
     return front, Silhouette(
         rows=rows,
         normals=np.vstack([normals, volume_normals]),
-        reach=np.concatenate([np.maximum(reach, MIN_REACH * d), weight * volume_reach]),
+        reach=np.concatenate([reach, weight * volume_reach]),
         front=np.concatenate([np.maximum(front_depth, 0.0), weight * (at["11.1"][2] - at["11.2"][2])]),
         back=np.concatenate([back_depth, weight * (at["11.2"][2] - HEAD_BACK * d)]),
     )
