@@ -114,10 +114,10 @@ class FrameDocuments:
 
     def document(self, frame: int, width: int, height: int) -> str:
         """The static SVG document of frame `frame`, its root sized `width` x `height` px."""
-        return self._element(self.root, frame, {"width": str(width), "height": str(height)})
+        return self.text(self.root, frame, {"width": str(width), "height": str(height)})
 
-    def _element(self, element: etree._Element, frame: int, override: dict[str, str] | None = None) -> str:
-        """`element` as text at `frame` (empty when the frame hides it)."""
+    def text(self, element: etree._Element, frame: int, override: dict[str, str] | None = None) -> str:
+        """`element` as text at `frame` (empty when the frame hides it); `override`: attributes of its own replaced."""
         if element not in self.dynamic:
             text = self.static.get(element)
             if text is None:
@@ -127,18 +127,26 @@ class FrameDocuments:
         if element in self.shown_by:
             use, drawings = self.shown_by[element]
             drawing = drawings.get(self._attributes(use, frame).get("href", "").removeprefix("#"))
-            return "" if drawing is None else f"<defs>{self._element(drawing, frame)}</defs>"
+            return "" if drawing is None else f"<defs>{self.text(drawing, frame)}</defs>"
+        opening = self.start_tag(element, frame, override)
+        if opening is None:
+            return ""
+        tag = etree.QName(element).localname
+        children = "".join(self.text(child, frame) for child in element
+                           if not isinstance(child.tag, str) or etree.QName(child).localname not in ANIMATIONS)
+        return f"{opening}{escape(element.text or '')}{children}</{tag}>"
+
+    def start_tag(self, element: etree._Element, frame: int, override: dict[str, str] | None = None) -> str | None:
+        """`element`'s start tag with its attributes as its animations set them at `frame` and `override`
+        replacing some (None when the frame hides it: visibility="hidden")."""
         attributes = self._attributes(element, frame)
         if attributes.get("visibility") == "hidden":
-            return ""
+            return None
         attributes.update(override or {})
         if element is self.root:
             attributes.update({"xmlns": SVG_NS, "xmlns:xlink": XLINK_NS})
-        tag = etree.QName(element).localname
-        children = "".join(self._element(child, frame) for child in element
-                           if not isinstance(child.tag, str) or etree.QName(child).localname not in ANIMATIONS)
         opening = "".join(f" {name}={quoteattr(value)}" for name, value in attributes.items())
-        return f"<{tag}{opening}>{escape(element.text or '')}{children}</{tag}>"
+        return f"<{etree.QName(element).localname}{opening}>"
 
     def _attributes(self, element: etree._Element, frame: int) -> dict[str, str]:
         """`element`'s attributes as its animations set them at `frame`."""

@@ -1,11 +1,12 @@
-"""The animation as an MP4 video (H.264 + AAC): its SMIL frames resolved, rasterised by resvg, encoded by ffmpeg.
+"""The animation as an MP4 video (H.264 + AAC): its SMIL frames resolved, drawn by resvg in layers, encoded by ffmpeg.
 
 The video shows the frames of animation.svg itself: for each video frame the SMIL
-animation is resolved at the frame's time (exports/frames.py) and the static document
-that remains is drawn by resvg.
-Frames whose resolved document is the same as the one before are drawn once. The PNG
-frames are piped to the ffmpeg that imageio-ffmpeg bundles, which centres them on a
-WIDTH x HEIGHT canvas and encodes them with the recording's sound.
+animation is resolved at the frame's time (exports/frames.py). The picture is put together
+from layers (exports/layers.py): the background drawn once, each animated piece (hair,
+clothes, each face part track) drawn by resvg once per look inside its box and pasted over
+it. Frames whose resolved animation is the same as the one before are put together once.
+The frames go to the ffmpeg that imageio-ffmpeg bundles as raw RGB on a WIDTH x HEIGHT
+canvas (the picture centred on white) and are encoded with the recording's sound.
 """
 
 from __future__ import annotations
@@ -16,27 +17,35 @@ import os
 import re
 import subprocess
 import tempfile
+from collections import OrderedDict, deque
 from collections.abc import Callable
+from dataclasses import dataclass
+from multiprocessing.pool import AsyncResult, Pool
 from pathlib import Path
 from typing import IO
 
 import resvg_py
+from PIL import Image
 
 from cartoonface.errors import AudioError, OptionError
 from cartoonface.exports.frames import FrameDocuments
+from cartoonface.exports.layers import Box, Layers, Piece, bounds, decode, footprint_bounds, spills, union
 from cartoonface.speech.audio import ffmpeg_exe
 
 DEFAULT_SIZE = (1280, 720)  # 720p (issue 14)
 MAX_SIDE = 3840  # px: 4K is the largest video made
 MIN_SIDE = 16  # px
-PAD_COLOUR = "white"  # around a picture whose shape is not the video's
+PAD_COLOUR = "white"  # around a picture whose shape is not the video's, and under its transparent parts
 # H.264 for any player (yuv420p), x264's "veryfast" preset and "animation" tuning (flat colours),
 # CRF 23 (x264's default quality); AAC sound at 128 kbit/s.
 VIDEO_CODEC = ("-c:v", "libx264", "-preset", "veryfast", "-tune", "animation", "-crf", "23", "-pix_fmt", "yuv420p")
 AUDIO_CODEC = ("-c:a", "aac", "-b:a", "128k")
-# Distinct frames drawn by the worker processes (one per core) in one batch: enough to keep
-# them busy, few enough that the batch's documents (~60 kB each) stay small in memory.
-BATCH = 48
+# Distinct frames a worker process (one per core) puts together in one task, and the tasks
+# under way per process: frames are 2.8 MB of raw RGB at 720p, so about 100 MB wait at most.
+BATCH = 12
+WINDOW = 2
+OVERLAY = 64  # looks of a piece drawn over one another in one document to find its box
+CACHE = 24  # looks of a piece a worker keeps drawn (the hair of a swaying head comes back)
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -64,38 +73,47 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
     temporary name, then renamed).
 
     `size`: the video's width and height (px); the picture is centred on it. `progress("video",
-    fraction)` is told as frames are encoded. Returns the number of frames drawn (identical
-    consecutive frames are drawn once, on as many processes as there are cores). Raises
-    AudioError when ffmpeg fails.
+    fraction)` is told as frames are encoded. Returns the number of frames put together
+    (identical consecutive frames are put together once, on as many processes as there are
+    cores). Raises AudioError when ffmpeg fails.
     """
+    global _WORK
     count = max(1, math.ceil(round(duration * 1000) * rate / 1000))
     frames = FrameDocuments(svg, rate, count)
-    width, height = fit(frames.view_size, size)
+    picture = fit(frames.view_size, size)
+    offset = ((size[0] - picture[0]) // 2, (size[1] - picture[1]) // 2)
+    layers = Layers(frames, picture)
+    keys = [frames.key(frame) for frame in range(count)]
+    distinct = [frame for frame in range(count) if frame == 0 or keys[frame] != keys[frame - 1]]
+    processes = len(os.sched_getaffinity(0))
+    with multiprocessing.get_context("fork").Pool(processes) as pool:
+        base, boxes = _base_and_boxes(layers, distinct, size, offset, pool)
+    _WORK = _Work(layers, base, boxes, offset)
     temporary = out.with_name(f".{out.name}.{os.getpid()}.tmp.mp4")
     command = [
         ffmpeg_exe(), "-nostdin", "-v", "error", "-y",
-        "-f", "image2pipe", "-c:v", "png", "-framerate", str(rate), "-i", "-",
+        "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{size[0]}x{size[1]}", "-framerate", str(rate), "-i", "-",
         "-i", str(audio), "-map", "0:v:0", "-map", "1:a:0",
-        "-vf", f"pad={size[0]}:{size[1]}:(ow-iw)/2:(oh-ih)/2:color={PAD_COLOUR}",
         *VIDEO_CODEC, *AUDIO_CODEC, "-movflags", "+faststart", "-t", f"{count / rate:.3f}",
         str(temporary),
     ]  # fmt: skip
-    keys = [frames.key(frame) for frame in range(count)]
-    distinct = [frame for frame in range(count) if frame == 0 or keys[frame] != keys[frame - 1]]
+    batches = [distinct[first: first + BATCH] for first in range(0, len(distinct), BATCH)]
     with tempfile.TemporaryFile() as log:
         process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=log)
         try:
             assert process.stdin is not None
-            with process.stdin, multiprocessing.get_context("fork").Pool(len(os.sched_getaffinity(0))) as pool:
-                for first in range(0, len(distinct), BATCH):
-                    batch = distinct[first: first + BATCH]
-                    pictures = pool.map(_draw, [frames.document(frame, width, height) for frame in batch])
-                    last = first + BATCH >= len(distinct)
-                    ends = distinct[first + 1: first + BATCH + 1] + ([count] if last else [])
-                    for frame, end, png in zip(batch, ends, pictures, strict=True):
-                        process.stdin.write(png * (end - frame))
-                    if progress is not None:
-                        progress("video", ends[-1] / count)
+            with process.stdin, multiprocessing.get_context("fork").Pool(processes) as pool:
+                pending: deque[tuple[list[int], AsyncResult[list[bytes]]]] = deque()
+                for number, batch in enumerate(batches):
+                    pending.append((batch, pool.apply_async(_compose, (batch,))))
+                    while pending and (len(pending) > WINDOW * processes or number == len(batches) - 1):
+                        done, result = pending.popleft()
+                        end = distinct[distinct.index(done[-1]) + 1] if done[-1] != distinct[-1] else count
+                        for frame, until, raw in zip(done, [*done[1:], end], result.get(), strict=True):
+                            for _ in range(until - frame):
+                                process.stdin.write(raw)
+                        if progress is not None:
+                            progress("video", end / count)
             if process.wait() != 0 or not temporary.is_file():
                 raise AudioError(f"{out}: ffmpeg could not make the video ({_last_line(log)})")
             os.replace(temporary, out)
@@ -103,11 +121,99 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
             process.wait()
             raise AudioError(f"{out}: ffmpeg stopped making the video ({_last_line(log)})") from None
         finally:
+            _WORK = None
             if process.poll() is None:
                 process.kill()
                 process.wait()
             temporary.unlink(missing_ok=True)
     return len(distinct)
+
+
+def _base_and_boxes(layers: Layers, distinct: list[int], size: tuple[int, int], offset: tuple[int, int],
+                    pool: Pool) -> tuple[Image.Image, list[Box | None]]:
+    """The picture under every frame (the video's `size`, white, the base pieces drawn at `offset`)
+    and each animated piece's box (None: never seen), all looks of a piece drawn over one another
+    (OVERLAY looks a document) on the `pool`."""
+    whole = layers.whole()
+    documents = [layers.document("".join(layers.piece_text(piece, 0) for piece in layers.base), whole)]
+    owners = []
+    for index, piece in enumerate(layers.animated):
+        looks: dict[tuple[int, ...], int] = {}
+        for frame in distinct:
+            looks.setdefault(piece.look(frame), frame)
+        shown = list(looks.values())
+        for first in range(0, len(shown), OVERLAY):
+            group = shown[first: first + OVERLAY]
+            documents.append(layers.document("".join(layers.piece_text(piece, f) for f in group), whole, group[0],
+                                             footprint=True))
+            owners.append(index)
+    pictures = pool.map(_draw, documents)
+    base = Image.new("RGB", size, PAD_COLOUR)
+    drawn = decode(pictures[0])
+    base.paste(drawn, offset, drawn)
+    boxes: list[Box | None] = [None] * len(layers.animated)
+    for owner, png in zip(owners, pictures[1:], strict=True):
+        boxes[owner] = union([boxes[owner], footprint_bounds(decode(png), whole, whole[2:])])
+    return base, boxes
+
+
+@dataclass(frozen=True)
+class _Work:
+    """What the worker processes put frames together from (set before they are forked)."""
+
+    layers: Layers
+    base: Image.Image  # the video's size, the base pieces drawn
+    boxes: list[Box | None]  # of each animated piece, picture px
+    offset: tuple[int, int]  # the picture's top left corner on the video, px
+
+
+_WORK: _Work | None = None
+# per animated piece: its latest looks drawn (look -> where it goes on the video and its RGBA picture, or None)
+_SPRITES: dict[int, OrderedDict[tuple[int, ...], tuple[tuple[int, int], Image.Image] | None]] = {}
+
+
+def _compose(batch: list[int]) -> list[bytes]:
+    """The frames `batch` as raw RGB (the video's width x height x 3 bytes each), in a worker process."""
+    assert _WORK is not None
+    work, frames = _WORK, []
+    for frame in batch:
+        picture = work.base.copy()
+        for index, (piece, box) in enumerate(zip(work.layers.animated, work.boxes, strict=True)):
+            if box is None:
+                continue
+            cache = _SPRITES.setdefault(index, OrderedDict())
+            look = piece.look(frame)
+            if look in cache:
+                cache.move_to_end(look)
+            else:
+                cache[look] = _sprite(work, piece, box, frame)
+                if len(cache) > CACHE:
+                    cache.popitem(last=False)
+            sprite = cache[look]
+            if sprite is not None:
+                picture.paste(sprite[1], sprite[0], sprite[1])
+        frames.append(picture.tobytes())
+    return frames
+
+
+def _sprite(work: _Work, piece: Piece, box: Box, frame: int) -> tuple[tuple[int, int], Image.Image] | None:
+    """`piece` at `frame` drawn in its `box`: its top left corner on the video and its RGBA
+    picture cut to its visible pixels (None when nothing shows)."""
+    text = work.layers.piece_text(piece, frame)
+    drawn = decode(_draw(work.layers.document(text, box, frame)))
+    seen = bounds(drawn, box)
+    if seen is None:
+        return None
+    whole = work.layers.whole()
+    if spills(seen, box, whole):
+        # drawn up to an edge of its box that is not the picture's: it may go on outside, draw it whole
+        box = whole
+        drawn = decode(_draw(work.layers.document(text, box, frame)))
+        seen = bounds(drawn, box)
+        assert seen is not None
+    x, y, width, height = seen
+    cut = drawn.crop((x - box[0], y - box[1], x - box[0] + width, y - box[1] + height))
+    return (x + work.offset[0], y + work.offset[1]), cut
 
 
 def _last_line(log: IO[bytes]) -> str:
