@@ -88,7 +88,9 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
     processes = len(os.sched_getaffinity(0))
     with multiprocessing.get_context("fork").Pool(processes) as pool:
         base, boxes = _base_and_boxes(layers, distinct, size, offset, pool)
-    _WORK = _Work(layers, base, boxes, offset)
+    busiest = max(range(len(layers.animated)), default=0,
+                  key=lambda k: len({layers.animated[k].look(frame) for frame in distinct}))
+    _WORK = _Work(layers, base, boxes, offset, busiest)
     temporary = out.with_name(f".{out.name}.{os.getpid()}.tmp.mp4")
     command = [
         ffmpeg_exe(), "-nostdin", "-v", "error", "-y",
@@ -165,38 +167,97 @@ class _Work:
     base: Image.Image  # the video's size, the base pieces drawn
     boxes: list[Box | None]  # of each animated piece, picture px
     offset: tuple[int, int]  # the picture's top left corner on the video, px
+    # the pieces below the one with the most looks are pasted into a picture kept while
+    # their looks stay, the rest over a copy of its part that they cover
+    split: int
+
+
+Region = tuple[int, int, int, int]  # left, top, right, bottom on the video, px
+Sprite = tuple[tuple[int, int], Image.Image]  # a piece's picture (RGBA) and its top left corner on the video
+
+
+@dataclass
+class _Canvas:
+    """A worker's pictures: `under` the base with the pieces below the split in `looks` pasted
+    over `under_dirty`, `frame` the last frame: `under` with the pieces above pasted over `frame_dirty`."""
+
+    under: Image.Image
+    frame: Image.Image
+    looks: tuple[tuple[int, ...], ...] | None = None
+    under_dirty: Region | None = None
+    frame_dirty: Region | None = None
 
 
 _WORK: _Work | None = None
-# per animated piece: its latest looks drawn (look -> where it goes on the video and its RGBA picture, or None)
-_SPRITES: dict[int, OrderedDict[tuple[int, ...], tuple[tuple[int, int], Image.Image] | None]] = {}
+_CANVAS: _Canvas | None = None
+# per animated piece: its latest looks drawn (look -> its sprite, None when nothing shows)
+_SPRITES: dict[int, OrderedDict[tuple[int, ...], Sprite | None]] = {}
 
 
 def _compose(batch: list[int]) -> list[bytes]:
     """The frames `batch` as raw RGB (the video's width x height x 3 bytes each), in a worker process."""
+    global _CANVAS
     assert _WORK is not None
     work, frames = _WORK, []
+    if _CANVAS is None:
+        _CANVAS = _Canvas(work.base.copy(), work.base.copy())
+    canvas = _CANVAS
     for frame in batch:
-        picture = work.base.copy()
-        for index, (piece, box) in enumerate(zip(work.layers.animated, work.boxes, strict=True)):
-            if box is None:
-                continue
-            cache = _SPRITES.setdefault(index, OrderedDict())
-            look = piece.look(frame)
-            if look in cache:
-                cache.move_to_end(look)
-            else:
-                cache[look] = _sprite(work, piece, box, frame)
-                if len(cache) > CACHE:
-                    cache.popitem(last=False)
-            sprite = cache[look]
-            if sprite is not None:
-                picture.paste(sprite[1], sprite[0], sprite[1])
-        frames.append(picture.tobytes())
+        looks = tuple(piece.look(frame) for piece in work.layers.animated)
+        sprites = [_cached(work, index, look, frame) for index, look in enumerate(looks)]
+        changed = canvas.frame_dirty
+        if looks[: work.split] != canvas.looks:
+            changed = _union_region(changed, canvas.under_dirty)
+            _restore(canvas.under, work.base, canvas.under_dirty)
+            canvas.under_dirty = _paste(canvas.under, sprites[: work.split])
+            changed = _union_region(changed, canvas.under_dirty)
+            canvas.looks = looks[: work.split]
+        _restore(canvas.frame, canvas.under, changed)
+        canvas.frame_dirty = _paste(canvas.frame, sprites[work.split:])
+        frames.append(canvas.frame.tobytes())
     return frames
 
 
-def _sprite(work: _Work, piece: Piece, box: Box, frame: int) -> tuple[tuple[int, int], Image.Image] | None:
+def _restore(picture: Image.Image, source: Image.Image, region: Region | None) -> None:
+    """Copy `region` of `source` onto `picture` (nothing for None)."""
+    if region is not None:
+        picture.paste(source.crop(region), region[:2])
+
+
+def _paste(picture: Image.Image, sprites: list[Sprite | None]) -> Region | None:
+    """Paste `sprites` over `picture` by their alpha, in order; returns the region they cover."""
+    covered = None
+    for sprite in sprites:
+        if sprite is not None:
+            (x, y), image = sprite
+            picture.paste(image, (x, y), image)
+            covered = _union_region(covered, (x, y, x + image.width, y + image.height))
+    return covered
+
+
+def _union_region(one: Region | None, other: Region | None) -> Region | None:
+    """The smallest (left, top, right, bottom) region holding both (None for none)."""
+    if one is None or other is None:
+        return one or other
+    return min(one[0], other[0]), min(one[1], other[1]), max(one[2], other[2]), max(one[3], other[3])
+
+
+def _cached(work: _Work, index: int, look: tuple[int, ...], frame: int) -> Sprite | None:
+    """Animated piece `index` in `look` (that of `frame`), from the worker's latest CACHE looks or drawn."""
+    box = work.boxes[index]
+    if box is None:
+        return None
+    cache = _SPRITES.setdefault(index, OrderedDict())
+    if look in cache:
+        cache.move_to_end(look)
+        return cache[look]
+    sprite = cache[look] = _sprite(work, work.layers.animated[index], box, frame)
+    if len(cache) > CACHE:
+        cache.popitem(last=False)
+    return sprite
+
+
+def _sprite(work: _Work, piece: Piece, box: Box, frame: int) -> Sprite | None:
     """`piece` at `frame` drawn in its `box`: its top left corner on the video and its RGBA
     picture cut to its visible pixels (None when nothing shows)."""
     text = work.layers.piece_text(piece, frame)
