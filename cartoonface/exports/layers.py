@@ -17,7 +17,6 @@ for every small piece.
 
 from __future__ import annotations
 
-import io
 import re
 from dataclasses import dataclass
 
@@ -216,9 +215,3 @@ def union(boxes: list[Box | None]) -> Box | None:
     left, top = min(b[0] for b in real), min(b[1] for b in real)
     right, bottom = max(b[0] + b[2] for b in real), max(b[1] + b[3] for b in real)
     return left, top, right - left, bottom - top
-
-
-def decode(png: bytes) -> Image.Image:
-    """PNG bytes -> an RGBA picture."""
-    picture = Image.open(io.BytesIO(png))
-    return picture.convert("RGBA") if picture.mode != "RGBA" else picture

@@ -24,12 +24,12 @@ from multiprocessing.pool import AsyncResult, Pool
 from pathlib import Path
 from typing import IO
 
-import resvg_py
+import pyvips
 from PIL import Image
 
 from cartoonface.errors import AudioError, OptionError
 from cartoonface.exports.frames import FrameDocuments
-from cartoonface.exports.layers import Box, Layers, Piece, bounds, decode, footprint_bounds, spills, union
+from cartoonface.exports.layers import Box, Layers, Piece, bounds, footprint_bounds, spills, union
 from cartoonface.speech.audio import ffmpeg_exe
 
 DEFAULT_SIZE = (1280, 720)  # 720p (issue 14)
@@ -86,7 +86,7 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
     keys = [frames.key(frame) for frame in range(count)]
     distinct = [frame for frame in range(count) if frame == 0 or keys[frame] != keys[frame - 1]]
     processes = len(os.sched_getaffinity(0))
-    with multiprocessing.get_context("fork").Pool(processes) as pool:
+    with multiprocessing.get_context("fork").Pool(processes, _start_worker) as pool:
         base, boxes = _base_and_boxes(layers, distinct, size, offset, pool)
     busiest = max(range(len(layers.animated)), default=0,
                   key=lambda k: len({layers.animated[k].look(frame) for frame in distinct}))
@@ -104,7 +104,7 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
         process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=log)
         try:
             assert process.stdin is not None
-            with process.stdin, multiprocessing.get_context("fork").Pool(processes) as pool:
+            with process.stdin, multiprocessing.get_context("fork").Pool(processes, _start_worker) as pool:
                 pending: deque[tuple[list[int], AsyncResult[list[bytes]]]] = deque()
                 for number, batch in enumerate(batches):
                     pending.append((batch, pool.apply_async(_compose, (batch,))))
@@ -151,11 +151,10 @@ def _base_and_boxes(layers: Layers, distinct: list[int], size: tuple[int, int], 
             owners.append(index)
     pictures = pool.map(_draw, documents)
     base = Image.new("RGB", size, PAD_COLOUR)
-    drawn = decode(pictures[0])
-    base.paste(drawn, offset, drawn)
+    base.paste(pictures[0], offset, pictures[0])
     boxes: list[Box | None] = [None] * len(layers.animated)
-    for owner, png in zip(owners, pictures[1:], strict=True):
-        boxes[owner] = union([boxes[owner], footprint_bounds(decode(png), whole, whole[2:])])
+    for owner, picture in zip(owners, pictures[1:], strict=True):
+        boxes[owner] = union([boxes[owner], footprint_bounds(picture, whole, whole[2:])])
     return base, boxes
 
 
@@ -261,7 +260,7 @@ def _sprite(work: _Work, piece: Piece, box: Box, frame: int) -> Sprite | None:
     """`piece` at `frame` drawn in its `box`: its top left corner on the video and its RGBA
     picture cut to its visible pixels (None when nothing shows)."""
     text = work.layers.piece_text(piece, frame)
-    drawn = decode(_draw(work.layers.document(text, box, frame)))
+    drawn = _draw(work.layers.document(text, box, frame))
     seen = bounds(drawn, box)
     if seen is None:
         return None
@@ -269,7 +268,7 @@ def _sprite(work: _Work, piece: Piece, box: Box, frame: int) -> Sprite | None:
     if spills(seen, box, whole):
         # drawn up to an edge of its box that is not the picture's: it may go on outside, draw it whole
         box = whole
-        drawn = decode(_draw(work.layers.document(text, box, frame)))
+        drawn = _draw(work.layers.document(text, box, frame))
         seen = bounds(drawn, box)
         assert seen is not None
     x, y, width, height = seen
@@ -284,6 +283,14 @@ def _last_line(log: IO[bytes]) -> str:
     return lines[-1][:200] if lines else "?"
 
 
-def _draw(document: str) -> bytes:
-    """One frame's static SVG document -> PNG bytes (resvg, no system fonts: the face has no text)."""
-    return bytes(resvg_py.svg_to_bytes(svg_string=document, skip_system_fonts=True))
+def _start_worker() -> None:
+    """A worker process draws on its own thread (the processes share the cores) and keeps no
+    libvips cache (no two documents drawn are alike)."""
+    pyvips.concurrency_set(1)
+    pyvips.cache_set_max(0)
+
+
+def _draw(document: str) -> Image.Image:
+    """A static SVG document -> its RGBA picture (librsvg through libvips: raw pixels, no PNG)."""
+    drawn = pyvips.Image.svgload_buffer(document.encode())
+    return Image.frombuffer("RGBA", (drawn.width, drawn.height), drawn.write_to_memory(), "raw", "RGBA", 0, 1)
