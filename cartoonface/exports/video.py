@@ -17,13 +17,16 @@ import os
 import re
 import subprocess
 import tempfile
-from collections import OrderedDict, deque
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
-from multiprocessing.pool import AsyncResult, Pool
+from multiprocessing.pool import Pool
+from multiprocessing.sharedctypes import Synchronized
+from multiprocessing.synchronize import Condition
 from pathlib import Path
 from typing import IO
 
+import numpy as np
 import pyvips
 from PIL import Image
 
@@ -40,10 +43,9 @@ PAD_COLOUR = "white"  # around a picture whose shape is not the video's, and und
 # CRF 23 (x264's default quality); AAC sound at 128 kbit/s.
 VIDEO_CODEC = ("-c:v", "libx264", "-preset", "veryfast", "-tune", "animation", "-crf", "23", "-pix_fmt", "yuv420p")
 AUDIO_CODEC = ("-c:a", "aac", "-b:a", "128k")
-# Distinct frames a worker process (one per core) puts together in one task, and the tasks
-# under way per process: frames are 2.8 MB of raw RGB at 720p, so about 100 MB wait at most.
+# Distinct frames a worker process (one per core) puts together in one task before writing
+# them (2.8 MB of raw RGB each at 720p).
 BATCH = 12
-WINDOW = 2
 OVERLAY = 64  # looks of a piece drawn over one another in one document to find its box
 CACHE = 24  # looks of a piece a worker keeps drawn (the hair of a swaying head comes back)
 
@@ -90,7 +92,6 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
         base, boxes = _base_and_boxes(layers, distinct, size, offset, pool)
     busiest = max(range(len(layers.animated)), default=0,
                   key=lambda k: len({layers.animated[k].look(frame) for frame in distinct}))
-    _WORK = _Work(layers, base, boxes, offset, busiest)
     temporary = out.with_name(f".{out.name}.{os.getpid()}.tmp.mp4")
     command = [
         ffmpeg_exe(), "-nostdin", "-v", "error", "-y",
@@ -100,22 +101,21 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
         str(temporary),
     ]  # fmt: skip
     batches = [distinct[first: first + BATCH] for first in range(0, len(distinct), BATCH)]
+    repeats = dict(zip(distinct, np.diff([*distinct, count]).tolist(), strict=True))
+    context = multiprocessing.get_context("fork")
     with tempfile.TemporaryFile() as log:
         process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=log)
         try:
             assert process.stdin is not None
-            with process.stdin, multiprocessing.get_context("fork").Pool(processes, _start_worker) as pool:
-                pending: deque[tuple[list[int], AsyncResult[list[bytes]]]] = deque()
-                for number, batch in enumerate(batches):
-                    pending.append((batch, pool.apply_async(_compose, (batch,))))
-                    while pending and (len(pending) > WINDOW * processes or number == len(batches) - 1):
-                        done, result = pending.popleft()
-                        end = distinct[distinct.index(done[-1]) + 1] if done[-1] != distinct[-1] else count
-                        for frame, until, raw in zip(done, [*done[1:], end], result.get(), strict=True):
-                            for _ in range(until - frame):
-                                process.stdin.write(raw)
-                        if progress is not None:
-                            progress("video", end / count)
+            _WORK = _Work(layers, base, boxes, offset, busiest, process.stdin.fileno(), context.Condition(),
+                          context.Value("i", 0))
+            with process.stdin, context.Pool(processes, _start_worker) as pool:
+                tasks = [pool.apply_async(_compose, (number, batch, [repeats[frame] for frame in batch]))
+                         for number, batch in enumerate(batches)]
+                for task, end in zip(tasks, [*(batch[0] for batch in batches[1:]), count], strict=True):
+                    task.get()
+                    if progress is not None:
+                        progress("video", end / count)
             if process.wait() != 0 or not temporary.is_file():
                 raise AudioError(f"{out}: ffmpeg could not make the video ({_last_line(log)})")
             os.replace(temporary, out)
@@ -169,6 +169,9 @@ class _Work:
     # the pieces below the one with the most looks are pasted into a picture kept while
     # their looks stay, the rest over a copy of its part that they cover
     split: int
+    output: int  # ffmpeg's standard input (file descriptor): the workers write their frames there in turn
+    turn: Condition  # told when `written` moves on
+    written: Synchronized[int]  # the number of batches written
 
 
 Region = tuple[int, int, int, int]  # left, top, right, bottom on the video, px
@@ -193,8 +196,10 @@ _CANVAS: _Canvas | None = None
 _SPRITES: dict[int, OrderedDict[tuple[int, ...], Sprite | None]] = {}
 
 
-def _compose(batch: list[int]) -> list[bytes]:
-    """The frames `batch` as raw RGB (the video's width x height x 3 bytes each), in a worker process."""
+def _compose(number: int, batch: list[int], repeats: list[int]) -> None:
+    """Put together the frames `batch` (batch `number`), in a worker process, and when the batches
+    before it are written, write each `repeats` times to ffmpeg as raw RGB (the video's width x
+    height x 3 bytes)."""
     global _CANVAS
     assert _WORK is not None
     work, frames = _WORK, []
@@ -214,7 +219,20 @@ def _compose(batch: list[int]) -> list[bytes]:
         _restore(canvas.frame, canvas.under, changed)
         canvas.frame_dirty = _paste(canvas.frame, sprites[work.split:])
         frames.append(canvas.frame.tobytes())
-    return frames
+    with work.turn:
+        work.turn.wait_for(lambda: work.written.value == number)
+        for raw, times in zip(frames, repeats, strict=True):
+            for _ in range(times):
+                _write(work.output, raw)
+        work.written.value = number + 1
+        work.turn.notify_all()
+
+
+def _write(output: int, data: bytes) -> None:
+    """All of `data` to the file descriptor `output` (a pipe takes it in parts)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(output, view):]
 
 
 def _restore(picture: Image.Image, source: Image.Image, region: Region | None) -> None:
