@@ -4,15 +4,16 @@ The document's rendered elements are cut into pieces in paint order: the root's 
 children, and the rendered children of an animated plain group (a `<g>` with no attribute but
 id, transform and data-*, so painting its children one by one over the picture is painting the
 group: render/animation.py's `face` layer with its part tracks). The leading pieces without
-animation (the background) make the base picture, drawn once. Every other piece is drawn by
-resvg alone on a transparent canvas for each of its looks (the value indices of the animations
-it depends on: its own, its ancestors') and pasted over the picture with its alpha (source-over,
-as resvg paints it over what lies below). A piece is drawn only inside its box: the pixels any
-of its looks covers, found once by drawing all its looks over one another.
+animation (the background) make the base picture, drawn once. Every other piece is drawn
+alone on a transparent canvas for each of its looks (the value indices of the animations it
+depends on: its own, its ancestors') and pasted over the picture with its alpha (source-over,
+as a renderer paints it over what lies below; exports/compositor.py). A piece is drawn only
+inside its box: the pixels any of its looks covers, found once by drawing all its looks over
+one another.
 
 Only the root `<defs>` children a piece refers to (url(#id), href="#id", and what those refer
-to) go into its document, so resvg does not parse the whole face's gradients and clip paths
-for every small piece.
+to) go into its document, so the renderer does not parse the whole face's gradients and clip
+paths for every small piece.
 """
 
 from __future__ import annotations
@@ -151,9 +152,9 @@ class Layers:
         pixels `box`, with the root's context and the definitions `body` refers to (at `frame`).
 
         `footprint`: drawn for finding where `body` draws: FOOTPRINT_SHRINK times smaller (the
-        box grown to a multiple of it), the root's gradients as one opaque colour (resvg fills
-        a one-stop gradient as a plain colour, several times faster, and a gradient that is
-        transparent somewhere never covers less than the opaque colour)."""
+        box grown to a multiple of it), the root's gradients as one opaque colour (a one-stop
+        gradient paints its stop's colour, SVG 1.1 13.2.4: faster, and a gradient that is
+        transparent somewhere never covers more than the opaque colour)."""
         context = "".join(self.frames.text(element, frame) for element in self.context)
         wanted: set[int] = set()
         todo = REFERENCE.findall(body + context)
