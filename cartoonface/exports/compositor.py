@@ -23,6 +23,8 @@ OVERLAY = 64  # looks of a piece drawn over one another in one document to find 
 CACHE = 24  # looks of a piece a compositor keeps drawn (the hair of a swaying head comes back)
 Region = tuple[int, int, int, int]  # left, top, right, bottom on the video, px
 Sprite = tuple[tuple[int, int], Image.Image]  # a piece's picture (RGBA) and its top left corner on the video
+# draws documents (a function over a list: a process pool's map, or `serial`)
+Mapper = Callable[[Callable[[str], Image.Image], list[str]], list[Image.Image]]
 
 
 def draw(document: str) -> Image.Image:
@@ -52,8 +54,12 @@ class Stage:
     split: int
 
 
-def stage(layers: Layers, distinct: Sequence[int], size: tuple[int, int],
-          mapper: Callable[[Callable[[str], Image.Image], list[str]], list[Image.Image]] = lambda f, xs: list(map(f, xs))) -> Stage:
+def serial(function: Callable[[str], Image.Image], documents: list[str]) -> list[Image.Image]:
+    """`function` over `documents` in this process (a `Mapper`)."""
+    return [function(document) for document in documents]
+
+
+def stage(layers: Layers, distinct: Sequence[int], size: tuple[int, int], mapper: Mapper = serial) -> Stage:
     """The stage of `layers` for frames `distinct` on a video of `size` (width, height px): the
     base drawn once, each animated piece's box from all its looks drawn over one another
     (OVERLAY looks a document; `mapper(draw, documents)` draws them, e.g. a process pool's map)."""
