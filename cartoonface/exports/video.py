@@ -42,8 +42,9 @@ MIN_SIDE = 16  # px
 VIDEO_CODEC = ("-c:v", "libx264", "-preset", "veryfast", "-tune", "animation", "-crf", "23", "-pix_fmt", "yuv420p")
 AUDIO_CODEC = ("-c:a", "aac", "-b:a", "128k")
 # Distinct frames a worker process (one per core) puts together in one task before writing
-# them (2.8 MB of raw RGB each at 720p).
+# them: 12 (2.8 MB of raw RGB each at 720p), fewer when they would hold more than BATCH_BYTES.
 BATCH = 12
+BATCH_BYTES = 40_000_000
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -93,7 +94,8 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
         *VIDEO_CODEC, *AUDIO_CODEC, "-movflags", "+faststart", "-t", f"{count / rate:.3f}",
         str(temporary),
     ]  # fmt: skip
-    batches = [distinct[first: first + BATCH] for first in range(0, len(distinct), BATCH)]
+    batch = max(1, min(BATCH, BATCH_BYTES // (size[0] * size[1] * 3)))
+    batches = [distinct[first: first + batch] for first in range(0, len(distinct), batch)]
     repeats = dict(zip(distinct, np.diff([*distinct, count]).tolist(), strict=True))
     with tempfile.TemporaryFile() as log:
         process = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=log)
