@@ -4,6 +4,7 @@ clothes, rolled head) put together piece by piece against the resolved document 
 
 from __future__ import annotations
 
+import multiprocessing
 import shutil
 from pathlib import Path
 
@@ -25,9 +26,20 @@ SIZE = (640, 360)  # the video: the 16:9 stage fills it
 pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
 
 
+_SCENE: tuple | None = None  # (frames, layers, stage) for the forked drawing processes
+
+
+def in_child(function, *args):
+    """`function(*args)` in a forked process: libvips starts threads when it draws, and a process
+    that has drawn must not fork afterwards (write_video's workers in a later test would hang)."""
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        return pool.apply(function, args)
+
+
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     """The layers and stage of a short newsroom announcer page, with its frame documents and distinct frames."""
+    global _SCENE
     folder = tmp_path_factory.mktemp("layers")
     speech, transcript = spoken_inputs(folder, "你好。今天天气很好，我们出去走走吧。", speed=150)
     result = generate(FACE, speech, transcript, folder / "site",
@@ -36,15 +48,36 @@ def scene(tmp_path_factory):
     layers = Layers(frames, fit(frames.view_size, SIZE))
     keys = [frames.key(frame) for frame in range(result.frames)]
     distinct = [frame for frame in range(result.frames) if frame == 0 or keys[frame] != keys[frame - 1]]
-    return frames, layers, stage(layers, distinct, SIZE), distinct
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        built = stage(layers, distinct, SIZE, pool.map)
+    _SCENE = (frames, layers, built)
+    yield frames, layers, built, distinct
+    _SCENE = None
 
 
-def whole_frame(frames: FrameDocuments, frame: int) -> np.ndarray:
+def whole_frame(frame: int) -> np.ndarray:
     """The resolved document of `frame` drawn whole on the video's background, (h, w, 3) float."""
-    drawn = draw(frames.document(frame, *SIZE))
+    assert _SCENE is not None
+    drawn = draw(_SCENE[0].document(frame, *SIZE))
     picture = Image.new("RGB", SIZE, PAD_COLOUR)
     picture.paste(drawn, (0, 0), drawn)
     return np.asarray(picture, dtype=float)
+
+
+def composed(order: list[int]) -> list[np.ndarray]:
+    """The frames `order` put together one after another by one compositor, (h, w, 3) float each."""
+    assert _SCENE is not None
+    compositor = Compositor(_SCENE[2])
+    return [np.asarray(compositor.frame(frame), dtype=float) for frame in order]
+
+
+def piece_bounds(looks: list[tuple[int, int]]) -> list[tuple[int, int, int, int] | None]:
+    """For each (animated piece index, frame): the bounds of the piece drawn alone on the whole picture."""
+    assert _SCENE is not None
+    layers = _SCENE[1]
+    whole = layers.whole()
+    return [bounds(draw(layers.document(layers.piece_text(layers.animated[index], frame), whole, frame)), whole)
+            for index, frame in looks]
 
 
 def test_the_still_background_is_the_base_and_the_face_layer_is_cut_into_its_tracks(scene):
@@ -62,14 +95,12 @@ def test_the_still_background_is_the_base_and_the_face_layer_is_cut_into_its_tra
 
 
 def test_frames_put_together_are_the_whole_document_drawn(scene):
-    frames, _, built, distinct = scene
-    compositor = Compositor(built)
+    frames, _, _, distinct = scene
     # forwards, then back and forth: pieces come from the cache and the restored regions must hold
     chosen = distinct[:: max(1, len(distinct) // 8)]
     order = [*chosen, *reversed(chosen[:-1]), chosen[len(chosen) // 2]]
-    whole = {frame: whole_frame(frames, frame) for frame in chosen}
-    for frame in order:
-        put = np.asarray(compositor.frame(frame), dtype=float)
+    whole = dict(zip(chosen, in_child(_whole_frames, chosen), strict=True))
+    for frame, put in zip(order, in_child(composed, order), strict=True):
         own = np.abs(put - whole[frame])
         others = [np.abs(put - whole[other]).mean() for other in chosen if frames.key(other) != frames.key(frame)]
         # pasting straight-alpha pieces one by one rounds edge pixels differently from drawing
@@ -78,16 +109,21 @@ def test_frames_put_together_are_the_whole_document_drawn(scene):
         assert not others or own.mean() < 0.2 * min(others), (frame, own.mean(), others)
 
 
+def _whole_frames(chosen: list[int]) -> list[np.ndarray]:
+    """whole_frame of each of `chosen`."""
+    return [whole_frame(frame) for frame in chosen]
+
+
 def test_every_look_of_a_piece_stays_inside_its_box(scene):
-    frames, layers, built, distinct = scene
-    whole = layers.whole()
-    for piece, box in zip(layers.animated, built.boxes, strict=True):
+    _, layers, built, distinct = scene
+    asked = []
+    for index, piece in enumerate(layers.animated):
         looks = {piece.look(frame): frame for frame in distinct}
-        for frame in list(looks.values())[:: max(1, len(looks) // 5)]:
-            seen = bounds(draw(layers.document(layers.piece_text(piece, frame), whole, frame)), whole)
-            if seen is None:
-                continue
-            assert box is not None and union([box, seen]) == box, (piece.element.get("data-part"), seen, box)
+        asked += [(index, frame) for frame in list(looks.values())[:: max(1, len(looks) // 5)]]
+    for (index, _), seen in zip(asked, in_child(piece_bounds, asked), strict=True):
+        box = built.boxes[index]
+        if seen is not None:
+            assert box is not None and union([box, seen]) == box, (index, seen, box)
 
 
 def test_a_footprint_covers_a_thin_line_and_a_box_edge_is_told():

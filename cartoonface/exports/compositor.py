@@ -28,7 +28,10 @@ Mapper = Callable[[Callable[[str], Image.Image], list[str]], list[Image.Image]]
 
 
 def draw(document: str) -> Image.Image:
-    """A static SVG document -> its RGBA picture (librsvg through libvips: raw pixels, no PNG)."""
+    """A static SVG document -> its RGBA picture (librsvg through libvips: raw pixels, no PNG).
+
+    libvips starts threads when it draws: a process that has drawn must not fork afterwards
+    (the child hangs), so write_video draws only in the worker processes it forks."""
     drawn = pyvips.Image.svgload_buffer(document.encode())
     return Image.frombuffer("RGBA", (drawn.width, drawn.height), drawn.write_to_memory(), "raw", "RGBA", 0, 1)
 
