@@ -9,23 +9,30 @@ Target (issue 14): a 3-minute book weighs at most 3 MB besides its SVG.
 
 The MP4 (exports/video.py) of the sample story's announcer page at 1280x720, 30 fps: frames
 rendered and encoded per second of wall time (target: at least the frame rate, real time, on
-2 cores), distinct frames drawn, CPU seconds of this process and its children, MB per minute.
+2 cores), distinct frames put together, CPU seconds of this process and its children (the
+worker processes and ffmpeg), MB per minute. Then x264's presets on the same frames (the
+video decoded to raw RGB, PRESET_FRAMES of them): ffmpeg's CPU seconds per frame and MB per
+minute of picture, for the choice of VIDEO_CODEC's preset.
 """
 
 from __future__ import annotations
 
 import os
+import subprocess
 import tempfile
 import time
 from pathlib import Path
 
 from bench.generate import build_input
 from cartoonface.data import SAMPLE_FACES
-from cartoonface.exports.video import write_video
+from cartoonface.exports.video import VIDEO_CODEC, write_video
 from cartoonface.pipeline import Options, generate
+from cartoonface.speech.audio import ffmpeg_exe
 
 ROOT = Path(__file__).resolve().parents[1]
 STORY = ROOT / "samples" / "speech" / "story"
+PRESETS = ("ultrafast", "superfast", "veryfast", "faster")
+PRESET_FRAMES = 300  # 10 s at 30 fps
 
 
 def page_weights(name: str, audio: Path, transcript: Path, folder: Path) -> None:
@@ -45,8 +52,8 @@ def page_weights(name: str, audio: Path, transcript: Path, folder: Path) -> None
           f"besides the SVG for 3 minutes: {after / minutes * 3 / 1e6:.2f} MB (target <= 3)")
 
 
-def video_speed(folder: Path) -> None:
-    """Make the sample story's announcer page and its 720p30 MP4; print the speed and size."""
+def video_speed(folder: Path) -> Path:
+    """Make the sample story's announcer page and its 720p30 MP4; print the speed and size. Returns the video."""
     story = STORY.with_suffix(".wav")
     result = generate(sorted(SAMPLE_FACES.glob("*.json"))[0], story, STORY.with_suffix(".txt"), folder / "announcer",
                       Options(page="announcer"))
@@ -55,10 +62,30 @@ def video_speed(folder: Path) -> None:
     drawn = write_video((result.out_dir / "animation.svg").read_bytes(), 30, result.duration, story, video)
     wall, after = time.perf_counter() - started, os.times()
     used = sum(after[:4]) - sum(cpu[:4])
-    print(f"MP4 1280x720 30 fps, announcer, {result.duration:.1f} s ({result.frames} frames, {drawn} drawn): "
+    print(f"MP4 1280x720 30 fps, announcer, {result.duration:.1f} s ({result.frames} frames, {drawn} put together): "
           f"{wall:.1f} s wall = {result.frames / wall:.1f} frames/s ({result.duration / wall:.2f}x real time), "
-          f"{used:.1f} CPU s = {result.frames / used:.1f} frames per CPU second; "
-          f"{video.stat().st_size / 1e6 / (result.duration / 60):.2f} MB per minute")
+          f"{used:.1f} CPU s = {result.frames / used:.1f} frames per CPU second ({used / result.frames * 1000:.0f} ms "
+          f"a frame); {video.stat().st_size / 1e6 / (result.duration / 60):.2f} MB per minute")
+    return video
+
+
+def presets(video: Path, folder: Path) -> None:
+    """Encode the first PRESET_FRAMES frames of `video` again with each of PRESETS (VIDEO_CODEC
+    otherwise); print ffmpeg's CPU time per frame and the picture's MB per minute."""
+    raw = folder / "frames.rgb"
+    subprocess.run([ffmpeg_exe(), "-v", "error", "-y", "-i", str(video), "-frames:v", str(PRESET_FRAMES),
+                    "-f", "rawvideo", "-pix_fmt", "rgb24", str(raw)], check=True)
+    preset = VIDEO_CODEC.index("-preset") + 1
+    for name in PRESETS:
+        codec = [*VIDEO_CODEC[:preset], name, *VIDEO_CODEC[preset + 1:]]
+        out = folder / f"{name}.mp4"
+        cpu = os.times()
+        subprocess.run([ffmpeg_exe(), "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", "1280x720",
+                        "-framerate", "30", "-i", str(raw), *codec, str(out)], check=True)
+        used = sum(os.times()[2:4]) - sum(cpu[2:4])
+        print(f"x264 -preset {name}: {used / PRESET_FRAMES * 1000:.1f} ms CPU a frame, "
+              f"{out.stat().st_size / 1e6 / (PRESET_FRAMES / 30 / 60):.2f} MB per minute of picture")
+    raw.unlink()
 
 
 def main() -> None:
@@ -68,7 +95,7 @@ def main() -> None:
         audio, transcript, _ = build_input(folder)
         page_weights("THCHS-30 3 min 16 kHz", audio, transcript, folder)
         page_weights("sample story 22.05 kHz", STORY.with_suffix(".wav"), STORY.with_suffix(".txt"), folder)
-        video_speed(folder)
+        presets(video_speed(folder), folder)
 
 
 if __name__ == "__main__":

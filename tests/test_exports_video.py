@@ -13,7 +13,8 @@ import pytest
 from PIL import Image
 
 from cartoonface.errors import OptionError
-from cartoonface.exports.video import FrameDocuments, fit, parse_size, write_video
+from cartoonface.exports.frames import FrameDocuments
+from cartoonface.exports.video import fit, parse_size, write_video
 from cartoonface.pipeline import Options, generate
 from cartoonface.speech.audio import ffmpeg_exe
 from tests.conftest import run_cli, spoken_inputs
