@@ -39,7 +39,8 @@ from PIL import Image, ImageDraw
 from scipy.signal import butter, sosfilt
 
 from cartoonface.data import SAMPLE_FACES
-from cartoonface.exports.video import FrameDocuments, _draw
+from cartoonface.exports.frames import FrameDocuments
+from cartoonface.render.png import svg_to_png
 from cartoonface.face.model import load_face
 from cartoonface.pipeline import Options, generate
 from cartoonface.speech.audio import ffmpeg_exe
@@ -228,8 +229,8 @@ def sheet(out: Path, name: str = CLIPS[0]) -> None:
         photo = Image.fromarray(pictures[min(len(pictures) - 1, round(t * clip.fps))])
         box = (photo.width - photo.height * 0.8) / 2
         board.paste(photo.crop((int(box), 0, int(photo.width - box), photo.height)).resize((side, side)), (k * side, 16))
-        drawing = Image.open(BytesIO(_draw(documents.document(round(t * Options().fps), int(width * scale),
-                                                                int(height * scale)))))
+        drawing = Image.open(BytesIO(svg_to_png(documents.document(round(t * Options().fps), int(width * scale),
+                                                                int(height * scale)).encode())))
         left = (drawing.width - side) // 2
         top = int(drawing.height * 0.1)
         board.paste(drawing.convert("RGB").crop((left, top, left + side, top + side)), (k * side, side + 16))

@@ -1,6 +1,6 @@
 """`cartoonface generate --from-video` run as a user would, on a real GRID clip (tests/data/grid).
 
-The frames of the animation.svg it writes are resolved with lxml (exports/video.FrameDocuments)
+The frames of the animation.svg it writes are resolved with lxml (exports/frames.FrameDocuments)
 and drawn (resvg): the cartoon's mouth opens where the speaker talks and its eyes close where
 his do (hand labels: bench/video_blinks.csv)."""
 
@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from cartoonface.exports.video import FrameDocuments, _draw
+from cartoonface.exports.frames import FrameDocuments
+from cartoonface.render.png import svg_to_png
 from cartoonface.face.model import load_face
 from tests.conftest import run_cli
 from tests.test_video_clip import GRID, make_clip
@@ -44,7 +45,7 @@ def colour_counts(folder: Path, frames: list[int], colour: str) -> np.ndarray:
     target = np.array([int(colour[i:i + 2], 16) for i in (1, 3, 5)])
     out = []
     for frame in frames:
-        picture = np.asarray(Image.open(BytesIO(_draw(documents.document(frame, width, height)))).convert("RGB"))
+        picture = np.asarray(Image.open(BytesIO(svg_to_png(documents.document(frame, width, height).encode()))).convert("RGB"))
         out.append(int((np.abs(picture.astype(int) - target).sum(axis=2) < NEAR).sum()))
     return np.array(out)
 
