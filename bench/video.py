@@ -4,7 +4,7 @@ On the three GRID clips of ../shared/bench/av/grid/ (speaker 1, 360 x 288 at 25 
 
 - speed: video frames tracked per second (decode + face mesh + measures, video/track.py) at
   360p (the clips joined) and at 720p (the same scaled to 900 x 720), wall and CPU time, and the
-  whole `generate --from-video` in times real time with its animation.svg's weight per minute;
+  whole `generate --video` in times real time with its animation.svg's weight per minute;
 - blinks: the drawn blink (drive.blink_amounts >= BLINK_DRAWN) in runs against the hand labels
   of bench/video_blinks.csv (runs of frames whose iris both lids hide, labelled by looking at
   crops of the eyes frame by frame): a run found when it overlaps a labelled one; precision,
@@ -149,7 +149,7 @@ def speed() -> None:
                 result = generate(SAMPLE_FACES / "female.json", None, None, Path(tmp) / "site", Options(), video=clip.path)
                 took = time.perf_counter() - wall
                 svg = (result.out_dir / "animation.svg").stat().st_size
-                print(f"generate --from-video (360p, {result.duration:.1f} s): {took:.1f} s wall, "
+                print(f"generate --video (360p, {result.duration:.1f} s): {took:.1f} s wall, "
                       f"{result.duration / took:.2f} x real time; animation.svg {svg / 1e6 / result.duration * 60:.2f} "
                       "MB per minute")
 
@@ -213,7 +213,7 @@ def large_motion() -> None:
 
 def sheet(out: Path, name: str = CLIPS[0]) -> None:
     """Write the contact sheet: frames of GRID `name` at SHEET_TIMES above the female sample's
-    cartoon at the same times (made by generate --from-video), a 256-colour PNG."""
+    cartoon at the same times (made by generate --video), a 256-colour PNG."""
     clip = probe(GRID / f"{name}.mpg")
     pictures = list(frames(clip))
     with tempfile.TemporaryDirectory(prefix="bench-video-") as tmp:

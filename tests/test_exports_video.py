@@ -106,10 +106,10 @@ def test_sizes():
         assert max(1280 - width, 720 - height) <= 2 or abs(width / height - view[0] / view[1]) < 0.01
 
 
-@pytest.mark.parametrize("extra", [["--video", "out.avi"], ["--size", "100x101", "--video", "o.mp4"]])
+@pytest.mark.parametrize("extra", [["--mp4", "out.avi"], ["--size", "100x101", "--mp4", "o.mp4"]])
 def test_bad_video_options_exit_2(extra, tmp_path):
     done = run_cli("generate", "--face", str(FACE), "--audio", "x.wav", "--transcript", "t.txt",
                    "-o", str(tmp_path / "o"), *extra, cwd=tmp_path)
     assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert ("--video" in done.stderr) or ("--size" in done.stderr)
+    assert ("--mp4" in done.stderr) or ("--size" in done.stderr)
     assert not (tmp_path / "o").exists()

@@ -16,7 +16,7 @@ from cartoonface.speech.sentences import find_speech_parts
 from cartoonface.speech.textgrid import load_textgrid
 from cartoonface.web.store import DONE
 from tests.conftest import ROOT, form, post, run_cli
-from tests.test_web import wait_done
+from tests.conftest import wait_done
 
 STORY = ROOT / "samples" / "speech" / "story.wav"
 FACE = ROOT / "samples" / "faces" / "female.json"

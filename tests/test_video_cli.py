@@ -1,4 +1,4 @@
-"""`cartoonface generate --from-video` run as a user would, on a real GRID clip (tests/data/grid).
+"""`cartoonface generate --video` run as a user would, on a real GRID clip (tests/data/grid).
 
 The frames of the animation.svg it writes are resolved with lxml (exports/frames.FrameDocuments)
 and drawn (resvg): the cartoon's mouth opens where the speaker talks and its eyes close where
@@ -18,8 +18,7 @@ from cartoonface.exports.frames import FrameDocuments
 from cartoonface.render.png import svg_to_png
 from cartoonface.face.model import load_face
 from tests.conftest import run_cli
-from tests.test_video_clip import GRID, make_clip
-from tests.test_video_track import LABELS
+from tests.clips import GRID, LABELS, make_clip
 
 ROOT = Path(__file__).resolve().parent.parent
 FACE = ROOT / "samples" / "faces" / "female.json"
@@ -31,7 +30,7 @@ NEAR = 30  # a pixel within this sum of channel differences shows the palette co
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> tuple[Path, str]:
     out = tmp_path_factory.mktemp("video") / "site"
-    done = run_cli("generate", "--face", str(FACE), "--from-video", str(GRID), "-o", str(out))
+    done = run_cli("generate", "--face", str(FACE), "--video", str(GRID), "-o", str(out))
     assert done.returncode == 0, done.stderr
     return out, done.stdout + done.stderr
 
@@ -88,7 +87,7 @@ def test_the_mouth_opens_where_the_speaker_talks(site):
 def test_a_clip_without_sound_makes_a_silent_page_and_says_so(tmp_path):
     mute = make_clip(tmp_path / "mute.mp4", "-i", str(GRID), "-an", "-c:v", "libx264", "-preset", "ultrafast")
     out = tmp_path / "site"
-    done = run_cli("generate", "--face", str(FACE), "--from-video", str(mute), "-o", str(out))
+    done = run_cli("generate", "--face", str(FACE), "--video", str(mute), "-o", str(out))
     assert done.returncode == 0, done.stderr
     assert "no sound" in done.stderr and (out / "audio.m4a").is_file()
 
@@ -103,7 +102,7 @@ def test_a_clip_without_sound_makes_a_silent_page_and_says_so(tmp_path):
 def test_bad_clips_exit_2_with_one_line_and_no_output(tmp_path, make, expected):
     clip = make(tmp_path)
     out = tmp_path / "site"
-    done = run_cli("generate", "--face", str(FACE), "--from-video", str(clip), "-o", str(out))
+    done = run_cli("generate", "--face", str(FACE), "--video", str(clip), "-o", str(out))
     assert done.returncode == 2 and expected in done.stderr and str(clip) in done.stderr
     assert "Traceback" not in done.stderr and not out.exists()
 
@@ -112,25 +111,25 @@ def test_a_transcript_needs_the_clip_sound(tmp_path):
     mute = make_clip(tmp_path / "mute.mp4", "-i", str(GRID), "-an", "-c:v", "libx264", "-preset", "ultrafast")
     text = tmp_path / "words.txt"
     text.write_text("place blue at i six please", encoding="utf-8")
-    done = run_cli("generate", "--face", str(FACE), "--from-video", str(mute), "--transcript", str(text),
+    done = run_cli("generate", "--face", str(FACE), "--video", str(mute), "--transcript", str(text),
                    "-o", str(tmp_path / "site"))
     assert done.returncode == 2 and "no sound track to align the transcript" in done.stderr
 
 
 def test_audio_and_video_are_one_or_the_other(tmp_path):
-    done = run_cli("generate", "--face", str(FACE), "--from-video", str(GRID), "--audio", str(GRID),
+    done = run_cli("generate", "--face", str(FACE), "--video", str(GRID), "--audio", str(GRID),
                    "-o", str(tmp_path / "site"))
     assert done.returncode == 2 and "not allowed with" in done.stderr
     done = run_cli("generate", "--face", str(FACE), "-o", str(tmp_path / "site"))
-    assert done.returncode == 2 and "--audio" in done.stderr and "--from-video" in done.stderr
+    assert done.returncode == 2 and "--audio" in done.stderr and "--video" in done.stderr
 
 
 def test_a_transcript_aligns_the_clip_sound_and_the_mp4_export_still_works(tmp_path):
     text = tmp_path / "words.txt"
     text.write_text("place blue at i six please", encoding="utf-8")
     out, mp4 = tmp_path / "site", tmp_path / "cartoon.mp4"
-    done = run_cli("generate", "--face", str(FACE), "--from-video", str(GRID), "--transcript", str(text),
-                   "-o", str(out), "--video", str(mp4), "--size", "160x120")
+    done = run_cli("generate", "--face", str(FACE), "--video", str(GRID), "--transcript", str(text),
+                   "-o", str(out), "--mp4", str(mp4), "--size", "160x120")
     assert done.returncode == 0, done.stderr
     grid = (out / "alignment.TextGrid").read_text(encoding="utf-8")
     assert "please" in grid and "six" in grid

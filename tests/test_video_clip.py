@@ -2,24 +2,13 @@
 
 from __future__ import annotations
 
-import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
 import soundfile
 
-from cartoonface.speech.audio import ffmpeg_exe
 from cartoonface.video.clip import MAX_FPS, MAX_SECONDS, MAX_SIZE, VideoError, extract_audio, frames, probe
-
-GRID = Path(__file__).resolve().parent / "data" / "grid" / "s1_pbai6p.mpg"
-
-
-def make_clip(path: Path, *args: str) -> Path:
-    """A clip made by the bundled ffmpeg from lavfi sources: `args` between the binary and `path`."""
-    subprocess.run([ffmpeg_exe(), "-nostdin", "-v", "error", "-y", *args, str(path)], check=True)
-    return path
-
+from tests.clips import GRID, make_clip
 
 def test_probe_reads_the_grid_clip_header():
     clip = probe(GRID)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,10 +13,9 @@ from cartoonface.face.state import MAX_ANGLE, FaceState
 from cartoonface.video.clip import VideoError, probe
 from cartoonface.video.drive import drive
 from cartoonface.video.track import EASE, HOLD, MEASURES, fill_lost, track
-from tests.test_video_clip import GRID, make_clip
+from tests.clips import GRID, LABELS, make_clip
 
 FACE = SAMPLE_FACES / "female.json"
-LABELS = Path(__file__).resolve().parent.parent / "bench" / "video_blinks.csv"
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from pathlib import Path
 from cartoonface.speech.audio import ffmpeg_exe
 from cartoonface.web.store import DONE, FAILED, load_job
 from tests.conftest import form, post, wait_done
-from tests.test_video_clip import GRID, make_clip
+from tests.clips import GRID, make_clip
 
 SAMPLE = "female"
 

@@ -40,7 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--audio", type=Path, metavar="SPEECH",
                         help="the recording: WAV, MP3, OGG, M4A or FLAC, at most 30 minutes")
-    source.add_argument("--from-video", type=Path, metavar="CLIP",
+    source.add_argument("--video", type=Path, metavar="CLIP",
                         help="instead of --audio: a video of a person talking (MP4, WebM, MOV or MPEG-1, at most "
                              "10 minutes); the cartoon moves its head, eyes, brows and mouth as the person does and "
                              "the page plays the clip's sound (docs/video.md)")
@@ -75,10 +75,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="language of the transcript and speech (default: found from its script)")
     parser.add_argument("--link", action="append", default=[], metavar="LABEL=URL",
                         help="a link under the audio-book text (repeatable)")
-    parser.add_argument("--video", type=Path, metavar="OUT.mp4",
+    parser.add_argument("--mp4", type=Path, metavar="OUT.mp4",
                         help="also render the animation with its sound as an MP4 video (H.264 + AAC) at --fps")
     parser.add_argument("--size", default="1280x720", metavar="WxH",
-                        help="the video's size in pixels (default %(default)s); the picture is centred on it")
+                        help="the MP4's size in pixels (default %(default)s); the picture is centred on it")
     parser.add_argument("--keep-original", action="store_true",
                         help="also put the recording as given into the folder (recording.EXT); the page "
                              "plays a compressed copy, audio.m4a")
@@ -96,12 +96,12 @@ def parse_link(text: str) -> tuple[str, str]:
     return label, url
 
 
-def check_video_path(path: Path) -> None:
+def check_mp4_path(path: Path) -> None:
     """OptionError unless `path` names an .mp4 file that can be written (its folder exists)."""
     if path.suffix.lower() != ".mp4":
-        raise OptionError(f"--video {path}: expected a file name ending in .mp4")
+        raise OptionError(f"--mp4 {path}: expected a file name ending in .mp4")
     if path.is_dir() or not path.absolute().parent.is_dir():
-        raise OptionError(f"--video {path}: expected an .mp4 file name in an existing folder")
+        raise OptionError(f"--mp4 {path}: expected an .mp4 file name in an existing folder")
 
 
 def summary(result: Result) -> str:
@@ -123,14 +123,14 @@ def run(args: argparse.Namespace) -> int:
         cues=tuple(dict.fromkeys(args.cues)), keep_original=args.keep_original, language=args.language,
     )
     size = parse_size(args.size)
-    if args.video is not None:
-        check_video_path(args.video)
+    if args.mp4 is not None:
+        check_mp4_path(args.mp4)
     bar = ProgressBar(sys.stderr)
     try:
-        result = generate(args.face, args.audio, args.transcript, args.output, options, bar, video=args.from_video)
-        if args.video is not None:
+        result = generate(args.face, args.audio, args.transcript, args.output, options, bar, video=args.video)
+        if args.mp4 is not None:
             write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration,
-                        result.out_dir / f"{AUDIO_STEM}.m4a" if args.audio is None else args.audio, args.video, size, bar)
+                        result.out_dir / f"{AUDIO_STEM}.m4a" if args.audio is None else args.audio, args.mp4, size, bar)
     finally:
         bar.close()
     for note in result.notes:
