@@ -173,3 +173,33 @@ def test_standalone_animation_plays_on_its_own(browser, site):
     alone.close()
     assert shown["time"] > 1.0
     assert shown["visible"] == 1
+
+
+def test_page_face_draws_as_the_svg_written(browser, site, tmp_path):
+    """The page's inline SVG (track drawings undisplayed, clip paths hoisted: render/pages.py) shows the
+    same pixels as animation.svg put in the page as written, at times across the recording."""
+    copy = tmp_path / "site"
+    shutil.copytree(site, copy)
+    html = (copy / "index.html").read_text(encoding="utf-8")
+    written = (copy / "animation.svg").read_text(encoding="utf-8")
+    written = written[written.index("<svg"):]
+    inline = re.search(r"<svg\b.*</svg>", html, re.S)
+    assert inline is not None and inline.group(0) != written, "the page inlines the SVG unchanged"
+    (copy / "written.html").write_text(html[: inline.start()] + written + html[inline.end():], encoding="utf-8")
+    opened = []
+    for name in ("index.html", "written.html"):
+        tab = browser.new_page(viewport={"width": 900, "height": 700})
+        tab.goto((copy / name).as_uri(), wait_until="load")
+        tab.wait_for_function("document.getElementById('cf-audio').readyState >= 1")
+        opened.append(tab)
+    duration = opened[0].evaluate("document.getElementById('cf-audio').duration")
+    for fraction in (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95):
+        shots = []
+        for tab in opened:
+            seek(tab, duration * fraction)
+            tab.evaluate("() => new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))")
+            shots.append(Image.open(BytesIO(tab.locator("#cf-face").screenshot())).convert("RGB"))
+        assert shots[0].size == shots[1].size
+        assert shots[0].tobytes() == shots[1].tobytes(), f"the page's face differs at {duration * fraction:.2f} s"
+    for tab in opened:
+        tab.close()
