@@ -9,12 +9,13 @@ Figures, each the median of RUNS loads from file:// with the variants interleave
 - the split of that time: HTML parse (responseEnd to domInteractive: the inline SVG's DOM and the
   page script run there), the rest to the `load` event (the audio element's metadata, the CSS),
   first paint, and Chromium's own counters (CDP Performance.getMetrics: style, layout, script);
-- a plain page of the same size (the SVG's bytes in an HTML comment) as the yardstick;
-- variants of the page made by post-processing its inline SVG (never the writer): without the
-  page script, without the audio element, with part of each track's drawings dropped, with `<set>`
-  runs instead of one discrete `<animate href>`, with presentation attributes instead of CSS
-  classes, without clip paths, with the path data doubled. The difference to the page as made,
-  divided by the elements (or KB) changed, is the cost per 1,000 elements;
+- a plain page of the same size (the SVG's bytes in an HTML comment) as the yardstick, and the
+  page with animation.svg inline as written (before render/pages.py undisplayed the drawings);
+- variants made by post-processing animation.svg (never the writer), each put in the page the way
+  render/pages.py does: without the page script, without the audio element, with every other
+  drawing of each track dropped, with `<set>` runs instead of one discrete `<animate href>`, with
+  presentation attributes instead of CSS classes, without clip paths, with the path data doubled.
+  The difference to the page as made, divided by the elements (or KB) changed, is their cost;
 - playback: main-thread task time per second of the free-running SVG (CDP TaskDuration).
 """
 
@@ -30,16 +31,13 @@ from pathlib import Path
 
 from lxml import etree
 
-from bench.generate import CHROMIUM_ARGS, build_input
+from bench.generate import CHROMIUM_ARGS, READY_PROBE, build_input
 from cartoonface.render.pages import inline_svg
 
 RUNS = 5
 SVG_NS = "{http://www.w3.org/2000/svg}"
 PLAY_SECONDS = 2.0
 VIEWPORT = {"width": 1280, "height": 800}
-# Set before the page's own scripts: the time (ms since navigation start) two frames after `load`.
-READY_PROBE = """addEventListener('load', () => requestAnimationFrame(() => requestAnimationFrame(() => {
-    window.__cfReady = performance.now(); })));"""
 SPLIT = """() => { const n = performance.getEntriesByType('navigation')[0];
     const paint = performance.getEntriesByType('paint').find(e => e.name === 'first-paint');
     return {ready: window.__cfReady, read: n.responseEnd, parse: n.domInteractive - n.responseEnd,
