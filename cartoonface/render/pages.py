@@ -119,9 +119,14 @@ def inline_svg(svg: bytes) -> Markup:
     shared_end = text.find(DEFS_END)
     if first_track is None or not 0 <= shared_end < first_track.start():
         return Markup(text)
-    tracks = text[shared_end:]
-    clips = CLIP_PATH.findall(tracks)
-    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", CLIP_PATH.sub("", tracks))
+    clips: list[str] = []
+
+    def moved(clip: re.Match[str]) -> str:
+        clips.append(clip.group(0))
+        return ""
+
+    tracks = CLIP_PATH.sub(moved, text[shared_end:])
+    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", tracks)
     return Markup(text[:shared_end] + "".join(clips) + tracks)
 
 
