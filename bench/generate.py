@@ -12,8 +12,9 @@ Figures (issue 4, "Done means"):
 - peak memory (max RSS of a child process doing one run);
 - SVG bytes per minute of audio, raw and gzipped (targets < 1.5 MB and < 200 KB at 30 fps),
   and how they split between the shared definitions and the part tracks;
-- page-ready time in headless Chromium (navigation start to the load event of index.html
-  from file://, median of RUNS; target < 2 s), and the SVG-vs-audio gap after 2 s of play.
+- page-ready time in headless Chromium (navigation start to two animation frames after the load
+  event of index.html from file://, median of RUNS; target < 1 s), and the SVG-vs-audio gap after
+  2 s of play. bench/page.py splits that time.
 """
 
 from __future__ import annotations
@@ -43,6 +44,9 @@ RUNS = 3
 PROFILE_LINES = 40  # functions `--profile` prints
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--autoplay-policy=no-user-gesture-required", "--mute-audio",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
+# Set before the page's own scripts: "page ready", ms from navigation start to two animation frames after `load`.
+READY_PROBE = """addEventListener('load', () => requestAnimationFrame(() => requestAnimationFrame(() => {
+    window.__cfReady = performance.now(); })));"""
 
 
 def build_input(folder: Path, target: float = TARGET_SECONDS) -> tuple[Path, Path, float]:
@@ -96,7 +100,7 @@ def peak_memory(face: Path, audio: Path, transcript: Path, out: Path) -> float:
 
 
 def page_ready(index: Path) -> tuple[list[float], float]:
-    """Load times (s) of `index` in headless Chromium, and |SVG - audio| time after 2 s of play."""
+    """Ready times (s: load + two frames) of `index` in headless Chromium, and |SVG - audio| time after 2 s of play."""
     from playwright.sync_api import sync_playwright
 
     loads = []
@@ -104,8 +108,10 @@ def page_ready(index: Path) -> tuple[list[float], float]:
         browser = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
         for _ in range(RUNS):
             page = browser.new_page()
+            page.add_init_script(READY_PROBE)
             page.goto(index.as_uri(), wait_until="load")
-            loads.append(page.evaluate("performance.getEntriesByType('navigation')[0].loadEventEnd") / 1000)
+            page.wait_for_function("window.__cfReady !== undefined")
+            loads.append(page.evaluate("window.__cfReady") / 1000)
             page.close()
         page = browser.new_page()
         page.goto(index.as_uri(), wait_until="load")
@@ -181,7 +187,7 @@ def main() -> None:
         print(bytes_by_track(svg, minutes))
         loads, gap = page_ready(result.out_dir / "index.html")
         print(f"page ready in headless Chromium: median {statistics.median(loads):.2f} s of {RUNS} "
-              f"({', '.join(f'{x:.2f}' for x in loads)}); SVG-audio gap after 2 s of play {gap * 1000:.0f} ms")
+              f"({', '.join(f'{x:.2f}' for x in loads)}; load + two frames); SVG-audio gap after 2 s of play {gap * 1000:.0f} ms")
 
 
 if __name__ == "__main__":

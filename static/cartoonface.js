@@ -22,6 +22,9 @@
   var fps = parseFloat(audio.getAttribute("data-fps")) || 30;
   var tolerance = 0.5 / fps; // seconds: half a frame
   var sentences = Array.prototype.slice.call(document.querySelectorAll(".cf-sentence[data-start]"));
+  // Read once: the highlight runs on every animation frame.
+  var starts = sentences.map(function (s) { return parseFloat(s.getAttribute("data-start")); });
+  var ends = sentences.map(function (s) { return parseFloat(s.getAttribute("data-end")); });
   var caption = document.querySelector("[data-caption]");
   var current = null;
   var ticking = false;
@@ -35,15 +38,23 @@
     return running() && audio.playbackRate === 1;
   }
 
-  function highlight(t) {
-    var found = null;
-    for (var i = 0; i < sentences.length; i++) {
-      var s = sentences[i];
-      if (t >= parseFloat(s.getAttribute("data-start")) && t < parseFloat(s.getAttribute("data-end"))) {
-        found = s;
-        break;
+  // The sentence spoken at t seconds (the sentences come in time order), or null.
+  function spokenAt(t) {
+    var low = 0, high = starts.length - 1, last = -1;
+    while (low <= high) {
+      var middle = (low + high) >> 1;
+      if (starts[middle] <= t) {
+        last = middle;
+        low = middle + 1;
+      } else {
+        high = middle - 1;
       }
     }
+    return last >= 0 && t < ends[last] ? sentences[last] : null;
+  }
+
+  function highlight(t) {
+    var found = spokenAt(t);
     if (found === current) return;
     if (current) {
       current.classList.remove("cf-speaking");
@@ -92,10 +103,10 @@
   });
   document.addEventListener("visibilitychange", follow);
 
-  sentences.forEach(function (s) {
-    s.addEventListener("click", function () {
-      audio.currentTime = parseFloat(s.getAttribute("data-start"));
-    });
+  // One listener for every sentence (a long book has thousands).
+  document.addEventListener("click", function (event) {
+    var s = event.target && event.target.closest ? event.target.closest(".cf-sentence[data-start]") : null;
+    if (s) audio.currentTime = starts[sentences.indexOf(s)];
   });
 
   document.addEventListener("keydown", function (event) {

@@ -12,7 +12,7 @@ from io import BytesIO
 from pathlib import Path
 
 import pytest
-from PIL import Image
+from PIL import Image, ImageChops
 
 from cartoonface.pipeline import Options, generate
 from tests.conftest import speak
@@ -24,6 +24,9 @@ pytestmark = [
 ]
 
 ROOT = Path(__file__).resolve().parent.parent
+# Two drawings the same: at most this share of pixels differs by more than EDGE_NOISE grey levels.
+SAME_PIXELS = 2e-4
+EDGE_NOISE = 8
 FPS = 30
 TEXT = "小猫在花园里玩。它看见了一只蝴蝶。"
 # What the page is asked, in one evaluation so both clocks are read at the same moment.
@@ -173,3 +176,48 @@ def test_standalone_animation_plays_on_its_own(browser, site):
     alone.close()
     assert shown["time"] > 1.0
     assert shown["visible"] == 1
+
+
+def test_page_face_draws_as_the_svg_written(browser, site, tmp_path):
+    """The page's inline SVG (track drawings undisplayed, clip paths hoisted: render/pages.py) shows the
+    same pixels as animation.svg put in the page as written, at times across the recording."""
+    copy = tmp_path / "site"
+    shutil.copytree(site, copy)
+    html = (copy / "index.html").read_text(encoding="utf-8")
+    written = (copy / "animation.svg").read_text(encoding="utf-8")
+    written = written[written.index("<svg"):]
+    inline = re.search(r"<svg\b.*</svg>", html, re.S)
+    assert inline is not None and inline.group(0) != written, "the page inlines the SVG unchanged"
+    (copy / "written.html").write_text(html[: inline.start()] + written + html[inline.end():], encoding="utf-8")
+    opened = []
+    for name in ("index.html", "written.html"):
+        tab = browser.new_page(viewport={"width": 900, "height": 700})
+        tab.goto((copy / name).as_uri(), wait_until="load")
+        tab.wait_for_function("document.getElementById('cf-audio').readyState >= 1")
+        opened.append(tab)
+    duration = opened[0].evaluate("document.getElementById('cf-audio').duration")
+    for fraction in (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95):
+        shots = []
+        for tab in opened:
+            seek(tab, duration * fraction)
+            tab.evaluate("() => new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))")
+            shots.append(Image.open(BytesIO(tab.locator("#cf-face").screenshot())).convert("RGB"))
+        assert shots[0].size == shots[1].size
+        # Chromium's raster differs now and then by a few edge pixels of the scenery between two tabs.
+        differing = sum(count for count, level in ImageChops.difference(*shots).convert("L").getcolors(256)
+                        if level > EDGE_NOISE)
+        assert differing <= SAME_PIXELS * shots[0].width * shots[0].height, \
+            f"the page's face differs at {duration * fraction:.2f} s in {differing} pixels"
+    for tab in opened:
+        tab.close()
+
+
+def test_clicking_a_sentence_seeks_to_it_and_highlights_it(page):
+    sentences = page.locator(".cf-sentence")
+    assert sentences.count() >= 2
+    start = float(sentences.nth(1).get_attribute("data-start"))
+    page.evaluate("""() => new Promise(done => { const a = document.getElementById('cf-audio');
+        a.addEventListener('seeked', () => requestAnimationFrame(() => done()), {once: true});
+        document.querySelectorAll('.cf-sentence')[1].click(); })""")
+    assert page.evaluate("document.getElementById('cf-audio').currentTime") == pytest.approx(start, abs=0.01)
+    assert page.evaluate("document.querySelector('.cf-speaking') === document.querySelectorAll('.cf-sentence')[1]")

@@ -10,7 +10,7 @@ import soundfile
 from lxml import etree, html
 
 from cartoonface.errors import OptionError
-from cartoonface.render.pages import AudioSource, copy_audio, page_html, write_site
+from cartoonface.render.pages import AudioSource, copy_audio, inline_svg, page_html, write_site
 from cartoonface.speech.records import Alignment, Sentence
 
 HOSTILE = '<script>alert("x")</script> & <b>bold</b>'
@@ -114,3 +114,46 @@ def test_site_files_are_written(tmp_path):
     names = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file()}
     assert {"index.html", "animation.svg", "alignment.TextGrid", "actions.json",
             "static/cartoonface.js", "static/cartoonface.css"} <= names
+
+
+def tracked_svg() -> bytes:
+    """A document shaped as animation.py writes one: shared <defs> with a clip path, then two part
+    tracks whose drawings hold clip paths of their own."""
+    root = etree.Element(f"{{{SVG}}}svg", nsmap={None: SVG}, id="cf-face", viewBox="0 0 10 10")
+    shared = etree.SubElement(root, f"{{{SVG}}}defs")
+    etree.SubElement(etree.SubElement(shared, f"{{{SVG}}}clipPath", id="v0"), f"{{{SVG}}}path", d="m0,0h5v5z", id="v0_")
+    for part in ("face", "eyes"):
+        track = etree.SubElement(root, f"{{{SVG}}}g", {"data-part": part})
+        drawings = etree.SubElement(track, f"{{{SVG}}}defs")
+        for index in range(3):
+            drawing = etree.SubElement(drawings, f"{{{SVG}}}g", id=f"{part}{index}")
+            clip = etree.SubElement(drawing, f"{{{SVG}}}clipPath", id=f"{part}c{index}")
+            etree.SubElement(clip, f"{{{SVG}}}path", d=f"m{index},0h5v5z")
+            etree.SubElement(drawing, f"{{{SVG}}}rect", width="3", height="3", **{"clip-path": f"url(#{part}c{index})"})
+        etree.SubElement(track, f"{{{SVG}}}use", href=f"#{part}0")
+    return etree.tostring(root, xml_declaration=True, encoding="utf-8")
+
+
+def test_inline_svg_undisplays_the_drawings_and_keeps_their_clip_paths_shown():
+    written = etree.fromstring(tracked_svg())
+    inline = etree.fromstring(str(inline_svg(tracked_svg())).encode("utf-8"))
+    tags = sorted(e.tag for e in written.iter())
+    assert sorted(e.tag for e in inline.iter()) == tags, "elements were lost or added"
+    tracks = inline.findall(f"{{{SVG}}}g[@data-part]")
+    assert len(tracks) == 2
+    for track in tracks:
+        drawings = track.find(f"{{{SVG}}}defs")
+        assert drawings.get("style") == "display:none"
+        assert not drawings.findall(f".//{{{SVG}}}clipPath"), "a clip path stayed in an undisplayed subtree"
+        assert track.find(f"{{{SVG}}}use") is not None
+    shared = inline.find(f"{{{SVG}}}defs")
+    assert shared.get("style") is None
+    written_clips = {c.get("id"): etree.tostring(c) for c in written.iter(f"{{{SVG}}}clipPath")}
+    assert {c.get("id"): etree.tostring(c) for c in shared.findall(f"{{{SVG}}}clipPath")} == written_clips
+
+
+def test_inline_svg_without_shared_defs_is_kept_as_written():
+    root = etree.fromstring(tracked_svg())
+    root.remove(root.find(f"{{{SVG}}}defs"))
+    written = etree.tostring(root, encoding="unicode")
+    assert str(inline_svg(written.encode("utf-8"))) == written
