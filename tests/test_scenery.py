@@ -13,7 +13,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
-from cartoonface.render.scenery import CLOTHES
+from cartoonface.render.scenery import CLOTHES, NECK, _points, _short_tenths, chin_shadow, figure_of
 from cartoonface.render.svg import face_svg
 from tests.conftest import ROOT
 from tests.shapes import NUMBER, polygon
@@ -120,3 +120,27 @@ def test_the_neck_leans_with_the_roll_to_stay_under_the_chin(face):
         middle = (_side_x(neck, 0, chin[1]) + _side_x(neck, 1, chin[1])) / 2
         upright = face.point("2.1")[0]
         assert abs(middle - chin[0]) < 0.1 * abs(upright - chin[0])  # far nearer than an upright neck
+
+
+def test_the_cut_shadow_writes_its_numbers_as_the_scenery_does():
+    # the polygon's bulk %-format gives the text of the per-number writer, ties, whole numbers and -0 included
+    rng = np.random.default_rng(7)
+    values = np.concatenate([rng.uniform(-500, 500, 200), np.arange(-40, 41) / 20, [-0.04, 0.04, -0.0, 0.0]])
+    for chunk in range(0, len(values) - 1, 32):
+        corners = values[chunk:chunk + 32]
+        corners = corners[:len(corners) // 2 * 2].reshape(-1, 2)
+        template = "M" + "L".join(["%.1f,%.1f"] * len(corners)) + "Z"
+        assert _short_tenths(template % tuple(corners.ravel().tolist())) == _points(*corners.tolist())
+
+
+def test_the_shadow_beyond_a_side_is_the_polygon_and_within_the_ellipse(face):
+    figure = figure_of(face, (0.0, 0.0, float(face.width), float(face.height)))
+    chin = face.point("2.1")
+    inside = chin_shadow(figure, chin, float(chin[0]), ' class="s"')
+    outside = chin_shadow(figure, chin + [figure.face_width, 0], float(chin[0]), ' class="s"')
+    assert inside.startswith("<ellipse") and outside.startswith("<path")
+    for text in (inside, outside):
+        node = etree.fromstring(text)
+        assert node.get("class") == "s"
+    corners = polygon(etree.fromstring(outside).get("d"))
+    assert corners[:, 0].max() <= chin[0] + figure.face_width * NECK + 0.05  # cut at the neck's right side

@@ -66,12 +66,6 @@ def attributes_text(attrs: Mapping[str, str]) -> str:
     return "".join(f' {name}="{html.escape(value)}"' for name, value in attrs.items())
 
 
-def element_text(node: etree._Element, extra: Mapping[str, str] | None = None) -> str:
-    """A childless lxml `node` of the SVG namespace as text like a Part's (no namespace
-    declaration), with the attributes `extra` added after its own."""
-    return f"<{etree.QName(node).localname}{attributes_text({**node.attrib, **(extra or {})})}/>"
-
-
 def parse_elements(texts: Iterable[str]) -> list[etree._Element]:
     """Parse SVG element texts written without a namespace declaration (Part texts, in the SVG
     namespace); returns them as free elements, in order."""

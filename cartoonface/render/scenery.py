@@ -154,6 +154,10 @@ LINE = 0.006  # outlines of collars and lapels, of fw
 JAW_SHADOW, JAW_SHADOW_OPACITY = 0.07, "0.12"  # the jaw's shadow on the neck: vertical radius
 SHADOW_WIDTH = 0.85  # the shadow's horizontal radius / half the neck's width: room for the chin to move
 SHADOW_POINTS = 16  # corners of the jaw's shadow cut at a side of the neck (an ellipse, within 1 px at our sizes)
+_SHADOW_ANGLES = np.linspace(0, 2 * np.pi, SHADOW_POINTS, endpoint=False)  # the corners' angles about the chin
+_SHADOW_COS, _SHADOW_SIN = np.cos(_SHADOW_ANGLES), np.sin(_SHADOW_ANGLES)
+# The cut shadow's path data with its corners' x, y %-formatted to DECIMALS (1) decimal (_num, then _short_tenths).
+_SHADOW_TEMPLATE = "M" + "L".join(["%.1f,%.1f"] * SHADOW_POINTS) + "Z"
 LEAN_DECIMALS = 1  # the neck's lean is written to 0.1 degree: 0.1 px at the chin for a lever of 60 px
 # The torso's motion (animate/body.py), our choices tuned by eye: a full breath lifts the
 # shoulders by BREATH_RISE fw (about 4 px on the sample faces) and the neck by NECK_BREATH of
@@ -194,6 +198,12 @@ def _num(value: float) -> str:
 def _points(*pairs: tuple[float, float]) -> str:
     """Path data of a closed polygon through `pairs`."""
     return "M" + "L".join(f"{_num(x)},{_num(y)}" for x, y in pairs) + "Z"
+
+
+def _short_tenths(data: str) -> str:
+    """Polygon path data whose numbers were %-formatted with DECIMALS (1) decimal, each followed
+    by "," "L" or "Z", with every ".0" dropped: each number as `_num` writes it ("12", "-0")."""
+    return data.replace(".0,", ",").replace(".0L", "L").replace(".0Z", "Z")
 
 
 def _gradient(defs: etree._Element, gid: str) -> str:
@@ -410,24 +420,27 @@ def torso_shift(figure: Figure, turn: np.ndarray, breath: np.ndarray) -> tuple[n
     return dx, dy, NECK_BREATH * dy
 
 
-def chin_shadow(figure: Figure, chin: np.ndarray, middle: float) -> etree._Element:
-    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels, without class or
-    paint: an ellipse centred on the chin, SHADOW_WIDTH of the neck wide and JAW_SHADOW fw high
-    (the face drawn over it hides its top half). Where it would pass a side of the neck (whose
-    middle at the chin's height is `middle`, neck_middle), a polygon of SHADOW_POINTS corners
-    cut at that side instead; corner SHADOW_POINTS // 4 is its lowest point, right under the
-    chin while the chin is over the neck."""
+def chin_shadow(figure: Figure, chin: np.ndarray, middle: float, paint: str = "") -> str:
+    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels, as the text of
+    one SVG element (no namespace declaration) with the attribute text `paint` (' fill="..."',
+    class, opacity) after its outline's: an ellipse centred on the chin, SHADOW_WIDTH of the
+    neck wide and JAW_SHADOW fw high (the face drawn over it hides its top half). Where it would
+    pass a side of the neck (whose middle at the chin's height is `middle`, neck_middle), a
+    polygon of SHADOW_POINTS corners cut at that side instead; corner SHADOW_POINTS // 4 is its
+    lowest point, right under the chin while the chin is over the neck. Numbers are written as
+    `_num` writes them, the polygon's in one %-format (the hot path of an animation)."""
     half = figure.face_width * NECK
     left, right = middle - half, middle + half
     cx, cy = float(chin[0]), float(chin[1])
     rx, ry = half * SHADOW_WIDTH, figure.face_width * JAW_SHADOW
     if left <= cx - rx and cx + rx <= right:
-        return element(None, "ellipse", cx=cx, cy=cy, rx=rx, ry=ry)
+        return f'<ellipse cx="{_num(cx)}" cy="{_num(cy)}" rx="{_num(rx)}" ry="{_num(ry)}"{paint}/>'
     cx = float(np.clip(cx, left, right))  # a chin beyond a side of the neck: on that side
-    angles = np.linspace(0, 2 * np.pi, SHADOW_POINTS, endpoint=False)
     # clamping x cuts an upright ellipse exactly at the sides: beyond a side it is no taller than there
-    xs = np.clip(cx + rx * np.cos(angles), left, right)
-    return element(None, "path", d=_points(*zip(xs.tolist(), (cy + ry * np.sin(angles)).tolist(), strict=True)))
+    corners = np.empty((SHADOW_POINTS, 2))
+    corners[:, 0] = np.clip(cx + rx * _SHADOW_COS, left, right)
+    corners[:, 1] = cy + ry * _SHADOW_SIN
+    return f'<path d="{_short_tenths(_SHADOW_TEMPLATE % tuple(corners.ravel().tolist()))}"{paint}/>'
 
 
 Point = tuple[float, float | None]

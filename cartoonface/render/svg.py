@@ -33,7 +33,7 @@ from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
-from cartoonface.render.elements import SVG, Part, attributes_text, element, element_text, svg_root
+from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
 from cartoonface.render.geometry import face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
@@ -171,7 +171,7 @@ def _style_texts(face: FaceModel) -> dict[str, str]:
 # corners 8.4 and 8.3.
 _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 # The chin shadow's paint, after the outline render/scenery.py's chin_shadow gives.
-_CHIN_SHADOW = {"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY}
+_CHIN_SHADOW = attributes_text({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
 
 
 def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> tuple[Part, ...]:
@@ -187,13 +187,13 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     shapes = face_shapes(posed)
     points = posed.xy[_ROWS].tolist()
     figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
-    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])))
+    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
     eyes = [_eye(shapes, side, eyeball, uid, style) for side, eyeball in zip("lr", _eyeballs(posed, points))]
     return (
         Part("hair", f'<path class="hair" d="{shapes["hair"]}"{style["hair"]}/>'),
         *(Part(f"ear-{side}", f'<path class="ear-{side}" d="{shapes[f"ear_{side}"]}"{style["skin"]}/>')
           for side in "lr"),
-        Part("chin-shadow", element_text(shadow, _CHIN_SHADOW)),
+        Part("chin-shadow", shadow),
         Part("face", f'<path class="face" d="{shapes["face"]}"{style["skin"]}/>'),
         Part("fringe", f'<path class="fringe" d="{shapes["fringe"]}"{style["fringe"]}/>'),
         Part("cheeks", _cheeks(points, face.fapu.d, style)),
