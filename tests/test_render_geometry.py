@@ -121,6 +121,12 @@ def test_number_text_rounds_to_a_tenth_with_fewest_characters(value: float) -> N
     assert number_texts(np.array([value])) == (text,)
 
 
+def test_number_texts_writes_each_value_as_number_text(rng: np.random.Generator) -> None:
+    # the drawing writes a state's numbers in one call (face_shapes, the mouth, the eyes and cheeks)
+    values = np.concatenate([rng.uniform(-400, 400, 500), np.arange(-30, 31) / 20, [4000.25, -5000.05]])
+    assert number_texts(values) == tuple(number_text(v) for v in values.tolist())
+
+
 @pytest.fixture(scope="module")
 def posed_sample():
     from cartoonface.face.lift import lift

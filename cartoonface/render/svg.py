@@ -37,7 +37,7 @@ from cartoonface.render.elements import SVG, Part, attributes_text, element, svg
 from cartoonface.render.geometry import face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
-from cartoonface.render.numbers import number_text
+from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
                                         desk_layer, figure_of, lean, lean_transform, neck_middle)
 
@@ -171,6 +171,8 @@ def _style_texts(face: FaceModel) -> dict[str, str]:
 # corners 8.4 and 8.3.
 _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 # The chin shadow's paint, after the outline render/scenery.py's chin_shadow gives.
+# Numbers face_parts writes per state for the cheeks (_cheek_numbers) and for each eye (_eye_numbers).
+_CHEEK_COUNT, _EYE_COUNT = 6, 7
 _CHIN_SHADOW = attributes_text({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
 
 
@@ -188,7 +190,11 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     points = posed.xy[_ROWS].tolist()
     figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
     shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
-    eyes = [_eye(shapes, side, eyeball, uid, style) for side, eyeball in zip("lr", _eyeballs(posed, points))]
+    left, right = _eyeballs(posed, points)
+    # the cheeks' and the eyes' numbers written in one call (CHEEK_COUNT, then EYE_COUNT per eye)
+    texts = number_texts(np.array(_cheek_numbers(points, face.fapu.d) + _eye_numbers(left) + _eye_numbers(right)))
+    eyes = [_eye(shapes, "l", texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT], uid, style),
+            _eye(shapes, "r", texts[_CHEEK_COUNT + _EYE_COUNT:], uid, style)]
     return (
         Part("hair", f'<path class="hair" d="{shapes["hair"]}"{style["hair"]}/>'),
         *(Part(f"ear-{side}", f'<path class="ear-{side}" d="{shapes[f"ear_{side}"]}"{style["skin"]}/>')
@@ -196,7 +202,7 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
         Part("chin-shadow", shadow),
         Part("face", f'<path class="face" d="{shapes["face"]}"{style["skin"]}/>'),
         Part("fringe", f'<path class="fringe" d="{shapes["fringe"]}"{style["fringe"]}/>'),
-        Part("cheeks", _cheeks(points, face.fapu.d, style)),
+        Part("cheeks", _cheeks(texts[:_CHEEK_COUNT], style)),
         Part("nose", f'<path class="nose" d="{shapes["nose"]}"{style["nose"]}/>'),
         *(Part(f"brow-{side}", f'<path class="brow-{side}" d="{shapes[f"brow_{side}"]}"{style["brow"]}/>')
           for side in "lr"),
@@ -221,17 +227,24 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     return group
 
 
-def _cheeks(points: list[list[float]], d: float, style: dict[str, str]) -> str:
-    """Blush under each eye, between the eye's lower lid and the mouth corner on its side, as
-    the text of a `<g class="cheeks">`. `points`: the posed rows _ROWS as [x, y] lists."""
-    ellipses = []
+def _cheek_numbers(points: list[list[float]], d: float) -> list[float]:
+    """Blush under each eye, between the eye's lower lid and the mouth corner on its side: the
+    centre x, y and the horizontal radius of the left's ellipse and the right's (6 pixels).
+    `points`: the posed rows _ROWS as [x, y] lists; `d` the FAPU d in pixels."""
+    numbers = []
     for first, mouth_corner in ((0, points[8]), (4, points[9])):
         (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
         width = math.hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
         cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - CHEEK_LIFT * d
-        ellipses.append(f'<ellipse cx="{number_text(CHEEK_OUTER * ox + CHEEK_INNER * ix)}" cy="{number_text(cy)}" '
-                        f'rx="{number_text(CHEEK[0] * d * min(width, CHEEK_STRETCH))}"{style["cheek_ry"]}/>')
-    return f'<g class="cheeks" fill="url(#cf-cheek)">{"".join(ellipses)}</g>'
+        numbers += [CHEEK_OUTER * ox + CHEEK_INNER * ix, cy, CHEEK[0] * d * min(width, CHEEK_STRETCH)]
+    return numbers
+
+
+def _cheeks(texts: tuple[str, ...], style: dict[str, str]) -> str:
+    """The text of the cheeks' `<g class="cheeks">` from the number `texts` of _cheek_numbers."""
+    ellipses = "".join(f'<ellipse cx="{cx}" cy="{cy}" rx="{rx}"{style["cheek_ry"]}/>'
+                       for cx, cy, rx in (texts[:3], texts[3:6]))
+    return f'<g class="cheeks" fill="url(#cf-cheek)">{ellipses}</g>'
 
 
 def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
@@ -246,20 +259,24 @@ def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float,
     return (x1, y1, r1), (x0, y0, r0)
 
 
-def _eye(shapes: dict[str, str], side: str, eyeball: tuple[float, float, float], uid: str,
-         style: dict[str, str]) -> Part:
+def _eye_numbers(eyeball: tuple[float, float, float]) -> list[float]:
+    """The eyeball's (x, y, iris radius) pixels and what _eye draws of it: pupil radius, the
+    highlight's centre x, y and radius (7 pixels)."""
+    x, y, r = eyeball
+    return [x, y, r, PUPIL * r, x - GLINT_LEFT * r, y - GLINT_UP * r, GLINT * r]
+
+
+def _eye(shapes: dict[str, str], side: str, texts: tuple[str, ...], uid: str, style: dict[str, str]) -> Part:
     """Eye `side`: white, clipped iris + pupil + the lid's shadow + highlight, outline, upper
-    lid; its clip path the eye outline."""
+    lid; its clip path the eye outline. `texts`: the numbers of _eye_numbers as text."""
     outline, lid = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
     clip_id = f"cf-eye-{side}-{uid}"
-    x, y, r = eyeball
-    cx, cy = number_text(x), number_text(y)
+    cx, cy, r, pupil, glint_x, glint_y, glint = texts
     text = (f'<g class="eye-{side}"><path d="{outline}"{style["white"]}/><g clip-path="url(#{clip_id})">'
-            f'<circle cx="{cx}" cy="{cy}" r="{number_text(r)}" fill="url(#cf-iris)"/>'
-            f'<circle cx="{cx}" cy="{cy}" r="{number_text(PUPIL * r)}"{style["pupil"]}/>'
+            f'<circle cx="{cx}" cy="{cy}" r="{r}" fill="url(#cf-iris)"/>'
+            f'<circle cx="{cx}" cy="{cy}" r="{pupil}"{style["pupil"]}/>'
             f'<path d="{lid}"{style["lid_shadow"]}/>'
-            f'<circle cx="{number_text(x - GLINT_LEFT * r)}" cy="{number_text(y - GLINT_UP * r)}" '
-            f'r="{number_text(GLINT * r)}" fill="#ffffff" opacity="{GLINT_OPACITY}"/></g>'
+            f'<circle cx="{glint_x}" cy="{glint_y}" r="{glint}" fill="#ffffff" opacity="{GLINT_OPACITY}"/></g>'
             f'<path d="{outline}"{style["eye_line"]}/><path d="{lid}"{style["lid"]}/></g>')
     return Part(f"eye-{side}", text, (f'<clipPath id="{clip_id}"><path d="{outline}"/></clipPath>',))
 
