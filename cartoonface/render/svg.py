@@ -39,7 +39,7 @@ from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import mouth_outlines, mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
-                                        desk_layer, figure_of, lean, lean_transform, neck_middle)
+                                        Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
 
 
 # Line widths as fractions of the FAPU d (the distance between the eyeball centres), so a
@@ -167,6 +167,13 @@ def _style_texts(face: FaceModel) -> dict[str, str]:
     return texts
 
 
+@functools.lru_cache(maxsize=16)
+def _canvas_figure(face: FaceModel) -> Figure:
+    """render/scenery.py's Figure of `face` on its own canvas (0, 0, width, height): the body
+    face_parts' chin shadow sits on, made once per face instead of once per state."""
+    return figure_of(face, (0.0, 0.0, float(face.width), float(face.height)))
+
+
 # Rows of posed.xy read by the cheeks and the eyes: the eye outlines of "l" and "r", the mouth
 # corners 8.4 and 8.3.
 _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
@@ -188,7 +195,7 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     style = _style_texts(face)
     shapes = face_shapes(posed)
     points = posed.xy[_ROWS].tolist()
-    figure, chin = figure_of(face, (0.0, 0.0, float(face.width), float(face.height))), posed.p("2.1")
+    figure, chin = _canvas_figure(face), posed.p("2.1")
     shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
     left, right = _eyeballs(posed, points)
     # the cheeks' and the eyes' numbers written in one call (CHEEK_COUNT, then EYE_COUNT per eye)
