@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 from cartoonface.render.geometry import arc, chaikin, chaikin_closed_operator, contour
-from cartoonface.render.numbers import number_text, number_texts
+from cartoonface.render.numbers import fill, number_text, number_texts, template_frame
 
 
 def bezier(start: np.ndarray, pieces: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -125,6 +125,14 @@ def test_number_texts_writes_each_value_as_number_text(rng: np.random.Generator)
     # the drawing writes a state's numbers in one call (face_shapes, the mouth, the eyes and cheeks)
     values = np.concatenate([rng.uniform(-400, 400, 500), np.arange(-30, 31) / 20, [4000.25, -5000.05]])
     assert number_texts(values) == tuple(number_text(v) for v in values.tolist())
+
+
+@pytest.mark.parametrize("template", ["%s", "M%s %sZ", "%s|%s", "M%s %sC%s %s %s %s %s %s|%s|", "x"])
+def test_a_filled_frame_is_the_percent_format(rng: np.random.Generator, template: str) -> None:
+    texts = number_texts(rng.uniform(-99, 99, template.count("%s")))
+    assert fill(template_frame(template), texts) == template % texts
+    with pytest.raises(ValueError):  # a number too many: an error, as the %-format gives
+        fill(template_frame(template), (*texts, "1"))
 
 
 @pytest.fixture(scope="module")

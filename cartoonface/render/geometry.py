@@ -42,7 +42,7 @@ import numpy as np
 import scipy.sparse
 
 from cartoonface.face.lift import FRONT_NAMES, LIFTED_NAMES
-from cartoonface.render.numbers import number_texts
+from cartoonface.render.numbers import fill, number_texts, template_frame
 
 # Eyebrows and hair: rounds of corner cutting. Three rounds turn each polygon edge into
 # eight short pieces, which read as a smooth outline at the sizes a face is drawn.
@@ -176,13 +176,13 @@ NOSE_SIDE_OTHER = 1
 class _Plan:
     """A compiled drawing: `hair` (8 H, H) sparse maps the H hair points to the hair's
     coordinates, written first; `matrix` (K, N) maps the N posed points (xy) to the K
-    coordinates of the other parts, written next; `template` %-formats (8 H + K) * 2 number
-    strings into every part's path data, parts separated by "|"; `names` lists the parts in
-    that order."""
+    coordinates of the other parts, written next; `template` (numbers.template_frame) takes
+    (8 H + K) * 2 number strings into every part's path data, parts separated by "|"; `names`
+    lists the parts in that order."""
 
     hair: scipy.sparse.csr_array
     matrix: np.ndarray
-    template: str
+    template: tuple[str, ...]
     names: tuple[str, ...]
 
 
@@ -253,7 +253,7 @@ def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
             outline = np.concatenate([chaikin(a)[:-1] for a in arcs])
             texts.append(_polygon(rows, outline))
         part_names.append(name)
-    return _Plan(hair, np.array(rows), "|".join(texts), tuple(part_names))
+    return _Plan(hair, np.array(rows), template_frame("|".join(texts)), tuple(part_names))
 
 
 def face_shapes(posed: Posed) -> dict[str, str]:
@@ -273,5 +273,5 @@ def face_shapes(posed: Posed) -> dict[str, str]:
     points = np.concatenate([posed.xy, posed.front])
     for axis in (0, 1):  # two matrix-vector products: 4x faster than one product with (N, 2)
         coordinates[written:, axis] = plan.matrix @ points[:, axis]
-    text = plan.template % number_texts(coordinates)
+    text = fill(plan.template, number_texts(coordinates))
     return dict(zip(plan.names, text.replace(" -", "-").split("|")))

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cartoonface.face.lift import LIFTED_INDEX
-from cartoonface.render.numbers import number_texts
+from cartoonface.render.numbers import fill, number_texts, template_frame
 
 # The posed points the mouth is drawn from, in this order (thesis 002, Alg. 2.2 step 13).
 MOUTH_POINTS = ("8.4", "8.3", "8.9", "8.10", "8.1", "2.2", "2.3", "8.2")
@@ -205,8 +205,9 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
 # MouthOutlines.rows order, then single numbers.
 TEXTS = ("lips", "opening", "upper_teeth", "lower_teeth", "bite", "upper_width", "lower_width", "bite_width",
          "tongue_cx", "tongue_cy", "tongue_rx", "tongue_ry", "gloss_cx", "gloss_cy", "gloss_rx", "gloss_ry")
-_TEMPLATE = "|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close
-                      for pieces, close in ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))] + ["%s"] * 11)
+_TEMPLATE = template_frame("|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close
+                                     for pieces, close in ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))]
+                                    + ["%s"] * 11))
 
 
 def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
@@ -217,5 +218,5 @@ def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
                      *outlines.gloss[2:]])
     numbers = np.concatenate([outlines.rows.ravel(), sizes[:3], outlines.tongue[:2], sizes[3:5], outlines.gloss[:2],
                               sizes[5:]])
-    text = (_TEMPLATE % number_texts(numbers)).replace(" -", "-")
+    text = fill(_TEMPLATE, number_texts(numbers)).replace(" -", "-")
     return dict(zip(TEXTS, text.split("|")))

@@ -45,6 +45,23 @@ def number_texts(values: np.ndarray) -> tuple[str, ...]:
     return tuple(table[tenths + offset].tolist())  # a list first: 2x faster than iterating the array
 
 
+def template_frame(template: str) -> tuple[str, ...]:
+    """`template`, a text with "%s" slots (and no other "%"), as the frame `fill` writes: its
+    pieces with an empty slot between each two (2 k + 1 strings for k slots)."""
+    pieces = template.split("%s")
+    frame = [""] * (2 * len(pieces) - 1)
+    frame[0::2] = pieces
+    return tuple(frame)
+
+
+def fill(frame: tuple[str, ...], texts: tuple[str, ...]) -> str:
+    """`template % texts` for the `frame` of template_frame(template) (len(texts) its slots):
+    one join, twice as fast as the %-format on a drawing's ~1,000 numbers."""
+    joined = list(frame)
+    joined[1::2] = texts
+    return "".join(joined)
+
+
 def number_text(value: float) -> str:
     """One number (pixels) as SVG text rounded to 0.1 px, e.g. 12.5 -> "12.5", 3.0 -> "3"."""
     return _tenths_text(int(round(float(value) * TENTHS)))
