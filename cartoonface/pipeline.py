@@ -51,10 +51,11 @@ from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
 from cartoonface.video.drive import drive
 from cartoonface.video.track import track
 
-# Share of the whole job done when each stage starts (measured on a 4-minute recording, the
-# sample story ten times: drawing the SVG takes 80 % of the time; docs/web.md, "Progress").
-STAGES = (("decode", 0.0), ("segment", 0.01), ("align", 0.07), ("schedule", 0.14),
-          ("frames", 0.17), ("svg", 0.19), ("pages", 0.99))
+# Share of the whole job done when each stage starts (measured 2026-11-25 after the faster SVG
+# writer, on the sample story and on bench/generate.py's 190 s input, wall and CPU: drawing the
+# SVG now takes ~60 % of the time, the schedule's pitch track ~15 %; docs/web.md, "Progress").
+STAGES = (("decode", 0.0), ("segment", 0.01), ("align", 0.1), ("schedule", 0.26),
+          ("frames", 0.33), ("svg", 0.37), ("pages", 0.985))
 # An edited TextGrid may end this much after the audio (Praat rounds its times).
 ALIGNMENT_SLACK = 0.05  # seconds
 MAX_TITLE = 200  # characters
