@@ -7,7 +7,7 @@ children, positions rounded, every other presentation attribute moved to a CSS c
 (the most used classes named by one letter), a path with its clip path's outline drawn
 as a `<use>` of it, per-state definitions (clip paths) renamed by content with short
 base-36 ids. `share` then puts a part shown in several drawings once into `<defs>` and
-shows it with `<use>`.
+shows it with `<use>` (a part of one element with no `<g>` around it).
 
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
@@ -41,6 +41,9 @@ KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path"
 # Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
 # with no other attribute can be dissolved into its children. Not opacity, which applies to
 # the group as a whole.
+# Shapes a clip-path can move onto from a `<g>` around it alone (_dissolve); not a `<use>`,
+# whose x and y would move the clip.
+SHAPES = frozenset(f"{{{SVG}}}{tag}" for tag in ("path", "circle", "ellipse", "rect", "line", "polyline", "polygon"))
 INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-width", "stroke-linecap",
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
@@ -342,8 +345,9 @@ def _text(value: str) -> str:
 
 def _dissolve(top: etree._Element) -> list[etree._Element]:
     """Hand the INHERITED style of every `<g>` in `top` down to its children (each child
-    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children;
-    returns `top`, or its children if `top` itself dissolved. Fewer elements and
+    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children,
+    a `<g>` left with a clip path only around one shape (SHAPES, not transformed, clipped or
+    masked itself) by the shape clipped; returns `top`, or what replaced it if it dissolved. Fewer elements and
     classes for the browser, fewer bytes per frame (a clipped group keeps only its clip)."""
     groups = list(top.iter(f"{{{SVG}}}g"))
     for group in groups:  # outermost first, so handed-down style goes on down
@@ -360,23 +364,43 @@ def _dissolve(top: etree._Element) -> list[etree._Element]:
         if parent is not None:
             index = parent.index(group)
             parent[index : index + 1] = list(group)
+    clipped = [group for group in groups if group not in empty and set(group.attrib) == {"clip-path"} and len(group) == 1
+               and group[0].tag in SHAPES and not {"transform", "clip-path", "mask"} & set(group[0].attrib)]
+    for group in clipped:  # the clip in the shape's user space, the group's own without a transform
+        group[0].set("clip-path", group.get("clip-path"))
+        parent = group.getparent()
+        if parent is not None:
+            parent.replace(group, group[0])
     if empty and empty[0] is top:
         return list(top)
+    if clipped and clipped[0] is top:
+        return [top[0]]
     return [top]
+
+
+def bare(elements: Sequence[etree._Element]) -> bool:
+    """Whether the drawing `elements` is one element that can itself be the target of a `<use>`
+    in place of a `<g id>` around it: drawn (not a definition) and without an id of its own."""
+    return len(elements) == 1 and elements[0].tag not in DEFINITIONS and elements[0].get("id") is None
 
 
 def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
            defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
     """The elements of every drawing of `drawings` (lists of tidy part numbers by group, as
     Writer.finish numbered them into `tidy`): a part drawn in one drawing only is itself; a
-    part in several is put once into `defs` as `<g id="gN">` and each drawing shows it with
-    `<use>`. Returns the drawings' element lists by group."""
+    part in several is put once into `defs` as `<g id="gN">` (a part of one element: that element
+    with the id, no `<g>`: bare) and each drawing shows it with `<use>`. Returns the drawings'
+    element lists by group."""
     uses = Counter(part for track in drawings.values() for drawing in track for part in drawing)
     names: dict[int, str] = {}
     for part, count in uses.items():
         if count > 1:
             names[part] = short_id("g", len(names))
-            element(defs, "g", id=names[part]).extend(tidy[part])
+            if bare(tidy[part]):
+                tidy[part][0].set("id", names[part])
+                defs.append(tidy[part][0])
+            else:
+                element(defs, "g", id=names[part]).extend(tidy[part])
     return {track: [[node for part in drawing
                      for node in ([element(None, "use", href=f"#{names[part]}")] if part in names
                                   else tidy[part])]
