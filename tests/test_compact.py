@@ -176,3 +176,46 @@ def test_a_pool_that_cannot_start_falls_back_to_one_process(face, monkeypatch):
     expected = animation_svg(face, states, FPS)
     monkeypatch.setattr(animation, "ProcessPoolExecutor", NoFork)
     assert animation_svg(face, states, FPS, workers=2) == expected
+
+
+def wrapped(data: bytes) -> bytes:
+    """The still SVG `data` in the form the compactor wrote before it left out wrappers: every
+    drawn element with an id in a `<defs>` (a track's drawing or a shared part of one element)
+    inside a `<g>` that takes its id, and every shape with a clip path inside a `<g>` that clips."""
+    svg = etree.fromstring(data)
+    for defs in list(svg.iter(f"{S}defs")):
+        for node in list(defs):
+            if node.get("id") and node.tag in (f"{S}path", f"{S}ellipse", f"{S}circle", f"{S}use"):
+                holder = etree.Element(f"{S}g", id=node.attrib.pop("id"))
+                node.addprevious(holder)
+                holder.append(node)
+    for node in list(svg.iter(f"{S}path", f"{S}ellipse", f"{S}circle")):
+        if node.get("clip-path"):
+            holder = etree.Element(f"{S}g", {"clip-path": node.attrib.pop("clip-path")})
+            node.addprevious(holder)
+            holder.append(node)
+    return etree.tostring(svg)
+
+
+def test_no_group_wraps_one_element_for_nothing(face):
+    svg = etree.fromstring(animation_svg(face, talking_about(60), FPS))
+    drawings = [node for defs in svg.iter(f"{S}defs") for node in defs
+                if node.tag in (f"{S}g", f"{S}path", f"{S}ellipse", f"{S}circle", f"{S}use")]
+    assert len(drawings) > 60
+    for node in drawings:
+        if node.tag == f"{S}g" and node.get("data-shape") is None:
+            assert len(node) != 1 or node[0].get("id") is not None, "a drawing of one element is that element"
+    for group in svg.iter(f"{S}g"):
+        if set(group.attrib) == {"clip-path"} and len(group) == 1:
+            assert group[0].tag not in (f"{S}path", f"{S}ellipse", f"{S}circle"), "one shape carries its clip"
+    assert any(node.tag != f"{S}g" for node in drawings), "some drawings are one element"
+    assert any(node.get("clip-path") for node in svg.iter(f"{S}ellipse", f"{S}circle", f"{S}path"))
+
+
+@pytest.mark.parametrize("frame", [0, 11, 23, 37, 52])
+def test_a_frame_without_wrappers_looks_as_with_them(face, frame):
+    still = frozen(animation_svg(face, talking_about(60), FPS), frame, FPS)
+    before = wrapped(still)
+    assert before != still
+    differ = np.abs(pixels(still) - pixels(before)).max(axis=2) > 2
+    assert differ.mean() < 1e-4, f"{differ.sum()} pixels differ"
