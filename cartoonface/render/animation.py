@@ -31,7 +31,8 @@ animation about three times as fast: docs/BENCHMARKS.md, "Frames by one <use>"):
 - a part shown in several drawings of its track (the face outline under
   different mouths) is defined once and drawn with `<use>`; a path with the
   outline of its part's clip path (the mouth's opening, an eye's white and
-  outline) is a `<use>` of the clip path's outline;
+  outline) is a `<use>` of the clip path's outline; consecutive paths of one opaque
+  style lying apart (the brows) are one path (compact.merge_alike);
 - repeated presentation attributes become CSS classes, the most used ones
   named by one letter; ids are short (base 36).
 
@@ -64,7 +65,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Writer, bare, share, short_id
+from cartoonface.render.compact import Writer, bare, merge_alike, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
@@ -442,6 +443,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
+    classes = writer.classes()
+    elements = {name: [merge_alike(drawing, classes) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")

@@ -48,6 +48,14 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
+# Path data read by _extent: a command letter and its numbers.
+_COMMAND = re.compile(r"([MmLlHhVvCcSsQqTtZz])([^A-Za-z]*)")
+_UNREAD = re.compile(r"[^MmLlHhVvCcSsQqTtZzEe\d\s,.+-]")  # arcs, anything else _extent does not read
+_PATH_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "z": 0}
+# merge_alike joins paths whose extents (with their control points) lie at least this many pixels
+# apart beyond half their stroke width: antialiasing reaches 1 px.
+MERGE_GAP = 1.0
 _PATH_DATA = re.compile(r' d="([^"]*)"')
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
 # the attributes it takes out (path data and positions), a path data's token, and the
@@ -206,6 +214,10 @@ class Writer:
             if label is None:
                 label = self.styles[key] = f"s{len(self.styles)}"
             attrib["class"] = label
+
+    def classes(self) -> dict[str, dict[str, str]]:
+        """The style of every class: its properties by name."""
+        return {label: dict(key) for key, label in self.styles.items()}
 
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
@@ -376,6 +388,81 @@ def _dissolve(top: etree._Element) -> list[etree._Element]:
     if clipped and clipped[0] is top:
         return [top[0]]
     return [top]
+
+
+def _extent(d: str) -> tuple[float, float, float, float] | None:
+    """The box (x0, y0, x1, y1) holding every point and control point of the path data `d` (which
+    holds its curves); None for data it does not read (arcs, a first command not a move)."""
+    if _UNREAD.search(d):
+        return None
+    xs: list[float] = []
+    ys: list[float] = []
+    x = y = start_x = start_y = 0.0
+    for letter, text in _COMMAND.findall(d):
+        if not xs and letter not in "Mm" or not text.strip(" ,") and letter not in "Zz":
+            return None
+        low = letter.lower()
+        values = [float(v) for v in _PATH_NUMBER.findall(text)]
+        arity = _ARITY[low]
+        if low == "z":
+            x, y = start_x, start_y
+            continue
+        if len(values) % arity:
+            return None
+        for index in range(0, len(values), arity):
+            chunk = values[index:index + arity]
+            base_x, base_y = (x, y) if letter.islower() else (0.0, 0.0)
+            if low == "h":
+                x = chunk[0] + (x if letter.islower() else 0.0)
+            elif low == "v":
+                y = chunk[0] + (y if letter.islower() else 0.0)
+            else:
+                points = [(base_x + chunk[k], base_y + chunk[k + 1]) for k in range(0, arity, 2)]
+                xs.extend(px for px, _ in points[:-1])
+                ys.extend(py for _, py in points[:-1])
+                x, y = points[-1]
+            xs.append(x)
+            ys.append(y)
+            if low == "m" and index == 0:
+                start_x, start_y = x, y
+    return (min(xs), min(ys), max(xs), max(ys)) if xs else None
+
+
+def _absolute_start(d: str) -> str:
+    """The path data `d` (starting with a move) with its first move absolute, so that it can follow
+    other path data: "m3,4 5,6" -> "M3,4l5,6"."""
+    match = re.match(r"m\s*([-+.\d]+)[\s,]*([-+]?[.\d]+)[\s,]*", d)
+    if match is None:
+        return d
+    rest = d[match.end():]
+    return f"M{match.group(1)},{match.group(2)}" + (f"l{rest}" if rest and rest[0] not in _ARITY_LETTERS else rest)
+
+
+_ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
+
+
+def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]]) -> list[etree._Element]:
+    """`elements` (a drawing's, in drawing order) with each run of consecutive paths of one opaque
+    style (only `d` and a `class` of `styles`, no paint server, no opacity) whose extents lie apart
+    (_extent, MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
+    (the two brows). The first path of a run is changed in place."""
+    merged: list[etree._Element] = []
+    extents: list[tuple[float, float, float, float]] = []
+    for node in elements:
+        style = styles.get(node.get("class", ""))
+        extent = (_extent(node.get("d", "")) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
+                  and style is not None and not any("url(" in v or "opacity" in k for k, v in style.items()) else None)
+        last = merged[-1] if merged else None
+        if extent is not None and last is not None and last.get("class") == node.get("class") and extents:
+            pad = float((style or {}).get("stroke-width", "1")) + MERGE_GAP
+            if all(a[2] + pad < extent[0] or extent[2] + pad < a[0] or a[3] + pad < extent[1] or extent[3] + pad < a[1]
+                   for a in extents):
+                last.set("d", last.get("d", "") + _absolute_start(node.get("d", "")))
+                extents.append(extent)
+                continue
+        merged.append(node)
+        extents = [extent] if extent is not None else []
+    return merged
 
 
 def bare(elements: Sequence[etree._Element]) -> bool:
