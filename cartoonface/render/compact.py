@@ -7,7 +7,9 @@ children, positions rounded, every other presentation attribute moved to a CSS c
 (the most used classes named by one letter), a path with its clip path's outline drawn
 as a `<use>` of it, per-state definitions (clip paths) renamed by content with short
 base-36 ids. `share` then puts a part shown in several drawings once into `<defs>` and
-shows it with `<use>` (a part of one element with no `<g>` around it).
+shows it with `<use>` (a part of one element with no `<g>` around it), and `merge_alike` writes
+consecutive paths of one opaque style lying apart (the brows) as one path: fewer elements for the
+browser to build (docs/BENCHMARKS.md, "Fewer elements").
 
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
