@@ -2,7 +2,8 @@
 
 Input: bench/generate.py's 3-minute THCHS-30 recording (built at bench time), made into the
 audio-book and the announcer page (default options). `python -m bench.page [FOLDER ...]` measures
-existing page folders instead.
+existing page folders instead; `python -m bench.page --compare BEFORE AFTER [...]` compares pairs of
+page folders of one recording (elements per kind per minute, page ready, playback: interleaved).
 
 Figures, each the median of RUNS loads from file:// with the variants interleaved (the machine is shared):
 - page ready: navigation start to two animation frames after the `load` event (performance.now());
@@ -26,6 +27,7 @@ import shutil
 import statistics
 import sys
 import tempfile
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
@@ -255,6 +257,43 @@ def measure(folder: Path, work: Path) -> None:
     sys.stdout.flush()
 
 
+def element_kinds(svg_file: Path) -> Counter[str]:
+    """How many elements of each kind (tag without namespace) the SVG file `svg_file` holds."""
+    root = etree.parse(str(svg_file), etree.XMLParser(huge_tree=True)).getroot()
+    return Counter(etree.QName(node).localname for node in root.iter() if isinstance(node.tag, str))
+
+
+def compare(pairs: list[tuple[Path, Path]]) -> None:
+    """For each (before, after) pair of page folders of one recording: the elements per kind per
+    minute of their animation.svg, and page ready, parse, style and playback of their index.html,
+    loaded RUNS times interleaved (medians, ms)."""
+    from playwright.sync_api import sync_playwright
+
+    for before, after in pairs:
+        end = re.search(r"xmax = ([\d.]+)", (before / "alignment.TextGrid").read_text(encoding="utf-8"))
+        if end is None:
+            raise ValueError(f"{before / 'alignment.TextGrid'}: no xmax (the recording's length)")
+        minutes = float(end.group(1)) / 60
+        kinds = [element_kinds(folder / "animation.svg") for folder in (before, after)]
+        print(f"{before} -> {after}: elements per minute of the {minutes:.2f} min recording (all: "
+              f"{sum(kinds[0].values()):,} -> {sum(kinds[1].values()):,})")
+        for kind, _ in kinds[0].most_common(8):
+            print(f"| {kind} | {kinds[0][kind] / minutes:,.0f} | {kinds[1][kind] / minutes:,.0f} |")
+    loads: dict[Path, list[dict[str, float]]] = {folder: [] for pair in pairs for folder in pair}
+    with sync_playwright() as play:
+        browser = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
+        for _ in range(RUNS):
+            for folder in loads:
+                loads[folder].append(load_once(browser, folder / "index.html"))
+        playing = {folder: statistics.median(playback_cost(browser, folder / "index.html") for _ in range(3))
+                   for folder in loads}
+        browser.close()
+    for folder, runs in loads.items():
+        med = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+        print(f"{folder}: ready {med['ready']:.0f} parse {med['parse']:.0f} style {med['RecalcStyleDuration']:.0f} "
+              f"layout {med['LayoutDuration']:.0f} playing {playing[folder]:.0f} ms/s")
+
+
 def main(folders: list[Path] | None = None) -> None:
     """Measure `folders` (default: the audio-book and announcer pages of bench/generate.py's input)."""
     with tempfile.TemporaryDirectory(prefix="cartoonface-page-") as tmp:
@@ -273,4 +312,8 @@ def main(folders: list[Path] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main([Path(arg) for arg in sys.argv[1:]] or None)
+    if sys.argv[1:2] == ["--compare"]:  # --compare BEFORE AFTER [BEFORE AFTER ...]
+        folders = [Path(arg) for arg in sys.argv[2:]]
+        compare(list(zip(folders[::2], folders[1::2], strict=True)))
+    else:
+        main([Path(arg) for arg in sys.argv[1:]] or None)

@@ -46,7 +46,7 @@ def shows(track: etree._Element) -> etree._Element:
 
 
 def intervals(track: etree._Element) -> list[tuple[int, int, etree._Element]]:
-    """(begin ms, end ms, drawing <g>) of every run of a track, in time order: the key times of its
+    """(begin ms, end ms, drawing) of every run of a track, in time order: the key times of its
     <use>'s href animation (fractions of its dur) and the drawings of the track's <defs> they show.
     A run ends where the next begins, the last at the end of the animation."""
     animate = shows(track)
@@ -54,15 +54,19 @@ def intervals(track: etree._Element) -> list[tuple[int, int, etree._Element]]:
     begins = [round(float(value) * total) for value in animate.get("keyTimes").split(";")]
     values = animate.get("values").split(";")
     assert len(values) == len(begins) and begins[0] == 0
-    drawings = {g.get("id"): g for g in track.find("s:defs", NS).iterfind("s:g", NS)}
+    drawings = {node.get("id"): node for node in track.find("s:defs", NS)}
     ends = begins[1:] + [round(total)]
     assert all(begin < end for begin, end in zip(begins, ends)), "time order"
     return [(begin, end, drawings[value[1:]]) for begin, end, value in zip(begins, ends, values, strict=True)]
 
 
 def content(frame: etree._Element) -> bytes:
-    """A drawing's elements."""
-    return b"".join(etree.tostring(child) for child in frame)
+    """A drawing's elements: the `<g id>`'s children, or the drawing of one element without its id."""
+    if frame.tag == f"{S}g" and frame.get("id", "").startswith("f"):
+        return b"".join(etree.tostring(child) for child in frame)
+    alone = etree.fromstring(etree.tostring(frame))
+    del alone.attrib["id"]
+    return etree.tostring(alone)
 
 
 def tracks(svg: etree._Element) -> dict[str, etree._Element]:
@@ -323,9 +327,10 @@ def test_many_drawings_have_unique_ids_and_every_reference_resolves(face):
     by_id = {node.get("id"): node for node in svg.iter() if node.get("id")}
     for use in svg.iter(f"{S}use"):
         target = by_id[use.get("href")[1:]]
-        assert target.tag in (f"{S}g", f"{S}path")
-        if target.tag == f"{S}path":  # a clip path's outline drawn again: it styles nothing itself
-            assert target.getparent().tag == f"{S}clipPath" and target.get("class") is None
+        # a drawing (a <g>, or a drawing of one element without one), or a clip path's outline
+        assert target.tag in (f"{S}g", f"{S}path", f"{S}ellipse", f"{S}circle", f"{S}use")
+        if target.getparent().tag == f"{S}clipPath":  # a clip path's outline drawn again: it styles nothing itself
+            assert target.tag == f"{S}path" and target.get("class") is None
             assert use.get("class"), "the <use> carries the style"
             frame = use
             while frame.getparent().tag != f"{S}defs" and frame.get("data-part") is None:

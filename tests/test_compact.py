@@ -15,6 +15,7 @@ from PIL import Image
 from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
+from cartoonface.render.compact import merge_alike
 from cartoonface.render.png import svg_to_png
 from tests.stills import frozen
 
@@ -176,3 +177,78 @@ def test_a_pool_that_cannot_start_falls_back_to_one_process(face, monkeypatch):
     expected = animation_svg(face, states, FPS)
     monkeypatch.setattr(animation, "ProcessPoolExecutor", NoFork)
     assert animation_svg(face, states, FPS, workers=2) == expected
+
+
+def wrapped(data: bytes) -> bytes:
+    """The still SVG `data` in the form the compactor wrote before it left out wrappers: every
+    drawn element with an id in a `<defs>` (a track's drawing or a shared part of one element)
+    inside a `<g>` that takes its id, and every shape with a clip path inside a `<g>` that clips."""
+    svg = etree.fromstring(data)
+    for defs in list(svg.iter(f"{S}defs")):
+        for node in list(defs):
+            if node.get("id") and node.tag in (f"{S}path", f"{S}ellipse", f"{S}circle", f"{S}use"):
+                holder = etree.Element(f"{S}g", id=node.attrib.pop("id"))
+                node.addprevious(holder)
+                holder.append(node)
+    for node in list(svg.iter(f"{S}path", f"{S}ellipse", f"{S}circle")):
+        if node.get("clip-path"):
+            holder = etree.Element(f"{S}g", {"clip-path": node.attrib.pop("clip-path")})
+            node.addprevious(holder)
+            holder.append(node)
+    return etree.tostring(svg)
+
+
+def test_no_group_wraps_one_element_for_nothing(face):
+    svg = etree.fromstring(animation_svg(face, talking_about(60), FPS))
+    drawings = [node for defs in svg.iter(f"{S}defs") for node in defs
+                if node.tag in (f"{S}g", f"{S}path", f"{S}ellipse", f"{S}circle", f"{S}use")]
+    assert len(drawings) > 60
+    for node in drawings:
+        if node.tag == f"{S}g" and node.get("data-shape") is None:
+            assert len(node) != 1 or node[0].get("id") is not None, "a drawing of one element is that element"
+    for group in svg.iter(f"{S}g"):
+        if set(group.attrib) == {"clip-path"} and len(group) == 1:
+            assert group[0].tag not in (f"{S}path", f"{S}ellipse", f"{S}circle"), "one shape carries its clip"
+    assert any(node.tag != f"{S}g" for node in drawings), "some drawings are one element"
+    assert any(node.get("clip-path") for node in svg.iter(f"{S}ellipse", f"{S}circle", f"{S}path"))
+
+
+@pytest.mark.parametrize("frame", [0, 11, 23, 37, 52])
+def test_a_frame_without_wrappers_looks_as_with_them(face, frame):
+    still = frozen(animation_svg(face, talking_about(60), FPS), frame, FPS)
+    before = wrapped(still)
+    assert before != still
+    differ = np.abs(pixels(still) - pixels(before)).max(axis=2) > 2
+    assert differ.mean() < 1e-4, f"{differ.sum()} pixels differ"
+
+
+BROW_STYLE = {"fill": "#4a2a20", "stroke": "#4a2a20", "stroke-width": ".6"}
+
+
+@pytest.mark.parametrize("second", ["m60,20c5-6,15-6,20,0l-20,4z", "m60,20 20,0 0,8-20,0z", "M60,20H80V28H60Z",
+                                    "m60,20l10-8,10,8q-10,6-20,0", "m60,20s10-10,20,0 -20,8-20,0"])
+def test_paths_alike_lying_apart_are_one_path_with_the_same_pixels(second):
+    def path(d: str) -> etree._Element:
+        return etree.Element(f"{S}path", {"d": d, "class": "n"})
+
+    first = "m10,20c5-6,15-6,20,0l-20,4z"
+    drawing = [path(first), path(second)]
+    separate = b"".join(etree.tostring(node) for node in drawing)
+    merged = merge_alike(drawing, {"n": BROW_STYLE})
+    assert len(merged) == 1 and merged[0].get("d").startswith(first)
+
+    def picture(body: bytes) -> np.ndarray:
+        style = f".n{{{';'.join(f'{k}:{v}' for k, v in BROW_STYLE.items())}}}"
+        return pixels(f'<svg xmlns="{S[1:-1]}" width="100" height="40"><style>{style}</style>'.encode()
+                      + body + b"</svg>")
+
+    assert np.array_equal(picture(separate), picture(etree.tostring(merged[0])))
+
+
+@pytest.mark.parametrize("second, style", [("m25,20c5-6,15-6,20,0l-20,4z", BROW_STYLE),  # overlapping
+                                           ("m60,20c5-6,15-6,20,0l-20,4z", {"fill": "url(#g)"}),
+                                           ("m60,20c5-6,15-6,20,0l-20,4z", {"fill": "#000", "opacity": ".5"}),
+                                           ("m60,20a5,5,0,0,0,10,0z", BROW_STYLE)])  # an arc: not read
+def test_paths_that_could_draw_otherwise_stay_apart(second, style):
+    drawing = [etree.Element(f"{S}path", {"d": d, "class": "n"}) for d in ("m10,20c5-6,15-6,20,0l-20,4z", second)]
+    assert merge_alike(drawing, {"n": style}) == drawing

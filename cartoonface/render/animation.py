@@ -19,7 +19,8 @@ animation about three times as fast: docs/BENCHMARKS.md, "Frames by one <use>"):
   brows), eyes. Each track has its own frames, so a moving mouth does not
   repeat the eyes, and a still head does not repeat the hair;
 - each distinct drawing of a track is written once, as a `<g id>` in the track's own
-  `<defs>`; consecutive frames showing the same drawing are one value of the animation;
+  `<defs>` (a drawing of one element: that element with the id, no `<g>`); consecutive
+  frames showing the same drawing are one value of the animation;
 - a track whose drawing never changes is written once, with no `<use>`;
 - every frame's state is drawn (no pose held over frames); the head's roll is
   not drawn into the parts but is a rotation of the hair and face layers (one
@@ -30,7 +31,8 @@ animation about three times as fast: docs/BENCHMARKS.md, "Frames by one <use>"):
 - a part shown in several drawings of its track (the face outline under
   different mouths) is defined once and drawn with `<use>`; a path with the
   outline of its part's clip path (the mouth's opening, an eye's white and
-  outline) is a `<use>` of the clip path's outline;
+  outline) is a `<use>` of the clip path's outline; consecutive paths of one opaque
+  style lying apart (the brows) are one path (compact.merge_alike);
 - repeated presentation attributes become CSS classes, the most used ones
   named by one letter; ids are short (base 36).
 
@@ -63,7 +65,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_face, rig, unroll
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Writer, share, short_id
+from cartoonface.render.compact import Writer, bare, merge_alike, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
@@ -215,7 +217,9 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
     """Write one track into `parent` as a `<g data-part>`: its drawing as is if it never changes,
     else each distinct drawing once as a `<g id>` (ids from `names`) in the track's own `<defs>`
     and one `<use>` whose `href` a discrete `<animate>` (_discrete) points at the drawing of
-    every run of frames. The mouth track's drawings carry `data-shape`."""
+    every run of frames. A drawing of one element (compact.bare) is that element with the id, no
+    `<g>` around it (one element fewer for the browser to build). The mouth track's drawings are
+    `<g>`s carrying `data-shape`."""
     holder = element(parent, "g", data_part=track)
     if len(drawings) == 1:
         holder.extend(drawings[0])
@@ -223,6 +227,10 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
     store = element(holder, "defs")
     ids = [next(names) for _ in drawings]
     for number, (name, drawing) in enumerate(zip(ids, drawings, strict=True)):
+        if track != MOUTH_TRACK and bare(drawing):
+            drawing[0].set("id", name)
+            store.append(drawing[0])
+            continue
         frame = element(store, "g", id=name)
         if track == MOUTH_TRACK:
             frame.set("data-shape", shapes[number])
@@ -435,6 +443,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
+    classes = writer.classes()
+    elements = {name: [merge_alike(drawing, classes) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")

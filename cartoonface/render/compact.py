@@ -7,7 +7,9 @@ children, positions rounded, every other presentation attribute moved to a CSS c
 (the most used classes named by one letter), a path with its clip path's outline drawn
 as a `<use>` of it, per-state definitions (clip paths) renamed by content with short
 base-36 ids. `share` then puts a part shown in several drawings once into `<defs>` and
-shows it with `<use>`.
+shows it with `<use>` (a part of one element with no `<g>` around it), and `merge_alike` writes
+consecutive paths of one opaque style lying apart (the brows) as one path: fewer elements for the
+browser to build (docs/BENCHMARKS.md, "Fewer elements").
 
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
@@ -41,10 +43,21 @@ KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path"
 # Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
 # with no other attribute can be dissolved into its children. Not opacity, which applies to
 # the group as a whole.
+# Shapes a clip-path can move onto from a `<g>` around it alone (_dissolve); not a `<use>`,
+# whose x and y would move the clip.
+SHAPES = frozenset(f"{{{SVG}}}{tag}" for tag in ("path", "circle", "ellipse", "rect", "line", "polyline", "polygon"))
 INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-width", "stroke-linecap",
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
+# Path data read by _extent: a command letter and its numbers.
+_COMMAND = re.compile(r"([MmLlHhVvCcSsQqTtZz])([^A-Za-z]*)")
+_UNREAD = re.compile(r"[^MmLlHhVvCcSsQqTtZzEe\d\s,.+-]")  # arcs, anything else _extent does not read
+_PATH_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "z": 0}
+# merge_alike joins paths whose extents (with their control points) lie at least this many pixels
+# apart beyond half their stroke width: antialiasing reaches 1 px.
+MERGE_GAP = 1.0
 _PATH_DATA = re.compile(r' d="([^"]*)"')
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
 # the attributes it takes out (path data and positions), a path data's token, and the
@@ -204,6 +217,10 @@ class Writer:
                 label = self.styles[key] = f"s{len(self.styles)}"
             attrib["class"] = label
 
+    def classes(self) -> dict[str, dict[str, str]]:
+        """The style of every class: its properties by name."""
+        return {label: dict(key) for key, label in self.styles.items()}
+
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
@@ -342,8 +359,9 @@ def _text(value: str) -> str:
 
 def _dissolve(top: etree._Element) -> list[etree._Element]:
     """Hand the INHERITED style of every `<g>` in `top` down to its children (each child
-    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children;
-    returns `top`, or its children if `top` itself dissolved. Fewer elements and
+    keeps what it sets itself) and replace a `<g>` left with no other attribute by its children,
+    a `<g>` left with a clip path only around one shape (SHAPES, not transformed, clipped or
+    masked itself) by the shape clipped; returns `top`, or what replaced it if it dissolved. Fewer elements and
     classes for the browser, fewer bytes per frame (a clipped group keeps only its clip)."""
     groups = list(top.iter(f"{{{SVG}}}g"))
     for group in groups:  # outermost first, so handed-down style goes on down
@@ -360,23 +378,118 @@ def _dissolve(top: etree._Element) -> list[etree._Element]:
         if parent is not None:
             index = parent.index(group)
             parent[index : index + 1] = list(group)
+    clipped = [group for group in groups if group not in empty and set(group.attrib) == {"clip-path"} and len(group) == 1
+               and group[0].tag in SHAPES and not {"transform", "clip-path", "mask"} & set(group[0].attrib)]
+    for group in clipped:  # the clip in the shape's user space, the group's own without a transform
+        group[0].set("clip-path", group.get("clip-path"))
+        parent = group.getparent()
+        if parent is not None:
+            parent.replace(group, group[0])
     if empty and empty[0] is top:
         return list(top)
+    if clipped and clipped[0] is top:
+        return [top[0]]
     return [top]
+
+
+def _extent(d: str) -> tuple[float, float, float, float] | None:
+    """The box (x0, y0, x1, y1) holding every point and control point of the path data `d` (which
+    holds its curves); None for data it does not read (arcs, a first command not a move)."""
+    if _UNREAD.search(d):
+        return None
+    xs: list[float] = []
+    ys: list[float] = []
+    x = y = start_x = start_y = 0.0
+    for letter, text in _COMMAND.findall(d):
+        if not xs and letter not in "Mm" or not text.strip(" ,") and letter not in "Zz":
+            return None
+        low = letter.lower()
+        values = [float(v) for v in _PATH_NUMBER.findall(text)]
+        arity = _ARITY[low]
+        if low == "z":
+            x, y = start_x, start_y
+            continue
+        if len(values) % arity:
+            return None
+        for index in range(0, len(values), arity):
+            chunk = values[index:index + arity]
+            base_x, base_y = (x, y) if letter.islower() else (0.0, 0.0)
+            if low == "h":
+                x = chunk[0] + (x if letter.islower() else 0.0)
+            elif low == "v":
+                y = chunk[0] + (y if letter.islower() else 0.0)
+            else:
+                points = [(base_x + chunk[k], base_y + chunk[k + 1]) for k in range(0, arity, 2)]
+                xs.extend(px for px, _ in points[:-1])
+                ys.extend(py for _, py in points[:-1])
+                x, y = points[-1]
+            xs.append(x)
+            ys.append(y)
+            if low == "m" and index == 0:
+                start_x, start_y = x, y
+    return (min(xs), min(ys), max(xs), max(ys)) if xs else None
+
+
+def _absolute_start(d: str) -> str:
+    """The path data `d` (starting with a move) with its first move absolute, so that it can follow
+    other path data: "m3,4 5,6" -> "M3,4l5,6"."""
+    match = re.match(r"m\s*([-+.\d]+)[\s,]*([-+]?[.\d]+)[\s,]*", d)
+    if match is None:
+        return d
+    rest = d[match.end():]
+    return f"M{match.group(1)},{match.group(2)}" + (f"l{rest}" if rest and rest[0] not in _ARITY_LETTERS else rest)
+
+
+_ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
+
+
+def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]]) -> list[etree._Element]:
+    """`elements` (a drawing's, in drawing order) with each run of consecutive paths of one opaque
+    style (only `d` and a `class` of `styles`, no paint server, no opacity) whose extents lie apart
+    (_extent, MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
+    (the two brows). The first path of a run is changed in place."""
+    merged: list[etree._Element] = []
+    extents: list[tuple[float, float, float, float]] = []
+    for node in elements:
+        style = styles.get(node.get("class", ""))
+        extent = (_extent(node.get("d", "")) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
+                  and style is not None and not any("url(" in v or "opacity" in k for k, v in style.items()) else None)
+        last = merged[-1] if merged else None
+        if extent is not None and last is not None and last.get("class") == node.get("class") and extents:
+            pad = float((style or {}).get("stroke-width", "1")) + MERGE_GAP
+            if all(a[2] + pad < extent[0] or extent[2] + pad < a[0] or a[3] + pad < extent[1] or extent[3] + pad < a[1]
+                   for a in extents):
+                last.set("d", last.get("d", "") + _absolute_start(node.get("d", "")))
+                extents.append(extent)
+                continue
+        merged.append(node)
+        extents = [extent] if extent is not None else []
+    return merged
+
+
+def bare(elements: Sequence[etree._Element]) -> bool:
+    """Whether the drawing `elements` is one element that can itself be the target of a `<use>`
+    in place of a `<g id>` around it: drawn (not a definition) and without an id of its own."""
+    return len(elements) == 1 and elements[0].tag not in DEFINITIONS and elements[0].get("id") is None
 
 
 def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
            defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
     """The elements of every drawing of `drawings` (lists of tidy part numbers by group, as
     Writer.finish numbered them into `tidy`): a part drawn in one drawing only is itself; a
-    part in several is put once into `defs` as `<g id="gN">` and each drawing shows it with
-    `<use>`. Returns the drawings' element lists by group."""
+    part in several is put once into `defs` as `<g id="gN">` (a part of one element: that element
+    with the id, no `<g>`: bare) and each drawing shows it with `<use>`. Returns the drawings'
+    element lists by group."""
     uses = Counter(part for track in drawings.values() for drawing in track for part in drawing)
     names: dict[int, str] = {}
     for part, count in uses.items():
         if count > 1:
             names[part] = short_id("g", len(names))
-            element(defs, "g", id=names[part]).extend(tidy[part])
+            if bare(tidy[part]):
+                tidy[part][0].set("id", names[part])
+                defs.append(tidy[part][0])
+            else:
+                element(defs, "g", id=names[part]).extend(tidy[part])
     return {track: [[node for part in drawing
                      for node in ([element(None, "use", href=f"#{names[part]}")] if part in names
                                   else tidy[part])]
