@@ -34,6 +34,7 @@ GRADIENTS: dict[str, tuple[tuple[float, str], ...]] = {
     "bg-screen": ((0, "#1d4ed8"), (1, "#0e7490")),  # a screen of its video wall
     "bg-desk-top": ((0, "#f1f5f9"), (1, "#94a3b8")),  # the news desk's lit top edge
     "bg-desk": ((0, "#1e293b"), (1, "#0b1220")),  # its front
+    "bg-news-floor": ((0, "#2b4775"), (1, "#172641")),  # the lit set wall behind the anchor's shoulders
     "bg-studio": ((0, "#d5dbe2"), (1, "#97a3b0")),  # the studio's paper backdrop
     "bg-sweep": ((0, "#8e99a6"), (1, "#66717e")),  # where the backdrop sweeps into the floor
     "bg-board": ((0, "#2f5d3a"), (1, "#1f3d27")),  # chalkboard
@@ -54,7 +55,7 @@ GLOWS = {"bg-news-glow": ("#60a5fa", 0.35), "bg-spot": ("#ffffff", 0.6), "bg-sof
 # Flat colours by what they paint.
 COLOURS = {"wall": "#f3efe6", "classroom wall": "#efe6d2", "board frame": "#8b5a2b", "chalk": "#e5e7eb",
            "floor": "#c8b48c", "eraser": "#374151", "news frame": "#0a1428", "news line": "#1e3a5f",
-           "news light": "#7dd3fc", "news floor": "#050b16", "band": "#b91c1c", "band text": "#ffffff",
+           "news light": "#7dd3fc", "band": "#b91c1c", "band text": "#ffffff",
            "desk accent": "#38bdf8", "softbox": "#1f2937", "softbox face": "#f8fafc", "stand": "#374151",
            "jaw shadow": "#000", "collar": "#ffffff", "collar line": "#b6c2cf", "lapel": "#151d31",
            "lapel edge": "#3d4d70", "suit seam": "#070b14", "button": "#0b0f1a", "shirt collar": "#dbeafe",
@@ -291,7 +292,8 @@ def _newsroom(layer: etree._Element, box: tuple[float, float, float, float], def
     for left_edge, length in BAND_TEXT:
         element(layer, "rect", x=x + w * left_edge, y=text_y, width=w * length, height=h * band_height * BAND_TEXT_HEIGHT,
                 fill=COLOURS["band text"], opacity=BAND_TEXT_OPACITY)
-    element(layer, "rect", x=x, y=y + h * NEWS_FLOOR, width=w, height=h * (1 - NEWS_FLOOR), fill=COLOURS["news floor"])
+    element(layer, "rect", x=x, y=y + h * NEWS_FLOOR, width=w, height=h * (1 - NEWS_FLOOR),
+            fill=_gradient(defs, "bg-news-floor"))
 
 
 def _studio(layer: etree._Element, figure: Figure, defs: etree._Element) -> None:
