@@ -40,7 +40,7 @@ from cartoonface.files import atomic_directory, folder_size, read_user_text, wri
 from cartoonface.render.animation import animation_svg, drawing_workers
 from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
-from cartoonface.speech.audio_only import transcribed
+from cartoonface.speech.audio_only import AUDIO_ONLY_NOTE, transcribed
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.english import LANGUAGES
 from cartoonface.speech.records import Alignment
@@ -66,6 +66,8 @@ VIDEO_KEEPS = ("emotion", "breath")
 TRACK_SHARE = 0.4
 SILENT_RATE = 16000  # Hz of the silence a clip without sound gets as the page's clock
 SILENT_NOTE = "the video has no sound: the page is silent and its mouth follows the video alone"
+VIDEO_MOUTH_NOTE = ("no transcript: the mouth follows the video; the TextGrid and mouth cues come from "
+                    "the audio alone (loudness and formants)")
 
 
 @dataclass(frozen=True)
@@ -277,6 +279,9 @@ def generate(
             actions += emotion_actions(spans or (), duration, default)
         if tracking is not None:  # the video moves the head, eyes, brows and mouth: only moods and breaths stay
             actions = tuple(action for action in actions if action.kind in VIDEO_KEEPS)
+            if AUDIO_ONLY_NOTE in alignment.notes:  # the face's mouth follows the video, not the audio
+                alignment = dataclasses.replace(alignment, notes=tuple(
+                    VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:

@@ -57,6 +57,12 @@ def test_the_page_folder_is_written_with_the_clip_sound(site):
     assert "<audio" in (folder / "index.html").read_text(encoding="utf-8")
 
 
+def test_without_a_transcript_the_notes_say_the_mouth_follows_the_video(site):
+    _, output = site
+    note = next(line for line in output.splitlines() if "no transcript" in line)
+    assert "follows the video" in note and "lip sync comes from the audio alone" not in note
+
+
 def test_the_eyes_close_where_the_speaker_blinks(site):
     folder, _ = site
     with LABELS.open(encoding="utf-8") as handle:
