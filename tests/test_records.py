@@ -97,3 +97,17 @@ def test_textgrid_reader_names_the_file_for_a_negative_time():
 def test_bad_actions_are_refused(fields, field):
     with pytest.raises(ValueError, match=field):
         Action(*fields)
+
+
+@pytest.mark.parametrize("confidence", [0.29, 0.8, 1.0])
+def test_json_confidence_keeps_a_flagged_syllable_below_its_threshold(confidence):
+    from cartoonface.speech.analyse import LOW_CONFIDENCE
+    from cartoonface.speech.records import alignment_to_dict
+
+    def written(value: float) -> float:
+        one = syllable(confidence=value)
+        data = alignment_to_dict(Alignment((Sentence("你", 0.1, 0.3, (one,)),), 1.0, ()))
+        return data["sentences"][0]["syllables"][0]["confidence"]
+
+    assert written(LOW_CONFIDENCE - 0.004) < LOW_CONFIDENCE
+    assert written(confidence) == confidence  # hundredths themselves are kept

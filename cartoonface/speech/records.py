@@ -91,10 +91,15 @@ class Alignment:
                                  f"at {earlier.start:g} s; expected sentences in time order")
 
 
+# Rounding slack for the confidence's hundredths: 0.29 * 100 is 28.999999999999996 in floats.
+FLOOR_SLACK = 1e-9
+
+
 def alignment_to_dict(alignment: Alignment) -> dict:
     """The alignment as JSON-ready data (format "cartoonface-alignment", version 1; docs/alignment.md).
 
-    Times are seconds rounded to the millisecond, confidence to 0.01.
+    Times are seconds rounded to the millisecond, confidence rounded down to 0.01 (a syllable
+    below the low-confidence threshold, a multiple of 0.01, stays below it when read back).
     """
     return {
         "format": "cartoonface-alignment",
@@ -113,7 +118,7 @@ def alignment_to_dict(alignment: Alignment) -> dict:
                         "shapes": list(s.shapes),
                         "start": round(s.start, 3),
                         "end": round(s.end, 3),
-                        "confidence": round(s.confidence, 2),
+                        "confidence": math.floor(s.confidence * 100 + FLOOR_SLACK) / 100,
                     }
                     for s in sentence.syllables
                 ],
