@@ -25,14 +25,14 @@ from cartoonface.web.runner import QueueFull, current_lease, reaped_path
 from cartoonface.web.security import download_name
 from cartoonface.web.store import DONE, Job, create_job, list_jobs, load_job, space_problem
 from cartoonface.web.views import busy_message, job_label, state
-from cartoonface.web.worker import ZIP_NAME
+from cartoonface.web.worker import SITE, VIDEO_NAME, ZIP_NAME
 
 bp = Blueprint("api", __name__, url_prefix="/api")
 
 # API field -> the form field that check_submission reads (the same checks as the form).
 TEXT_FIELDS = {"sample": "face_sample", "title": "title", "page": "page", "style": "style",
                "background": "background", "clothes": "clothes", "mood": "mood", "language": "language",
-               "transcript": "transcript"}
+               "transcript": "transcript", "mp4": "mp4"}
 FILE_FIELDS = {"face": "face_file", "photo": "photo", "audio": "audio", "transcript": "transcript_file",
                "textgrid": "textgrid_file", "actions": "actions_file"}
 # A form field's error -> the API field to name.
@@ -123,6 +123,8 @@ def job_json(job: Job) -> dict[str, object]:
             "page": url_for("web.job_page", job_id=job.id),
             "result_zip": url_for(".result_zip", job_id=job.id) if done else None,
             "site": url_for("web.site_file", job_id=job.id, name="index.html") if done else None,
+            "video": url_for("web.site_file", job_id=job.id, name=VIDEO_NAME)
+            if done and (job.folder / SITE / VIDEO_NAME).is_file() else None,
         },
     }
 

@@ -179,7 +179,7 @@ def _text(form: MultiDict[str, str], name: str) -> str:
 def form_values(form: MultiDict[str, str]) -> dict[str, str]:
     """The plain fields as sent, to fill the form again when it comes back with errors."""
     return {name: _text(form, name) for name in ("face_sample", "face_draft", "page", "style", "mood", "language", "title",
-                                                 "background", "clothes", "transcript")}
+                                                 "background", "clothes", "transcript", "mp4")}
 
 
 def check_photo(name: str, data: bytes, too_big: bool,
@@ -369,6 +369,21 @@ def check_choice(form: MultiDict[str, str], name: str, allowed: tuple[str, ...] 
     return value
 
 
+# A yes/no field (the form's checkbox sends its value "1"; the API's `mp4: true`): these values
+# mean yes, FLAG_NO no (an absent field is no).
+FLAG_YES = ("1", "on", "true", "yes")
+FLAG_NO = ("", "0", "off", "false", "no")
+
+
+def check_flag(form: MultiDict[str, str], name: str, errors: dict[str, str]) -> bool:
+    """A checkbox `name`: True for FLAG_YES, False for FLAG_NO or when absent (case ignored);
+    an error for anything else."""
+    value = _text(form, name).strip().lower()
+    if value not in FLAG_YES + FLAG_NO:
+        errors[name] = f"{name} is {value[:20]!r}; expected true or false."
+    return value in FLAG_YES
+
+
 def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorage], limits: Limits,
                      chosen: tuple[bytes, str, tuple[str, ...]] | None = None) -> Submission | dict[str, str]:
     """Check every field (`chosen`: a face from a photo draft, see check_face); return the
@@ -386,6 +401,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
     language = check_choice(form, "language", LANGUAGE_CHOICES, "languages", errors)
     background = check_choice(form, "background", limits.backgrounds, "backgrounds", errors)
     clothes = check_choice(form, "clothes", limits.clothes, "clothes", errors)
+    mp4 = check_flag(form, "mp4", errors)
     face, face_label, face_notes = check_face(form, files, limits, errors, chosen)
     transcript = check_transcript(form, files, limits, errors)
     audio, ext, audio_label, duration = check_audio(files, limits, errors)
@@ -409,6 +425,7 @@ def check_submission(form: MultiDict[str, str], files: MultiDict[str, FileStorag
         "video": ext in VIDEO_EXTENSIONS.values(),  # a video of the speaker (pipeline.generate's video=)
         "duration": duration,
         "transcript_chars": len(transcript),
+        "mp4": mp4,  # also make the MP4 video (worker.py VIDEO_NAME)
     }
     files_out = {"face.json": face, f"audio.{ext}": audio}
     if transcript:  # without one the job is made from the audio alone

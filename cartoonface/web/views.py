@@ -37,7 +37,7 @@ from cartoonface.web.point_editor import preview_svg
 from cartoonface.web.runner import QueueFull, Runner
 from cartoonface.web.security import CSRF_FIELD, add_headers, csrf_ok, csrf_token, download_name
 from cartoonface.web.store import DONE, ID_PATTERN, QUEUED, Job, Status, create_job, load_job, space_problem
-from cartoonface.web.worker import SITE, ZIP_NAME
+from cartoonface.web.worker import SITE, VIDEO_NAME, VIDEO_STAGE, ZIP_NAME
 
 RECENT = 20  # jobs remembered per browser session
 THUMBNAIL_MAX_AGE = 3600  # seconds a browser may keep a sample face's thumbnail
@@ -54,9 +54,12 @@ STAGES = {
     "frames": "Posing the face in every frame",
     "svg": "Drawing the frames",
     "pages": "Writing the pages",
+    VIDEO_STAGE: "Making the video",
 }
-# The pipeline's stages in order (name, label), listed on the job page with the current one marked.
-STAGE_LIST = tuple((name, label) for name, label in STAGES.items() if name)
+# The pipeline's stages in order (name, label), listed on the job page with the current one
+# marked; a job that makes a video has its stage too, after the pages.
+STAGE_LIST = tuple((name, label) for name, label in STAGES.items() if name and name != VIDEO_STAGE)
+VIDEO_STAGE_LIST = (*STAGE_LIST, (VIDEO_STAGE, STAGES[VIDEO_STAGE]))
 
 # The generated pages (render/pages.py) load their script and CSS from files and hold
 # the SVG inline. They run sandboxed (an opaque origin: no access to this app's cookies
@@ -78,6 +81,7 @@ SITE_TYPES = {
     ".ogg": "audio/ogg",
     ".m4a": "audio/mp4",
     ".flac": "audio/flac",
+    ".mp4": "video/mp4",
     ".png": "image/png",
     ".woff2": "font/woff2",
 }
@@ -232,9 +236,11 @@ def job_page(job_id: str) -> str:
     """The job's progress, its error, or its player and download link."""
     job = stored_job(job_id)
     return render_template("web/job.html", job=job, status=job.status, stage=job_label(job),
-                           pages=PAGES, done=job.status.state == DONE, stages=STAGE_LIST,
+                           pages=PAGES, done=job.status.state == DONE,
+                           stages=VIDEO_STAGE_LIST if job.spec.get("mp4") else STAGE_LIST,
                            textgrid_name=TEXTGRID_FILE, actions_name=ACTIONS_FILE,
-                           captions=(job.folder / SITE / CAPTIONS_NAME).is_file())
+                           captions=(job.folder / SITE / CAPTIONS_NAME).is_file(),
+                           video=VIDEO_NAME if (job.folder / SITE / VIDEO_NAME).is_file() else None)
 
 
 @bp.get("/jobs/<jobid:job_id>/status")

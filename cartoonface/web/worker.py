@@ -4,7 +4,9 @@ as `python -m cartoonface.web.worker JOB_FOLDER PARENT_PID`.
 The job runs the same library call as `cartoonface generate`
 (`cartoonface.pipeline.generate`), writes its progress to status.json as it
 goes, zips the generated folder for download (without the recording, which
-`download_zip` adds when it is downloaded, so that it is stored once) and ends
+`download_zip` adds when it is downloaded, so that it is stored once), makes the
+MP4 video when the job asks for one (exports/video.py, as `generate --mp4`:
+drawn in processes it forks, into the generated folder after the zip) and ends
 with status done, or failed with the user message of an InputError. Any other
 exception is a bug: its traceback goes to stderr (the job's worker.log) and the
 user sees a short internal-error message. When the consumer that started it is
@@ -32,6 +34,7 @@ from cartoonface.errors import InputError
 from cartoonface.exports.cues import FORMATS as CUE_FORMATS
 from cartoonface.files import write_bytes_atomic
 from cartoonface.pipeline import Options, generate
+from cartoonface.render.pages import AUDIO_STEM
 from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, write_status
 
 # Progress is written at most this often (seconds), plus on every stage change.
@@ -40,6 +43,11 @@ PROGRESS_INTERVAL = 0.25
 SITE = "site"
 DEFAULT_OPTIONS = Options()  # fps and seed of jobs that do not set them (the form does not)
 ZIP_NAME = "site.zip"
+VIDEO_NAME = "video.mp4"  # the job's MP4 (spec "mp4"), in the generated folder but not in its zip
+VIDEO_STAGE = "video"  # the progress stage of making it (exports/video.py reports "video")
+# The share of the progress bar the pages take when a video follows; the video (made about
+# as fast as real time) takes the rest.
+PAGES_SHARE = 0.5
 
 
 # The CPU-time limit is a soft limit (SIGXCPU, answered with OverCpu); the process is
@@ -114,6 +122,7 @@ def user_message(error: InputError, folder: Path, spec: dict[str, object]) -> st
         folder / "transcript.txt": "transcript",
         **{folder / str(spec[f"{kind}_file"]): str(spec.get(f"{kind}_label", spec[f"{kind}_file"]))
            for kind in ("textgrid", "actions") if spec.get(f"{kind}_file")},
+        folder / SITE / VIDEO_NAME: "video",
         folder: "job",
     }
     for path, label in names.items():
@@ -125,9 +134,11 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     """Generate the job stored in `folder`, writing status.json as it goes; stop
     (Orphaned) at a progress report when `server_alive()` is False."""
     spec = read_spec(folder)
+    video = bool(spec.get("mp4"))
     last_stage, last_time = "", 0.0
 
     def progress(stage: str, fraction: float) -> None:
+        """Report `fraction` (0..1) of the whole job done, in `stage`."""
         nonlocal last_stage, last_time
         if not server_alive():
             raise Orphaned(stage)
@@ -137,6 +148,14 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         last_stage, last_time = stage, now
         write_status(folder, Status(state=RUNNING, stage=stage, fraction=min(max(fraction, 0.0), 1.0),
                                     updated=time.time()))
+
+    def pages_progress(stage: str, fraction: float) -> None:
+        """The pipeline's `fraction` of the pages, on the pages' share of the bar."""
+        progress(stage, fraction * PAGES_SHARE if video else fraction)
+
+    def video_progress(stage: str, fraction: float) -> None:
+        """write_video's `fraction` of the video, on the rest of the bar after the pages."""
+        progress(VIDEO_STAGE, PAGES_SHARE + fraction * (1 - PAGES_SHARE))
 
     write_status(folder, Status(state=RUNNING, updated=time.time()))
     options = Options(page=str(spec["page"]), title=str(spec["title"]), style=str(spec.get("style") or "") or None,
@@ -149,9 +168,18 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
     try:
         given = folder / str(spec["audio_file"])  # a recording, or a video of the speaker
         result = generate(folder / "face.json", None if spec.get("video") else given,
-                          transcript if transcript.is_file() else None, folder / SITE, options, progress,
+                          transcript if transcript.is_file() else None, folder / SITE, options, pages_progress,
                           video=given if spec.get("video") else None)
         write_bytes_atomic(folder / ZIP_NAME, zip_folder(folder / SITE, zip_top_name(spec)))
+        if video:  # the sound of a video of the speaker is in the pages' own audio file
+            # imported here, not in the forkserver that preloads this module: libvips is loaded
+            # only in the processes that make a video
+            from cartoonface.exports.video import write_video
+
+            video_progress(VIDEO_STAGE, 0.0)
+            sound = result.out_dir / f"{AUDIO_STEM}.m4a" if spec.get("video") else given
+            write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration, sound,
+                        result.out_dir / VIDEO_NAME, progress=video_progress)
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
                                     updated=time.time()))
@@ -165,7 +193,7 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         # the job process's peak resident memory (Linux reports ru_maxrss in KiB)
         "peak_memory_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
     }
-    write_status(folder, Status(state=DONE, stage="pages", fraction=1.0, updated=time.time(), result=summary))
+    write_status(folder, Status(state=DONE, stage=VIDEO_STAGE if video else "pages", fraction=1.0, updated=time.time(), result=summary))
 
 
 def _stage(folder: Path) -> str:
