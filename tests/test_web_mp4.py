@@ -91,9 +91,11 @@ def test_the_result_page_offers_the_video_and_it_plays_for_the_recording(app, vi
     url, _ = video_job
     client = app.test_client()
     page = client.get(url).get_data(as_text=True)
-    link = re.search(r'<a id="download-video" href="([^"]+)" download>Video \(MP4\)</a>', page)
+    link = re.search(r'<a id="download-video" class="button" href="([^"]+)" download="([^"]+)">'
+                     r'Download the video \(MP4\)</a>', page)
     assert link is not None, page
     assert link.group(1) == f"{url}/site/{VIDEO_NAME}"
+    assert link.group(2) == "cartoonface-Hello.mp4"  # the title, as the zip is named
     response = client.get(link.group(1))
     assert response.status_code == 200
     assert response.mimetype == "video/mp4"
@@ -119,7 +121,7 @@ def test_a_job_without_the_option_has_no_video(app, plain_job):
     assert "video" not in [status["stage"] for status in seen]
     client = app.test_client()
     page = client.get(url).get_data(as_text=True)
-    assert "download-video" not in page and "Video (MP4)" not in page
+    assert "download-video" not in page and "(MP4)" not in page
     assert "Making the video" not in page
     assert client.get(f"{url}/site/{VIDEO_NAME}").status_code == 404
 

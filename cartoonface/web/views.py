@@ -240,7 +240,15 @@ def job_page(job_id: str) -> str:
                            stages=VIDEO_STAGE_LIST if job.spec.get("mp4") else STAGE_LIST,
                            textgrid_name=TEXTGRID_FILE, actions_name=ACTIONS_FILE,
                            captions=(job.folder / SITE / CAPTIONS_NAME).is_file(),
-                           video=VIDEO_NAME if (job.folder / SITE / VIDEO_NAME).is_file() else None)
+                           video=video_link(job))
+
+
+def video_link(job: Job) -> dict[str, str] | None:
+    """The job's MP4 for the result page: its `file` in the generated folder and the `name` it
+    downloads as (the zip's name with .mp4); None when the job has none."""
+    if not (job.folder / SITE / VIDEO_NAME).is_file():
+        return None
+    return {"file": VIDEO_NAME, "name": Path(download_name(job.title, job.id)).with_suffix(".mp4").name}
 
 
 @bp.get("/jobs/<jobid:job_id>/status")
