@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from cartoonface.speech.audio import ffmpeg_exe
-from cartoonface.web.store import DONE
+from cartoonface.web.store import DONE, RUNNING, Status, create_job, read_spec, write_status
 from cartoonface.web.worker import SITE, VIDEO_NAME, user_message
 from cartoonface.errors import AudioError
 from tests.conftest import ROOT, form, make_app, post, wait_done
@@ -173,3 +173,19 @@ def test_a_failed_video_names_the_video_not_a_server_path(tmp_path):
     message = user_message(error, folder, spec)
     assert str(tmp_path) not in message
     assert message.startswith("video: ffmpeg could not make the video")
+
+
+def test_the_page_of_a_running_video_job_lists_the_video_stage_last(app, video_job):
+    url, _ = video_job
+    done = Path(app.instance_path) / "jobs" / url.rsplit("/", 1)[-1]
+    spec = {key: value for key, value in read_spec(done).items() if key not in ("id", "created")}
+    job = create_job(Path(app.instance_path), spec, {name: (done / name).read_bytes()
+                                                      for name in ("face.json", str(spec["audio_file"]))})
+    write_status(job.folder, Status(state=RUNNING, stage="video", fraction=0.7))  # stored, never queued
+    client = app.test_client()
+    page = client.get(f"/jobs/{job.id}").get_data(as_text=True)
+    marks = re.findall(r'<li data-stage="([a-z]+)"( class="(done|current)")?', page)
+    assert [name for name, _, _ in marks][-2:] == ["pages", "video"]
+    assert [mark for _, _, mark in marks] == ["done"] * (len(marks) - 1) + ["current"]
+    assert '<h2 id="stage">Making the video</h2>' in page
+    assert client.get(f"/jobs/{job.id}/status").get_json()["percent"] == 70
