@@ -189,3 +189,13 @@ def test_the_page_of_a_running_video_job_lists_the_video_stage_last(app, video_j
     assert [mark for _, _, mark in marks] == ["done"] * (len(marks) - 1) + ["current"]
     assert '<h2 id="stage">Making the video</h2>' in page
     assert client.get(f"/jobs/{job.id}/status").get_json()["percent"] == 70
+
+
+def test_a_form_sent_back_with_an_error_keeps_the_box_ticked(app, spoken):
+    client = app.test_client()
+    for sent, ticked in (("1", True), (None, False)):
+        response = post(client, form(client, spoken, SAMPLE, page="no-such-page", mp4=sent))
+        assert response.status_code == 400
+        box = re.search(r'<input type="checkbox" id="mp4"[^>]*>', response.get_data(as_text=True))
+        assert box is not None
+        assert (" checked" in box.group()) == ticked
