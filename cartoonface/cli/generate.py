@@ -112,9 +112,8 @@ def summary(result: Result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Generate the folder; print the summary and any notes. Returns 0."""
-    from cartoonface.exports.video import parse_size, write_video
+    from cartoonface.exports.video import parse_size, write_site_video
     from cartoonface.pipeline import Options, generate
-    from cartoonface.render.pages import AUDIO_STEM
 
     options = Options(
         page=args.page, title=args.title, fps=args.fps, seed=args.seed, style=args.style, background=args.background,
@@ -129,8 +128,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = generate(args.face, args.audio, args.transcript, args.output, options, bar, video=args.video)
         if args.mp4 is not None:
-            write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration,
-                        result.out_dir / f"{AUDIO_STEM}.m4a" if args.audio is None else args.audio, args.mp4, size, bar)
+            write_site_video(result.out_dir, options.fps, result.duration, args.audio, args.mp4, size, bar)
     finally:
         bar.close()
     for note in result.notes:

@@ -32,6 +32,7 @@ from cartoonface.errors import AudioError, OptionError
 from cartoonface.exports.compositor import Compositor, Stage, one_thread, stage
 from cartoonface.exports.frames import FrameDocuments
 from cartoonface.exports.layers import Layers
+from cartoonface.render.pages import AUDIO_STEM
 from cartoonface.speech.audio import ffmpeg_exe
 
 DEFAULT_SIZE = (1280, 720)  # 720p (issue 14)
@@ -122,6 +123,16 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
                 process.wait()
             temporary.unlink(missing_ok=True)
     return len(distinct)
+
+
+def write_site_video(site: Path, rate: int, duration: float, recording: Path | None, out: Path,
+                     size: tuple[int, int] = DEFAULT_SIZE,
+                     progress: Callable[[str, float], None] | None = None) -> int:
+    """write_video of the generated page folder `site` (its animation.svg, made at `rate` fps,
+    `duration` s) with the sound of `recording`, or of the page's own audio (audio.m4a) when there
+    is none (the input was a video of the speaker). Used by `generate --mp4` and web jobs."""
+    sound = site / f"{AUDIO_STEM}.m4a" if recording is None else recording
+    return write_video((site / "animation.svg").read_bytes(), rate, duration, sound, out, size, progress)
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,6 @@ from cartoonface.errors import InputError
 from cartoonface.exports.cues import FORMATS as CUE_FORMATS
 from cartoonface.files import write_bytes_atomic
 from cartoonface.pipeline import Options, generate
-from cartoonface.render.pages import AUDIO_STEM
 from cartoonface.web.store import DONE, FAILED, RUNNING, Status, read_spec, write_status
 
 # Progress is written at most this often (seconds), plus on every stage change.
@@ -174,12 +173,11 @@ def run_job(folder: Path, server_alive: Callable[[], bool]) -> None:
         if video:  # the sound of a video of the speaker is in the pages' own audio file
             # imported here, not in the forkserver that preloads this module: libvips is loaded
             # only in the processes that make a video
-            from cartoonface.exports.video import write_video
+            from cartoonface.exports.video import write_site_video
 
             video_progress(VIDEO_STAGE, 0.0)
-            sound = result.out_dir / f"{AUDIO_STEM}.m4a" if spec.get("video") else given
-            write_video((result.out_dir / "animation.svg").read_bytes(), options.fps, result.duration, sound,
-                        result.out_dir / VIDEO_NAME, progress=video_progress)
+            write_site_video(result.out_dir, options.fps, result.duration, None if spec.get("video") else given,
+                             result.out_dir / VIDEO_NAME, progress=video_progress)
     except InputError as exc:
         write_status(folder, Status(state=FAILED, stage=last_stage, error=user_message(exc, folder, spec),
                                     updated=time.time()))
