@@ -43,8 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cartoonface.photo.landmarks import _quiet
 from cartoonface.speech.audio import ffmpeg_exe
+from cartoonface.video.track import mesh_points, video_mesh
 from cartoonface.video.headpose import FACE_POINTS, Start, mesh_pose, mesh_start, track_cylinder
 
 # The benchmark data lives beside the repository, not in it (docs/BENCHMARKS.md).
@@ -76,39 +76,18 @@ def decode(path: Path, size: tuple[int, int] | None = None) -> np.ndarray:
     return np.frombuffer(raw, np.uint8).reshape(-1, height, width, 3)
 
 
-class VideoMesh:
-    """MediaPipe's face mesh in video mode (it follows the face between frames)."""
-
-    def __init__(self) -> None:
-        with _quiet():
-            from mediapipe.python.solutions import face_mesh
-            self._mesh = face_mesh.FaceMesh(static_image_mode=False, max_num_faces=1, refine_landmarks=True)
-
-    def points(self, rgb: np.ndarray) -> np.ndarray | None:
-        """(478, 3) mesh points in pixels (as photo/landmarks.py's) or None (no face)."""
-        height, width = rgb.shape[:2]
-        with _quiet():
-            found = self._mesh.process(np.ascontiguousarray(rgb)).multi_face_landmarks
-        if not found:
-            return None
-        return np.array([(p.x * width, p.y * height, p.z * width) for p in found[0].landmark])
-
-    def close(self) -> None:
-        self._mesh.close()
-
-
 def mesh_run(frames: np.ndarray) -> tuple[np.ndarray, list[np.ndarray | None], Seconds]:
     """Mesh pose per frame (n, 3) (a frame without a face holds the last), the meshes and
     the (CPU, wall) seconds taken."""
-    mesh = VideoMesh()
+    mesh = video_mesh()
     started = time.process_time(), time.perf_counter()
-    meshes = [mesh.points(frame) for frame in frames]
+    meshes = [mesh_points(mesh, frame) for frame in frames]
     poses, last = [], (0.0, 0.0, 0.0)
     for points in meshes:
         last = last if points is None else mesh_pose(points)
         poses.append(last)
     seconds = time.process_time() - started[0], time.perf_counter() - started[1]
-    mesh.close()
+    mesh.close()  # type: ignore[attr-defined]
     return np.array(poses), meshes, seconds
 
 
@@ -153,7 +132,7 @@ def _triangles() -> np.ndarray:
     triangulation of the mesh of the first GRID clip's first frame."""
     from scipy.spatial import Delaunay
 
-    points = VideoMesh().points(decode(sorted(GRID.glob("*.mpg"))[0])[0])
+    points = mesh_points(video_mesh(), decode(sorted(GRID.glob("*.mpg"))[0])[0])
     if points is None:
         raise SystemExit("no face in the first GRID frame")
     return np.asarray(Delaunay(points[:FACE_POINTS, :2]).simplices)

@@ -68,7 +68,7 @@ class PhotoExtraMissing(InputError):
 
 
 @contextlib.contextmanager
-def _quiet() -> Iterator[None]:
+def quiet() -> Iterator[None]:
     """Silence MediaPipe's C++ log lines on stderr and protobuf's deprecation warning
     (third-party noise a user cannot act on) for the duration of the block."""
     saved = os.dup(2)
@@ -92,14 +92,14 @@ class Landmarker:
     def __init__(self) -> None:
         os.environ.setdefault("GLOG_minloglevel", "2")
         try:
-            with _quiet():
+            with quiet():
                 import cv2  # noqa: F401  (the crops and masks need it too)
                 from mediapipe.python.solutions import face_detection, face_mesh, selfie_segmentation
         except ImportError as exc:
             raise PhotoExtraMissing(
                 f"reading a photo needs the photo extra ({exc.name or exc}): "
                 "pip install 'cartoonface[photo]' and see scripts/setup.sh") from None
-        with _quiet():
+        with quiet():
             # full range first (small faces in a wide photo), then short range (close-ups
             # it misses): both models ship in the wheel
             self._detectors = (face_detection.FaceDetection(model_selection=1, min_detection_confidence=0.5),
@@ -114,7 +114,7 @@ class Landmarker:
         """Every face box (x0, y0, x1, y1) in `rgb` ((H, W, 3) uint8) photo pixels: the
         full-range detector's, or the short-range detector's when the first finds none."""
         height, width = rgb.shape[:2]
-        with self._lock, _quiet():
+        with self._lock, quiet():
             for detector in self._detectors:
                 found = detector.process(np.ascontiguousarray(rgb)).detections or []
                 if found:
@@ -129,7 +129,7 @@ class Landmarker:
     def person(self, rgb: np.ndarray) -> np.ndarray:
         """(H, W) float confidence, 0..1, that each pixel of `rgb` ((H, W, 3) uint8) shows a
         person rather than the background (MediaPipe selfie segmentation)."""
-        with self._lock, _quiet():
+        with self._lock, quiet():
             mask = self._selfie.process(np.ascontiguousarray(rgb)).segmentation_mask
         return np.clip(np.asarray(mask, dtype=float), 0.0, 1.0)
 
@@ -140,7 +140,7 @@ class Landmarker:
             return None
         box = max(boxes, key=lambda b: (b[2] - b[0]) * (b[3] - b[1]))
         crop, origin, scale = _crop(rgb, box)
-        with self._lock, _quiet():
+        with self._lock, quiet():
             result = self._mesh.process(crop).multi_face_landmarks
         if not result:
             return None

@@ -216,13 +216,13 @@ def _read_ffmpeg(file: Path) -> tuple[np.ndarray, int]:
         ]  # fmt: skip
         done = subprocess.run(command, capture_output=True, text=True, errors="replace")
         if done.returncode != 0 or not wav.is_file():
-            reason = _ffmpeg_reason(done.stderr)
+            reason = ffmpeg_reason(done.stderr)
             raise AudioError(f"{file}: not a readable audio file ({reason}); expected WAV, MP3, OGG, M4A or FLAC")
         samples, rate = soundfile.read(str(wav), dtype="float32", always_2d=True)
     return np.ascontiguousarray(samples.mean(axis=1), dtype=np.float32), int(rate)
 
 
-def _ffmpeg_reason(stderr: str) -> str:
+def ffmpeg_reason(stderr: str) -> str:
     """The most telling line of ffmpeg's error output, without the file path."""
     lines = [line.strip() for line in stderr.splitlines() if line.strip()]
     if any("matches no streams" in line for line in lines):
@@ -250,5 +250,5 @@ def page_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], ste
         ]  # fmt: skip
         done = subprocess.run(command, capture_output=True, text=True, errors="replace")
         if done.returncode != 0 or not m4a.is_file():
-            raise AudioError(f"{source}: cannot compress for the page ({_ffmpeg_reason(done.stderr)})")
+            raise AudioError(f"{source}: cannot compress for the page ({ffmpeg_reason(done.stderr)})")
         return write_bytes_atomic(Path(out_dir) / f"{stem}.m4a", m4a.read_bytes())

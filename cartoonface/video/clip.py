@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from cartoonface.errors import InputError
-from cartoonface.speech.audio import _ffmpeg_reason, ffmpeg_exe
+from cartoonface.speech.audio import ffmpeg_reason, ffmpeg_exe
 
 # Longest clip accepted (issue 15: up to 10 minutes).
 MAX_SECONDS = 10 * 60
@@ -78,7 +78,7 @@ def probe(path: str | Path) -> Clip:
     header = done.stderr.splitlines()
     container = next((m.group(1).rstrip(",") for line in header if (m := _INPUT.match(line))), None)
     if container is None:
-        raise VideoError(f"{file}: not a readable video ({_ffmpeg_reason(done.stderr)}); {EXPECTED}")
+        raise VideoError(f"{file}: not a readable video ({ffmpeg_reason(done.stderr)}); {EXPECTED}")
     if container not in FORMATS:
         raise VideoError(f"{file}: a {container} file is not supported; {EXPECTED}")
     # a picture attached to a recording (an M4A's or MP3's cover) is no video
@@ -133,7 +133,7 @@ def frames(clip: Clip) -> Iterator[np.ndarray]:
             process.wait()
             log.seek(0)
             stderr = log.read().decode(errors="replace")
-            raise VideoError(f"{clip.path}: no picture could be decoded ({_ffmpeg_reason(stderr)}); {EXPECTED}")
+            raise VideoError(f"{clip.path}: no picture could be decoded ({ffmpeg_reason(stderr)}); {EXPECTED}")
     finally:
         if process.poll() is None:
             process.kill()
@@ -151,5 +151,5 @@ def extract_audio(clip: Clip, wav: Path) -> Path:
                            "-vn", "-ac", "1", "-c:a", "pcm_s16le", "-t", str(math.ceil(clip.duration) + 1),
                            "-f", "wav", str(wav)], capture_output=True, text=True, errors="replace")
     if done.returncode != 0 or not wav.is_file() or wav.stat().st_size <= 44:
-        raise VideoError(f"{clip.path}: its sound track cannot be decoded ({_ffmpeg_reason(done.stderr)})")
+        raise VideoError(f"{clip.path}: its sound track cannot be decoded ({ffmpeg_reason(done.stderr)})")
     return wav

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cartoonface.photo.landmarks import MESH_POINTS, PhotoExtraMissing, _quiet
+from cartoonface.photo.landmarks import MESH_POINTS, PhotoExtraMissing, quiet
 from cartoonface.video.clip import Clip, VideoError, frames
 from cartoonface.video.headpose import mesh_pose
 
@@ -104,42 +104,52 @@ def fill_lost(values: np.ndarray, found: np.ndarray, fps: float) -> np.ndarray:
     return out
 
 
-def _video_mesh() -> object:
-    """A MediaPipe face mesh in video mode (one face, the iris points refined)."""
+def video_mesh() -> object:
+    """A MediaPipe face mesh in video mode (one face, the iris points refined); `close()` it after use."""
     os.environ.setdefault("GLOG_minloglevel", "2")
     try:
-        with _quiet():
+        with quiet():
             from mediapipe.python.solutions import face_mesh
     except ImportError as exc:
         raise PhotoExtraMissing(f"a video needs the photo extra ({exc.name or exc}): "
                                 "pip install 'cartoonface[photo]' and see scripts/setup.sh") from None
-    with _quiet():
+    with quiet():
         return face_mesh.FaceMesh(static_image_mode=False, max_num_faces=1, refine_landmarks=True,
                                   min_detection_confidence=DETECTION_CONFIDENCE,
                                   min_tracking_confidence=TRACKING_CONFIDENCE)
+
+
+def mesh_points(mesh: object, rgb: np.ndarray) -> np.ndarray | None:
+    """(MESH_POINTS, 3) face mesh points in pixels (x, y, and z on x's scale) of the frame `rgb`
+    (H, W, 3) uint8 read by `mesh` (video_mesh()), or None when no face is found."""
+    height, width = rgb.shape[:2]
+    with quiet():
+        result = mesh.process(np.ascontiguousarray(rgb)).multi_face_landmarks  # type: ignore[attr-defined]
+    if not result:
+        return None
+    scale = np.array([width, height, width], dtype=float)
+    return np.array([(p.x, p.y, p.z) for p in result[0].landmark], dtype=float)[:MESH_POINTS] * scale
 
 
 def track(clip: Clip, progress: Callable[[float], None] | None = None) -> Tracking:
     """Follow the face through every frame of `clip`; `progress(fraction)` told every second of video.
 
     Raises VideoError naming the clip when the face is found in fewer than MIN_FOUND of the frames."""
-    mesh = _video_mesh()
+    mesh = video_mesh()
     poses, rows, found = [], [], []
-    scale = np.array([clip.width, clip.height, clip.width], dtype=float)
     step = max(1, round(clip.fps))
-    with _quiet():
-        for i, rgb in enumerate(frames(clip)):
-            result = mesh.process(rgb).multi_face_landmarks  # type: ignore[attr-defined]
-            if result:
-                points = np.array([(p.x, p.y, p.z) for p in result[0].landmark], dtype=float)[:MESH_POINTS] * scale
-                poses.append(mesh_pose(points))
-                rows.append(measure(points))
-            else:
-                poses.append((np.nan,) * 3)
-                rows.append(np.full(len(MEASURES), np.nan))
-            found.append(bool(result))
-            if progress is not None and i % step == 0:
-                progress(min(1.0, i / clip.frame_count))
+    for i, rgb in enumerate(frames(clip)):
+        points = mesh_points(mesh, rgb)
+        if points is not None:
+            poses.append(mesh_pose(points))
+            rows.append(measure(points))
+        else:
+            poses.append((np.nan,) * 3)
+            rows.append(np.full(len(MEASURES), np.nan))
+        found.append(points is not None)
+        if progress is not None and i % step == 0:
+            progress(min(1.0, i / clip.frame_count))
+    with quiet():
         mesh.close()  # type: ignore[attr-defined]
     seen = np.array(found, dtype=bool)
     if seen.mean() < MIN_FOUND:
