@@ -8,7 +8,7 @@ transcript, seeks the page's audio to the middle of each of the first N mouth-sh
 of the alignment (from `--start` seconds on) and lays the face shots out one row per face, each
 labelled with the time, the syllable and the shape (docs/sentence-montage.png, in the README).
 
-`frames`: SITE_FOLDER is a `cartoonface generate` output; its animation.svg is paused at each
+`frames`: SITE_FOLDER is a `cartoonface generate` output (audio book or announcer page); its animation.svg is paused at each
 time Ti (seconds) and the head cropped, in rows under LABEL (docs/performer-*.png were made with
 the times 0.5 2 5.2 7 9.8 12 14 16.5 18 20 21.5 24 on samples/speech/story.wav).
 """
@@ -24,6 +24,7 @@ from io import BytesIO
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from lxml import etree
 from PIL import Image, ImageDraw, ImageFont
 
 from cartoonface.data import SAMPLE_FACES
@@ -41,7 +42,6 @@ LABEL = 24  # px: label band above each tile (and the title band above a frames 
 FONT = "/usr/share/fonts/opentype/noto/NotoSansCJK-Regular.ttc"  # fonts-noto-cjk (scripts/setup.sh)
 FONT_SIZE = 15  # px
 FACE_CROP = (0.18, 0.22, 0.82, 0.86)  # share of the page's face element (left, top, right, bottom) kept
-CANVAS = (400, 480)  # px: the face model's canvas, the viewport for animation.svg alone
 HEAD = (60, 60, 340, 400)  # crop box of the head on that canvas, pixels
 COLUMNS = 6  # tiles per row of a frames montage
 SETTLE_MS = 60  # wait after setting the SVG clock before the screenshot
@@ -137,10 +137,19 @@ def sentence(wav: Path, transcript: Path, count: int, start: float) -> Image.Ima
     return grid(tiles, labels, count)
 
 
+def head_crop(svg: Path) -> tuple[tuple[int, int], tuple[float, float, float, float]]:
+    """The viewport (px) of animation.svg `svg` and the shares of it its HEAD box covers: the
+    audio book's portrait canvas is the face model's, the announcer's 16:9 stage lies around it."""
+    root = etree.parse(str(svg), etree.XMLParser(huge_tree=True)).getroot()
+    x, y, width, height = (float(v) for v in root.get("viewBox", "").split())
+    return ((round(float(root.get("width", width))), round(float(root.get("height", height)))),
+            ((HEAD[0] - x) / width, (HEAD[1] - y) / height, (HEAD[2] - x) / width, (HEAD[3] - y) / height))
+
+
 def frames(site: Path, label: str, times: list[float]) -> Image.Image:
     """The montage of the `frames` mode: animation.svg of `site` at `times`, under `label`."""
-    crop = (HEAD[0] / CANVAS[0], HEAD[1] / CANVAS[1], HEAD[2] / CANVAS[0], HEAD[3] / CANVAS[1])
-    with opened((site / "animation.svg").as_uri(), CANVAS, 1) as page:
+    size, crop = head_crop(site / "animation.svg")
+    with opened((site / "animation.svg").as_uri(), size, 1) as page:
         tiles = shots(page, times, seek_svg, crop)
     return grid(tiles, [f"{t:.2f} s" for t in times], COLUMNS, label)
 
