@@ -27,7 +27,7 @@ from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedul
 from cartoonface.animate.body import body_motion
 from cartoonface.animate.frames import FPS_RANGE, on_twos, sample_breaths, sample_frames
 from cartoonface.animate.idle import with_sway
-from cartoonface.animate.prosody import pitch_peaks
+from cartoonface.animate.prosody import pitch_peaks, pitch_track
 from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
@@ -50,6 +50,7 @@ from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
 from cartoonface.video.drive import drive
 from cartoonface.video.track import track
+from cartoonface.workers import helper_pool, offloaded
 
 # Share of the whole job done when each stage starts (measured 2026-11-25 after the faster SVG
 # writer, on the sample story and on bench/generate.py's 190 s input, wall and CPU: drawing the
@@ -243,7 +244,10 @@ def generate(
     report("decode")
     # the page's compressed audio is made by ffmpeg on the other core while the animation is drawn
     # (the pool is left, waiting for ffmpeg, before its folder is removed)
-    with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool:
+    # and a forked helper (workers.py) computes the pitch track and aligns about half the parts
+    # meanwhile (none for a web job: its CPU-time limit counts per process)
+    with (tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool,
+          helper_pool(drawing_workers()) as helper):
         tracking = None
         if clip is not None:
             tracking = track(clip, lambda done: report("decode", done))
@@ -253,6 +257,7 @@ def generate(
         else:
             raise OptionError("no recording: expected an audio file or a video")
         compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
+        pitch = offloaded(helper if options.actions is None else None, pitch_track, recording.samples, recording.rate)
         duration = recording.duration
         if clip is not None and not clip.has_audio:
             alignment = Alignment((), duration, (SILENT_NOTE,))
@@ -262,14 +267,14 @@ def generate(
             alignment = edited_alignment(options.alignment, duration)
         else:
             alignment = analyse(recording, text, pause=options.pause, progress=report, source=source,
-                                language=options.language)
+                                language=options.language, pool=helper)
         report("schedule")
         style = STYLES[options.style or PAGE_STYLES[options.page]]
         if options.actions is not None:
             actions = load_actions(options.actions, duration)
         else:
             actions = () if not alignment.sentences else schedule(  # a silent clip: nothing to schedule by
-                duration, speech_pauses(alignment), options.seed, style=style, peaks=pitch_peaks(recording, alignment),
+                duration, speech_pauses(alignment), options.seed, style=style, peaks=pitch_peaks(recording, alignment, pitch()),
                 speech=speech_spans(alignment), breath_pauses=silences_of(alignment))
             spans = marked_spans(alignment, marks)
             if spans is None:

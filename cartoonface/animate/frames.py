@@ -18,7 +18,6 @@ emotion's intensity and the lips' gamma go from key to key in a few equal steps
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
 
 import numpy as np
 
@@ -26,7 +25,7 @@ from cartoonface.animate.timeline import Timeline, Track
 from cartoonface.errors import OptionError
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.face.state import FaceState, Pose
+from cartoonface.face.state import MAX_ANGLE, MAX_GAZE, FaceState, Pose, trusted_pose, trusted_state
 
 FPS_RANGE = (12, 60)  # frames per second allowed (default 30; docs/animation.md)
 EASINGS = {
@@ -44,6 +43,7 @@ EASE_STEP = 0.125
 # A nod bends the head down: Pose.tilt is the rotation about X and positive
 # means the face looks down (face/state.py), so a nod of depth d is tilt +d.
 NOD_SIGN = 1.0
+REST = FaceState()  # the checked state whose fields every sampled state replaces
 
 
 def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
@@ -71,19 +71,30 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
     lips = _stepped(timeline.track("lips"), t) if any(feelings) else np.ones_like(t)
     columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
                   gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
+    # The mouth mixes and emotion names are made in range here; the numbers are checked at once, and
+    # only when one is out of range (an edited actions.json) are the states made by FaceState's
+    # checks, which name it.
+    checked = (_within(MAX_ANGLE, pitch, turn, tilt) and _within(MAX_GAZE, gaze_h, gaze_v)
+               and _within(0.5, blink - 0.5, brow - 0.5, smile - 0.5, lips - 0.5)  # each 0..1
+               and all(0.0 <= amount <= 1.0 for feeling in feelings for _, amount in feeling))
     states: list[FaceState] = []
     previous = None
     for values in columns:
         if values != previous:
             eyes, brows, smiling, down, sideways, lean, look_h, look_v, mix, feeling, gamma = values
-            pose = Pose(tilt=down, turn=sideways, roll=lean)
-            states.append(FaceState(pose=pose, blink=eyes, smile=smiling, brow=brows, mouth=mix,
-                                    gaze_h=look_h, gaze_v=look_v, emotion=feeling,
-                                    lips=gamma if feeling else 1.0))
+            fields = dict(blink=eyes, smile=smiling, brow=brows, mouth=mix, gaze_h=look_h, gaze_v=look_v,
+                          emotion=feeling, lips=gamma if feeling else 1.0)
+            states.append(trusted_state(REST, pose=trusted_pose(down, sideways, lean), **fields) if checked
+                          else FaceState(pose=Pose(tilt=down, turn=sideways, roll=lean), **fields))
             previous = values
         else:
             states.append(states[-1])
     return tuple(states)
+
+
+def _within(limit: float, *values: np.ndarray | float) -> bool:
+    """Whether every number of `values` (arrays or numbers) is finite with |x| <= `limit`."""
+    return all(bool(np.all(np.abs(x) <= limit)) for x in values)
 
 
 def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float], ...]]:
@@ -116,9 +127,9 @@ def on_twos(states: Sequence[FaceState]) -> tuple[FaceState, ...]:
     for i in range(1, len(out), 2):
         after = steps[i] if i < len(steps) else 0.0
         if steps[i - 1] < HOLD_STEP and after < HOLD_STEP and out[i].pose != out[i - 1].pose:
-            out[i] = replace(out[i], pose=out[i - 1].pose)
+            out[i] = trusted_state(out[i], pose=out[i - 1].pose)  # fields of checked states
         if (out[i].emotion, out[i].lips) != (out[i - 1].emotion, out[i - 1].lips):
-            out[i] = replace(out[i], emotion=out[i - 1].emotion, lips=out[i - 1].lips)
+            out[i] = trusted_state(out[i], emotion=out[i - 1].emotion, lips=out[i - 1].lips)
     return tuple(out)
 
 

@@ -11,11 +11,10 @@ numbers (docs/animation.md "Idle motion").
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
 
 import numpy as np
 
-from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
+from cartoonface.face.state import MAX_ANGLE, FaceState, trusted_pose, trusted_state
 
 COMPONENTS = 3
 PERIODS = (2.5, 9.0)  # seconds: slow, like a breathing or standing sway
@@ -63,7 +62,7 @@ def with_sway(states: Sequence[FaceState], fps: int, seed: int, peak: float) -> 
         if out and key == previous:
             out.append(out[-1])
             continue
-        out.append(replace(state, pose=Pose(*values)))
+        out.append(trusted_state(state, pose=trusted_pose(*values)))  # angles clamped and rounded: in range
         previous = key
     return tuple(out)
 

@@ -45,13 +45,14 @@ def pitch_track(samples: np.ndarray, rate: int) -> tuple[np.ndarray, np.ndarray]
     return np.array(pitch.xs(), dtype=float), f0
 
 
-def pitch_peaks(audio, alignment) -> tuple[float, ...]:
+def pitch_peaks(audio, alignment, track: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[float, ...]:
     """Seconds of the accent peaks of an Audio (speech/audio.py) and its Alignment, sorted.
 
     One time per peak syllable: the frame of its highest F0 (rounded to ms).
-    Empty when the recording has no voiced frame.
+    Empty when the recording has no voiced frame. `track`: the audio's pitch_track when already
+    computed (generate computes it in a second process during the analysis).
     """
-    times, f0 = pitch_track(audio.samples, audio.rate)
+    times, f0 = pitch_track(audio.samples, audio.rate) if track is None else track
     voiced = f0[np.isfinite(f0)]
     if not len(voiced):
         return ()

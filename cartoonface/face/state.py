@@ -116,3 +116,20 @@ class FaceState:
     def with_mouth(self, symbol: str) -> FaceState:
         """This state with the mouth set to one basic shape (OptionError if unknown)."""
         return replace(self, mouth=((symbol, 1.0),))
+
+
+def trusted_pose(tilt: float, turn: float, roll: float) -> Pose:
+    """A Pose of angles the program has already made finite floats within +-MAX_ANGLE (clamped and
+    rounded, or taken from checked poses), made without Pose's checks: the frame loops make
+    thousands (issue 16). Anything from a user goes through Pose itself."""
+    pose = object.__new__(Pose)
+    pose.__dict__.update(tilt=tilt, turn=turn, roll=roll)
+    return pose
+
+
+def trusted_state(state: FaceState, **changes: object) -> FaceState:
+    """`dataclasses.replace(state, **changes)` without FaceState's checks, for a checked `state`
+    and changes the program made in range (a trusted_pose, or fields of other checked states)."""
+    new = object.__new__(FaceState)
+    new.__dict__.update(state.__dict__, **changes)
+    return new

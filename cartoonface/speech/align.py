@@ -399,9 +399,11 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             mean = means[i] * RATES[r]
             longest = min(total, int(LONGEST_SHARE * mean) + MIN_FRAMES)
             d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
-            # start_score padded with impossible starts before frame 0, so (k - d) needs no check
+            # start_score padded with impossible starts before frame 0, so (k - d) needs no check;
+            # row k of its windows holds the starts k - d[-1] .. k - d[0], read backwards (a view: no copy)
             padded = np.concatenate([np.full(d[-1], _NEG), start_score])
-            cand = padded[k[:, None] + (d[-1] - d)[None, :]] + _duration_score(d, mean)[None, :]
+            windows = np.lib.stride_tricks.sliding_window_view(padded, d.size)[:positions, ::-1]
+            cand = windows + _duration_score(d, mean)[None, :]
             choice = cand.argmax(axis=1)
             after_syllable[i + 1, r] = cand[k, choice]
             length[i, r] = d[choice]

@@ -20,6 +20,7 @@ import math
 import re
 from dataclasses import replace
 from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, FALLBACK_NOTE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
+from cartoonface.workers import offloaded, shares
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
 # is far longer than the recording (an error); more than FAST_RATE or fewer than MIN_RATE is aligned
@@ -64,6 +66,7 @@ def analyse(
     progress: Callable[[str, float], None] | None = None,
     source: str = "transcript",
     language: str | None = None,
+    pool: Executor | None = None,
 ) -> Alignment:
     """Time every sentence and syllable of `transcript_text` in `audio`.
 
@@ -75,6 +78,7 @@ def analyse(
     fraction)` is called with stage "segment" then "align" and the fraction
     0..1 done of that stage. `source` names the transcript in messages.
     `transcript_text` None (no transcript): the lip sync from the audio alone (audio_only.py).
+    `pool`: a one-process pool (workers.helper_pool) that aligns about half the parts meanwhile.
     Raises TranscriptError for an empty transcript, one in another language
     (more Latin words than Chinese characters), one with no Mandarin
     syllables (from parse_transcript), or one far longer than the speech
@@ -103,17 +107,16 @@ def analyse(
     counts = [len(piece.syllables) for piece in pieces]
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
     spans = reconcile(audio, parts, counts)
-    aligned: list[tuple[Sentence, tuple[float, ...]]] = []
+    jobs: list[tuple[list[SentenceText], Span]] = []
     for block in _blocks(spans, owners):
-        report("align", len(aligned) / len(pieces))
         span = Span(spans[block[0]].start, spans[block[-1]].end)
         if len(block) > 1 and span.duration <= MAX_JOINT:
             # Sentences sharing a speaking part are aligned together: the boundary between them
             # is where the aligner puts it, not the dip the reconciling chose.
-            aligned += _aligned(audio, [pieces[k] for k in block], span)
+            jobs.append(([pieces[k] for k in block], span))
         else:
-            for k in block:
-                aligned += _aligned(audio, [pieces[k]], spans[k])
+            jobs += [([pieces[k]], spans[k]) for k in block]
+    aligned = [timed for job in _align_jobs(audio, jobs, pool, report) for timed in job]
     report("align", 1.0)
     sentences = []
     for number, sentence in enumerate(spoken):
@@ -199,6 +202,27 @@ def word_lengths(texts: Sequence[str]) -> list[int]:
         lengths[-1] += 1
         position += len(text)
     return lengths
+
+
+def _align_jobs(audio: Audio, jobs: list[tuple[list[SentenceText], Span]], pool: Executor | None,
+                report: Callable[[str, float], None]) -> list[list[tuple[Sentence, tuple[float, ...]]]]:
+    """`_aligned` of each job (sentences, span), in order; with a `pool`, about half the work (by
+    seconds times syllables: the aligner's cost, docs/BENCHMARKS.md "Analysis in parallel") done
+    there meanwhile. `report("align", fraction)` as this process's share goes on."""
+    costs = [span.duration * sum(len(text.syllables) for text in texts) for texts, span in jobs]
+    here, there = shares(costs) if pool is not None else (list(range(len(jobs))), [])
+    later = offloaded(pool if there else None, _aligned_all, audio, [jobs[k] for k in there])
+    done: dict[int, list[tuple[Sentence, tuple[float, ...]]]] = {}
+    for number, k in enumerate(here):
+        report("align", number / len(here))
+        done[k] = _aligned(audio, *jobs[k])
+    done.update(zip(there, later()))
+    return [done[k] for k in range(len(jobs))]
+
+
+def _aligned_all(audio: Audio, jobs: list[tuple[list[SentenceText], Span]]) -> list[list[tuple[Sentence, tuple[float, ...]]]]:
+    """`_aligned` of each job (sentences, span), in order (the pool's share of _align_jobs)."""
+    return [_aligned(audio, texts, span) for texts, span in jobs]
 
 
 def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[tuple[Sentence, tuple[float, ...]]]:

@@ -1,0 +1,69 @@
+"""A second process for work that can run beside the main one (the two cores of issue 16).
+
+`helper_pool(workers)` opens a forked one-process pool when `workers` is 2 or more (the caller
+decides, e.g. by render/animation.drawing_workers: no pool for a process with a CPU-time limit,
+whose limit counts per process); `offloaded(pool, fn, *args)` starts `fn(*args)` there and
+returns a getter of its result that computes it here instead when the pool is None, could not
+start, or broke (no memory, a killed child). The results are the same either way: the child is a
+fork of this process running the same code.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from typing import TypeVar
+
+T = TypeVar("T")
+
+
+@contextmanager
+def helper_pool(workers: int) -> Iterator[Executor | None]:
+    """A one-process pool forked on first use, or None when `workers` < 2 or fork is missing.
+
+    On leaving, work not yet started is cancelled; work under way is waited for."""
+    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        yield None
+        return
+    pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"))
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Callable[[], T]:
+    """fn(*args) started in `pool`; returns a function giving its result. Computed in this
+    process when `pool` is None or cannot run it (fork or thread start failed, broken pool).
+    An exception raised by `fn` itself is raised by the getter."""
+    future = None
+    if pool is not None:
+        try:
+            future = pool.submit(fn, *args)
+        except (BrokenProcessPool, OSError, RuntimeError):
+            future = None
+
+    def result() -> T:
+        if future is not None:
+            try:
+                return future.result()
+            except (BrokenProcessPool, OSError, MemoryError):
+                pass
+        return fn(*args)
+
+    return result
+
+
+def shares(costs: Sequence[float]) -> tuple[list[int], list[int]]:
+    """Indices of `costs` split into two lists of about equal total (the largest first, each to
+    the lighter side; ties to the first), each list in increasing order."""
+    sides: tuple[list[int], list[int]] = ([], [])
+    totals = [0.0, 0.0]
+    for index in sorted(range(len(costs)), key=lambda i: -costs[i]):
+        side = 0 if totals[0] <= totals[1] else 1
+        sides[side].append(index)
+        totals[side] += costs[index]
+    return sorted(sides[0]), sorted(sides[1])
