@@ -242,12 +242,12 @@ def generate(
     marks = () if text is None else emotion_marks(text, source)
     clip = None if video is None else video_input(video, text)
     report("decode")
-    # the page's compressed audio is made by ffmpeg on the other core while the animation is drawn
-    # (the pool is left, waiting for ffmpeg, before its folder is removed)
-    # and a forked helper (workers.py) computes the pitch track and aligns about half the parts
-    # meanwhile (none for a web job: its CPU-time limit counts per process)
-    with (tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool,
-          helper_pool(drawing_workers()) as helper):
+    # A forked helper (workers.py) computes the pitch track and aligns about half the parts during
+    # the analysis (none for a web job: its CPU-time limit counts per process); forked first, it
+    # holds none of ffmpeg's pipes. The page's compressed audio is made by ffmpeg on the other core
+    # while the animation is drawn (the pool is left, waiting for ffmpeg, before its folder is removed).
+    with (helper_pool(drawing_workers()) as helper,
+          tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
         if clip is not None:
             tracking = track(clip, lambda done: report("decode", done))
@@ -287,6 +287,8 @@ def generate(
             if AUDIO_ONLY_NOTE in alignment.notes:  # the face's mouth follows the video, not the audio
                 alignment = dataclasses.replace(alignment, notes=tuple(
                     VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
+        if helper is not None:
+            helper.shutdown()  # its work is done: the process ends now, not after the drawing
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:

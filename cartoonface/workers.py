@@ -22,13 +22,22 @@ T = TypeVar("T")
 
 @contextmanager
 def helper_pool(workers: int) -> Iterator[Executor | None]:
-    """A one-process pool forked on first use, or None when `workers` < 2 or fork is missing.
+    """A one-process pool, forked at once, or None when `workers` < 2, fork is missing or fails.
 
-    On leaving, work not yet started is cancelled; work under way is waited for."""
+    Forked at once, the helper holds no pipe of a subprocess the caller starts later (generate's
+    ffmpeg: a helper forked while another thread starts it could keep its output open, and the
+    thread reading it would wait for the helper). On leaving, work not yet started is cancelled;
+    work under way is waited for."""
     if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
         yield None
         return
     pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"))
+    try:
+        pool.submit(int)  # forks the process now
+    except (BrokenProcessPool, OSError, RuntimeError):  # fork or thread start failed
+        pool.shutdown(wait=False, cancel_futures=True)
+        yield None
+        return
     try:
         yield pool
     finally:

@@ -24,16 +24,16 @@ from dataclasses import dataclass
 from multiprocessing.sharedctypes import Synchronized
 from multiprocessing.synchronize import Condition
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 import numpy as np
 
 from cartoonface.errors import AudioError, OptionError
-from cartoonface.exports.compositor import Compositor, Stage, one_thread, stage
-from cartoonface.exports.frames import FrameDocuments
-from cartoonface.exports.layers import Layers
 from cartoonface.render.pages import AUDIO_STEM
 from cartoonface.speech.audio import ffmpeg_exe
+
+if TYPE_CHECKING:
+    from cartoonface.exports.compositor import Compositor, Stage
 
 DEFAULT_SIZE = (1280, 720)  # 720p (issue 14)
 MAX_SIDE = 3840  # px: 4K is the largest video made
@@ -77,6 +77,11 @@ def write_video(svg: bytes, rate: int, duration: float, audio: Path, out: Path,
     (identical consecutive frames are put together once, on as many processes as there are
     cores). Raises AudioError when ffmpeg fails.
     """
+    # imported here: `generate` without --mp4 needs only parse_size (PIL and pyvips take ~0.07 s)
+    from cartoonface.exports.compositor import one_thread, stage
+    from cartoonface.exports.frames import FrameDocuments
+    from cartoonface.exports.layers import Layers
+
     global _WORK
     count = max(1, math.ceil(round(duration * 1000) * rate / 1000))
     frames = FrameDocuments(svg, rate, count)
@@ -157,6 +162,8 @@ def _compose(number: int, batch: list[int], repeats: list[int]) -> None:
     assert _WORK is not None
     work = _WORK
     if _COMPOSITOR is None:
+        from cartoonface.exports.compositor import Compositor  # already imported by write_video (forked)
+
         _COMPOSITOR = Compositor(work.scene)
     frames = [_COMPOSITOR.frame(frame).tobytes() for frame in batch]
     with work.turn:
