@@ -1,0 +1,89 @@
+"""The second process of generate (workers.py): same results as one process, falls back, never hangs."""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cartoonface.animate.frames import states_at
+from cartoonface.animate.timeline import Keyframe, Timeline, build_timeline
+from cartoonface.animate.behaviour import schedule, speech_pauses
+from cartoonface.errors import OptionError
+from cartoonface.face.state import FaceState, Pose
+from cartoonface.speech.analyse import analyse
+from cartoonface.speech.audio import load_audio
+from cartoonface.workers import helper_pool, offloaded, shares
+from tests.conftest import ROOT
+from tests.synthetic import synthetic_talk
+
+STORY = ROOT / "samples" / "speech"
+
+
+def _pid_and_square(x: float) -> tuple[int, float]:
+    return os.getpid(), x * x
+
+
+def _dies_in_a_child(parent: int) -> int:
+    if os.getpid() != parent:
+        os._exit(1)  # the helper process is lost (killed, out of memory)
+    return parent
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_shares_split_every_index_once_about_evenly(seed):
+    costs = np.random.default_rng(seed).uniform(0.1, 5.0, size=3 + 4 * seed).tolist()
+    first, second = shares(costs)
+    assert sorted(first + second) == list(range(len(costs)))
+    assert first == sorted(first) and second == sorted(second)
+    assert abs(sum(costs[i] for i in first) - sum(costs[i] for i in second)) <= max(costs)
+
+
+def test_the_helper_is_forked_at_once_and_computes_the_same():
+    before = len(multiprocessing.active_children())
+    with helper_pool(2) as pool:
+        assert pool is not None
+        assert len(multiprocessing.active_children()) == before + 1  # before any pipe the caller opens later
+        # a subprocess started now hands over its output: the helper holds none of its pipe
+        out = subprocess.run([sys.executable, "-c", "print(7)"], stdout=subprocess.PIPE, timeout=60, check=True)
+        assert out.stdout.strip() == b"7"
+        pid, value = offloaded(pool, _pid_and_square, 1.5)()
+        assert pid != os.getpid() and value == 1.5 * 1.5
+    with helper_pool(1) as none:
+        assert none is None
+        assert offloaded(none, _pid_and_square, 1.5)() == (os.getpid(), 2.25)
+
+
+def test_a_lost_helper_is_done_here():
+    with helper_pool(2) as pool:
+        assert offloaded(pool, _dies_in_a_child, os.getpid())() == os.getpid()
+
+
+def test_analyse_with_a_helper_gives_the_one_process_alignment():
+    audio = load_audio(STORY / "story.wav")
+    text = (STORY / "story.txt").read_text(encoding="utf-8")
+    alone = analyse(audio, text)
+    fractions = []
+    with helper_pool(2) as pool:
+        shared = analyse(audio, text, pool=pool, progress=lambda stage, done: fractions.append((stage, done)))
+    assert shared == alone
+    aligning = [done for stage, done in fractions if stage == "align"]
+    assert aligning == sorted(aligning) and aligning[-1] == 1.0
+
+
+def test_sampled_states_out_of_range_are_still_refused():
+    alignment = synthetic_talk(30.0, seed=2)
+    timeline = build_timeline(alignment, schedule(alignment.duration, speech_pauses(alignment), seed=5))
+    states = states_at(timeline, np.arange(50) / 10)
+    for state in states:  # the states made without the checks pass them
+        fields = {f.name: getattr(state, f.name) for f in dataclasses.fields(state)}
+        assert state == FaceState(**{**fields, "pose": Pose(state.pose.tilt, state.pose.turn, state.pose.roll)})
+    tracks = tuple(dataclasses.replace(track, keys=(Keyframe(0, 0.0), Keyframe(1000, 20.0)))
+                   if track.name == "turn" else track for track in timeline.tracks)
+    with pytest.raises(OptionError, match="turn"):
+        states_at(Timeline(timeline.duration, tracks), np.arange(20) / 10)
