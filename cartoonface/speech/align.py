@@ -402,7 +402,8 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             # start_score padded with impossible starts before frame 0, so (k - d) needs no check;
             # row k of its windows holds the starts k - d[-1] .. k - d[0], read backwards (a view: no copy)
             padded = np.concatenate([np.full(d[-1], _NEG), start_score])
-            windows = np.lib.stride_tricks.sliding_window_view(padded, d.size)[:positions, ::-1]
+            windows = np.lib.stride_tricks.as_strided(padded, (positions, d.size), padded.strides * 2,
+                                                      writeable=False)[:, ::-1]
             cand = windows + _duration_score(d, mean)[None, :]
             choice = cand.argmax(axis=1)
             after_syllable[i + 1, r] = cand[k, choice]

@@ -215,6 +215,7 @@ def _second(unit: Unit) -> Unit:
     return unit if unit.no_sandhi else replace(unit, pinyin=_with_tone(unit.pinyin, 2))
 
 
+@cache  # a few hundred distinct syllables recur through a text (pypinyin's conversions: ~0.1 ms each)
 def zhuyin(pinyin: str) -> str:
     """Tone-numbered pinyin -> Bopomofo with its tone mark; erhua adds ㄦ ("ㄉㄧㄢˇㄦ")."""
     parts = syllable_parts(pinyin)
