@@ -309,13 +309,22 @@ def _duration_score(d: np.ndarray, mean: float) -> np.ndarray:
 
 
 def _duration_scores(ends: np.ndarray, d: np.ndarray, mean: float, pace: np.ndarray) -> np.ndarray:
-    """(K,) end positions, (D,) durations in frames, the expected duration at the part's own rate
-    and (T + 1,) log pace per position -> (K, D) log duration prior of a syllable lasting d frames
+    """(K,) consecutive end positions, (D,) consecutive durations in frames, the expected duration at
+    the part's own rate and (T + 1,) log pace per position -> (K, D) log duration prior of a syllable lasting d frames
     up to each end: its expected duration is scaled by exp of the mean pace at its two ends (the
     same forwards and time-reversed)."""
-    local = 0.5 * (pace[ends][:, None] + pace[np.clip(ends[:, None] - d[None, :], 0, None)])
+    local = 0.5 * (pace[ends][:, None] + _before(pace, ends, d, pace[0]))
     ratio = np.log(np.maximum(d, 1) / mean)[None, :] - local
     return -0.5 * (ratio / DURATION_SPREAD) ** 2
+
+
+def _before(x: np.ndarray, ends: np.ndarray, d: np.ndarray, fill: float) -> np.ndarray:
+    """(T,) values, (K,) consecutive positions, (D,) consecutive ascending durations -> (K, D)
+    x[ends[j] - d[m]], `fill` where that position is negative: a read-only view of `x` padded in
+    front (no index arrays: the DP's candidates cost a pass over memory, not a gather)."""
+    padded = np.concatenate([np.full(d[-1], fill), x])
+    windows = np.lib.stride_tricks.as_strided(padded[ends[0]:], (ends.size, d.size), padded.strides * 2, writeable=False)
+    return windows[:, ::-1]
 
 
 @dataclass(frozen=True)
@@ -399,12 +408,8 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             mean = means[i] * RATES[r]
             longest = min(total, int(LONGEST_SHARE * mean) + MIN_FRAMES)
             d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
-            # start_score padded with impossible starts before frame 0, so (k - d) needs no check;
-            # row k of its windows holds the starts k - d[-1] .. k - d[0], read backwards (a view: no copy)
-            padded = np.concatenate([np.full(d[-1], _NEG), start_score])
-            windows = np.lib.stride_tricks.as_strided(padded, (positions, d.size), padded.strides * 2,
-                                                      writeable=False)[:, ::-1]
-            cand = windows + _duration_score(d, mean)[None, :]
+            # impossible starts before frame 0
+            cand = _before(start_score, k, d, _NEG) + _duration_score(d, mean)[None, :]
             choice = cand.argmax(axis=1)
             after_syllable[i + 1, r] = cand[k, choice]
             length[i, r] = d[choice]
@@ -459,9 +464,7 @@ def _soft_forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, 
         longest = min(total, int(LONGEST_SHARE * means[i] * np.exp(pace.max())) + MIN_FRAMES)
         d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
         band = k[max(ends[i] - BAND, 0):ends[i] + BAND + 1]
-        starts = band[:, None] - d[None, :]
-        cand = (np.where(starts >= 0, start_score[np.clip(starts, 0, None)], _NEG)
-                + _duration_scores(band, d, means[i], pace) / temperature)
+        cand = _before(start_score, band, d, _NEG) + _duration_scores(band, d, means[i], pace) / temperature
         after_syllable[i + 1, band] = _log_sum_exp(cand)
     return after_syllable, after_pause
 
@@ -489,14 +492,12 @@ def _onset_posteriors(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarr
     flipped[1:] = evidence[:0:-1, ::-1]
     backward, _ = _soft_forward(flipped, silence[::-1], edges[::-1, ::-1], means[::-1], penalty[::-1],
                                 pace[::-1], temperature, total - starts[::-1])
-    k = np.arange(positions)
-    posteriors = np.zeros(n)
-    for i in range(n):
-        before = np.logaddexp(syllable[i] + (evidence[i] / temperature if i else 0.0), pause[i])
-        score = before + backward[n - i, total - k]
-        near = np.abs(k - starts[i]) <= SURE_DISTANCE
-        posteriors[i] = np.exp(_log_sum_exp(score[near][None])[0] - _log_sum_exp(score[None])[0])
-    return posteriors
+    onset = evidence / temperature
+    onset[0] = 0.0
+    # row i: onset i at each k, the forward sum up to k times the reversed problem's from k on
+    score = np.logaddexp(syllable[:n] + onset, pause[:n]) + backward[n:0:-1, ::-1]
+    near = [_log_sum_exp(row[None, max(s - SURE_DISTANCE, 0):s + SURE_DISTANCE + 1])[0] for row, s in zip(score, starts)]
+    return np.exp(np.array(near) - _log_sum_exp(score))
 
 
 def prior_split(span: SpanLike, syllables: Sequence[str], confidence: float) -> tuple[SyllableTiming, ...]:
