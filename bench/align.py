@@ -57,6 +57,7 @@ from cartoonface.speech import textgrid
 from cartoonface.speech.audio import Audio
 from tests.espeak import Voice, synthesize
 from tests.espeak import story as read_story
+from samples.speech.make_speech import HERE as STORY
 from cartoonface.speech.features import HOP, frames
 from cartoonface.speech.sentences import Span, find_speech_parts
 from cartoonface.speech.stretches import FALLBACK_NOTE
@@ -79,7 +80,6 @@ ESPEAK_WEIGHTS = (0.0, 0.25, 0.5, 1.0)  # weights of an espeak-ng onset against 
 # rates and pitches, so that no one voice's way of speaking reads as misses
 ESPEAK_VOICES = (Voice(), Voice("f3", 150), Voice("m3", 210, 35), Voice("f2", 130, 70))
 SOUND_FLOOR_DB = 50.0     # an espeak-ng reading ends at its last sample within this many dB of its peak
-STORY = Path(__file__).resolve().parents[1] / "samples" / "speech"
 PUNCTUATION = re.compile(r"[^\w]|_")  # everything but letters and digits (Han characters are letters)
 
 
@@ -485,7 +485,7 @@ def fit_confidence() -> None:
     """Fit the miss model (align.MISS_BIAS, MISS_WEIGHTS) on the aligner-alone tuning pool (Biaobei's
     copies and the espeak-ng readings of the same sentences) and choose by cross-validation on it the
     weight of an espeak-ng onset (ESPEAK_WEIGHTS) and the low-confidence threshold: print the
-    out-of-fold F1 per weight (and per voice), the coefficients, the F1 per P(miss) threshold at the
+    out-of-fold F1 per weight (over all onsets, Biaobei's and espeak-ng's), the coefficients, the F1 per P(miss) threshold at the
     chosen weight and the best threshold as a confidence threshold."""
     tuning = [r for r in biaobei() if int(r.name) in TUNING]
     sets = [tuning, *(stretched(tuning, t) for t in TEMPI), *(pitched(tuning, s) for s in SEMITONES), paragraphs(tuning)]
@@ -496,7 +496,7 @@ def fit_confidence() -> None:
     miss = error > 0.05
     print(f"tuning pool: {miss[~espeak].sum()} of {(~espeak).sum()} Biaobei onsets and {miss[espeak].sum()} of "
           f"{espeak.sum()} espeak-ng onsets off by > 50 ms")
-    best_f1, chosen, best = -1.0, 0.0, 0.0
+    best_f1, chosen, best, chosen_scores = -1.0, 0.0, 0.0, [0.0]
     for share in ESPEAK_WEIGHTS:
         weight = np.where(espeak, share, 1.0)
         held = out_of_fold(table, miss, fold, weight)
