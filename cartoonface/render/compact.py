@@ -23,13 +23,13 @@ from __future__ import annotations
 import html
 import re
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, parse_elements
-from cartoonface.render.pathdata import compact_paths
+from cartoonface.render.pathdata import Extent, compact_extents
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -91,6 +91,7 @@ class Writer:
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
+        self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
@@ -112,8 +113,9 @@ class Writer:
         several tidy drawings hold alike (an eye's clip path under different gazes) is taken out
         of them into `self.definitions` (ids "v0", "v1", ...: for the document's `<defs>`), which
         they refer to."""
-        compact = compact_paths(_text(d) for part in self.raw
-                                for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
+        compact, self.extents = compact_extents(_text(d) for part in self.raw
+                                                for raw in (part.element, *part.definitions)
+                                                for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
         templates: dict[str, tuple[str, int]] = {}
         tidy_ids: dict[str, int] = {}
@@ -139,8 +141,9 @@ class Writer:
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
         tidy = [[next(nodes) for _ in range(count)] for count in counts]
         self.definitions = _hoist(tidy)
-        for number, elements in enumerate(tidy):
-            _own_ids(elements, short_id("k", number))
+        for number, (elements, text) in enumerate(zip(tidy, texts, strict=True)):
+            if 'id="c' in text:  # local definitions (and references to them) to rename
+                _own_ids(elements, short_id("k", number))
         self._short_classes(tidy)
         return mapping, tidy
 
@@ -392,7 +395,7 @@ def _dissolve(top: etree._Element) -> list[etree._Element]:
     return [top]
 
 
-def _extent(d: str) -> tuple[float, float, float, float] | None:
+def _extent(d: str) -> Extent | None:
     """The box (x0, y0, x1, y1) holding every point and control point of the path data `d` (which
     holds its curves); None for data it does not read (arcs, a first command not a move)."""
     if _UNREAD.search(d):
@@ -443,27 +446,31 @@ def _absolute_start(d: str) -> str:
 _ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
 
 
-def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]]) -> list[etree._Element]:
+def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]],
+                extents: Mapping[str, Extent] | None = None) -> list[etree._Element]:
     """`elements` (a drawing's, in drawing order) with each run of consecutive paths of one opaque
     style (only `d` and a `class` of `styles`, no paint server, no opacity) whose extents lie apart
-    (_extent, MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
-    (the two brows). The first path of a run is changed in place."""
+    (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
+    (the two brows). The first path of a run is changed in place. A path data's extent is taken
+    from `extents` (Writer.extents: read off its numbers) when it is there, else read (_extent)."""
+    known = extents or {}
     merged: list[etree._Element] = []
-    extents: list[tuple[float, float, float, float]] = []
+    boxes: list[Extent] = []
     for node in elements:
         style = styles.get(node.get("class", ""))
-        extent = (_extent(node.get("d", "")) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
+        d = node.get("d", "")
+        extent = ((known.get(d) or _extent(d)) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
                   and style is not None and not any("url(" in v or "opacity" in k for k, v in style.items()) else None)
         last = merged[-1] if merged else None
-        if extent is not None and last is not None and last.get("class") == node.get("class") and extents:
+        if extent is not None and last is not None and last.get("class") == node.get("class") and boxes:
             pad = float((style or {}).get("stroke-width", "1")) + MERGE_GAP
             if all(a[2] + pad < extent[0] or extent[2] + pad < a[0] or a[3] + pad < extent[1] or extent[3] + pad < a[1]
-                   for a in extents):
-                last.set("d", last.get("d", "") + _absolute_start(node.get("d", "")))
-                extents.append(extent)
+                   for a in boxes):
+                last.set("d", last.get("d", "") + _absolute_start(d))
+                boxes.append(extent)
                 continue
         merged.append(node)
-        extents = [extent] if extent is not None else []
+        boxes = [extent] if extent is not None else []
     return merged
 
 

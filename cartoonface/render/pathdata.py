@@ -235,14 +235,25 @@ def _plain_numbers(paths: list[str], values: _Values) -> np.ndarray | None:
     return flat[~np.isnan(flat)].reshape(len(paths), int(counts[0]))
 
 
+Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data's points
+
+
 def compact_paths(paths: Iterable[str]) -> dict[str, str]:
     """Map each path data string of `paths` to its compact form (see the module docstring)."""
+    return compact_extents(paths)[0]
+
+
+def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Extent]]:
+    """compact_paths of `paths`, and the extent of each compact path data written (a path left as
+    it is has none): the box (x0, y0, x1, y1) of every point and control point it writes, read
+    off the rounded numbers (render/compact.py's merge_alike would otherwise parse the text)."""
     groups: dict[str, list[str]] = {}
     for d in set(paths):
         # Fast skeleton: the command letters, when every number is plain (no exponent).
         letters = d.translate(_ONLY_LETTERS)
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
     compact: dict[str, str] = {}
+    extents: dict[str, Extent] = {}
     values = _Values()
     for skeleton, members in groups.items():
         members.sort()
@@ -263,5 +274,14 @@ def compact_paths(paths: Iterable[str]) -> dict[str, str]:
         for number, pattern in enumerate(patterns):
             rows = np.flatnonzero(which.reshape(-1) == number)
             plan = _plan(commands, spans, kept, tuple(pattern.tolist()))
-            compact.update(zip([members[i] for i in rows], _write(plan, rounded[rows]), strict=True))
-    return compact
+            written = _write(plan, rounded[rows])
+            compact.update(zip([members[i] for i in rows], written, strict=True))
+            extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
+    return compact, extents
+
+
+def _extents(plan: _Plan, rounded: np.ndarray) -> list[Extent]:
+    """The box of the points `plan` writes of each row of `rounded` (n, 2P) absolute coordinates."""
+    xs, ys = (rounded[:, plan.columns[plan.columns % 2 == axis]] for axis in (0, 1))
+    boxes = np.column_stack([xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)]).astype(float)
+    return [(x0, y0, x1, y1) for x0, y0, x1, y1 in boxes.tolist()]
