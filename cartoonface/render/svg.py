@@ -36,7 +36,7 @@ from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
 from cartoonface.render.geometry import all_face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import mouth_outlines, mouth_texts
+from cartoonface.render.mouth import all_mouth_outlines, all_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
@@ -211,14 +211,16 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
         numbers += _cheek_numbers(points, face.fapu.d) + _eye_numbers(left) + _eye_numbers(right)
     texts = number_texts(np.array(numbers))
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
+    # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
+    shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
+    mouths = all_mouth_texts(all_mouth_outlines(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d))
     drawings = []
-    for index, part_shapes in enumerate(shapes):
+    for index, (part_shapes, mouth) in enumerate(zip(shapes, mouths, strict=True)):
         chin = chins[index]
         shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
         # the cheeks' and the eyes' numbers (CHEEK_COUNT, then EYE_COUNT per eye)
         state_texts = texts[index * per_state:(index + 1) * per_state]
-        drawings.append(_parts(part_shapes, shadow, state_texts, _mouth(posed[index], uid, style, face.fapu.d), uid,
-                               style))
+        drawings.append(_parts(part_shapes, shadow, state_texts, _mouth(mouth, uid, style), uid, style))
     return drawings
 
 
@@ -316,13 +318,11 @@ def _eye(shapes: dict[str, str], side: str, texts: tuple[str, ...], uid: str, st
     return Part(f"eye-{side}", text, (f'<clipPath id="{clip_id}"><path d="{outline}"/></clipPath>',))
 
 
-def _mouth(posed: PosedFace, uid: str, style: dict[str, str], d: float) -> Part:
-    """The mouth (render/mouth.py): lips; the opening, its outline the line where the
+def _mouth(text: dict[str, str], uid: str, style: dict[str, str]) -> Part:
+    """The mouth (render/mouth.py's texts `text`): lips; the opening, its outline the line where the
     lips meet; the tongue and the lower and upper teeth clipped to it (when it is open by a
     pixel or more; each row when it shows a pixel or more); the upper teeth on the lower lip
-    (f, clipped by the lips); a gloss on the lower lip. `d` is the FAPU d in pixels."""
-    outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
-    text = mouth_texts(outlines)
+    (f, clipped by the lips); a gloss on the lower lip."""
     pieces = ['<g class="mouth" stroke-linejoin="round" stroke-linecap="round">',
               f'<path d="{text["lips"]}"{style["lips"]}/>', f'<path d="{text["opening"]}"{style["opening"]}/>']
     clips = []
