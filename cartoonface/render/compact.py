@@ -66,6 +66,11 @@ _VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS))})="([^"]*)"')
 _TOKEN = re.compile(r'="@(\d+)@"')
 SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions
 _FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
+# A local definition's id ("c0", "c1_") where a tidy drawing's text names it: as an id, in a
+# url() reference or a <use>'s href. Writer.finish writes the drawing's own prefix in its place
+# (short_id("k", its number); LOCAL while drawings are compared).
+_LOCAL_ID = re.compile(r'(id="|url\(#|href="#)c(\d+)')
+LOCAL = "c"
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
@@ -117,7 +122,7 @@ class Writer:
                                                 for raw in (part.element, *part.definitions)
                                                 for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
-        templates: dict[str, tuple[str, int]] = {}
+        templates: dict[str, tuple[str, int, bool]] = {}
         tidy_ids: dict[str, int] = {}
         texts: list[str] = []
         counts: list[int] = []
@@ -129,21 +134,20 @@ class Writer:
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
-            text = template[0].format(*values)
+            form, count, local = template
+            text = form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
             number = tidy_ids.get(text)
             if number is None:
                 number = tidy_ids[text] = len(texts)
-                texts.append(text)
-                counts.append(template[1])
+                # the local definitions' ids made the drawing's own: "k" and its number
+                texts.append(form.format(*values, k=short_id("k", number)) if local else text)
+                counts.append(count)
             mapping.append(number)
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
         tidy = [[next(nodes) for _ in range(count)] for count in counts]
         self.definitions = _hoist(tidy)
-        for number, (elements, text) in enumerate(zip(tidy, texts, strict=True)):
-            if 'id="c' in text:  # local definitions (and references to them) to rename
-                _own_ids(elements, short_id("k", number))
         self._short_classes(tidy)
         return mapping, tidy
 
@@ -157,18 +161,21 @@ class Writer:
             node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
 
-    def _template(self, skeleton: str) -> tuple[str, int]:
+    def _template(self, skeleton: str) -> tuple[str, int, bool]:
         """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
         positions SENTINEL + j) as a format string of its values (compact path data, then rounded
-        positions), and its number of elements. Style classes are made here, so in the order the
-        parts come."""
+        positions) and of the field `k` its local definitions' ids start with (their ids "c0",
+        "c1", "c0_" ... become k, k-1, k_ ...), its number of elements and whether it has local
+        definitions. Style classes are made here, so in the order the parts come."""
         distinct = len(set(_TOKEN.findall(skeleton)))
         elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
         holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
         holder.extend(elements)
         text = etree.tostring(holder, encoding="unicode")
         inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
-        return _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner), len(elements)
+        form = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
+        own = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), form)
+        return own, len(elements), own != form
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
@@ -331,28 +338,6 @@ def short_id(letter: str, number: int) -> str:
         digits = "0123456789abcdefghijklmnopqrstuvwxyz"[digit] + digits
         if not number:
             return letter + digits
-
-
-def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
-    """`elements` with their local definition ids ("c0", "c1", ...) made unique: `prefix`,
-    `prefix`-1, ..., and the references to them."""
-    def own(local: str) -> str:  # "c0" -> prefix, "c0_" -> prefix + "_", "c1" -> prefix + "-1"
-        match = re.fullmatch(r"c(\d+)(\D*)", local)
-        if match is None:
-            raise ValueError(f"{local!r} is not a local definition id (c0, c1_, ...)")
-        number, rest = match.groups()
-        return prefix + ("" if number == "0" else f"-{number}") + rest
-
-    for top in elements:
-        for node in top.iter():
-            for name, value in node.attrib.items():
-                if name == "id":
-                    node.set(name, own(value))
-                elif value.startswith("url(#c"):
-                    node.set(name, f"url(#{own(value[5:-1])})")
-                elif name == "href" and value.startswith("#c"):
-                    node.set(name, f"#{own(value[1:])}")
-    return elements
 
 
 def _text(value: str) -> str:

@@ -270,14 +270,22 @@ def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Ext
         spans = _spans(commands)
         kept = _kept(commands, spans, rounded[0])
         smooth = _smooth(commands, spans, kept, rounded)
-        patterns, which = np.unique(smooth, axis=0, return_inverse=True)
-        for number, pattern in enumerate(patterns):
-            rows = np.flatnonzero(which.reshape(-1) == number)
-            plan = _plan(commands, spans, kept, tuple(pattern.tolist()))
+        for pattern, rows in _alike_rows(smooth):
+            plan = _plan(commands, spans, kept, pattern)
             written = _write(plan, rounded[rows])
             compact.update(zip([members[i] for i in rows], written, strict=True))
             extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
     return compact, extents
+
+
+def _alike_rows(marks: np.ndarray) -> list[tuple[tuple[bool, ...], np.ndarray]]:
+    """The distinct rows of the bool array `marks` (n, k) and where each occurs: (row, indices).
+    Rows packed into bytes and sorted as one 1-D array (np.unique with axis=0 is 10x slower)."""
+    packed = np.ascontiguousarray(np.packbits(marks, axis=1)).reshape(len(marks), -1)
+    keys = packed.view(f"V{max(packed.shape[1], 1)}").ravel() if packed.shape[1] else np.zeros(len(marks), "V1")
+    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    return [(tuple(marks[row].tolist()), np.flatnonzero(which.reshape(-1) == number))
+            for number, row in enumerate(first.tolist())]
 
 
 def _extents(plan: _Plan, rounded: np.ndarray) -> list[Extent]:
