@@ -245,17 +245,16 @@ def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, lis
     rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
     distinct: dict[str, int] = {}
     positions: list[str] = []
-
-    def field(match: re.Match[str]) -> str:
-        name, value = match.groups()
+    pieces = _VALUE.split("".join(texts))  # text, then (name, value, text) per value: one pass, no callback
+    for index in range(1, len(pieces), 3):
+        name, value = pieces[index], pieces[index + 1]
         if name == "d":
-            number = distinct.setdefault(compact[_text(value)], len(distinct))
-            return f' d="@{number}@"'
-        positions.append(str(round(float(value))))
-        return f' {name}="{SENTINEL + len(positions) - 1}"'
-
-    text = _VALUE.sub(field, "".join(texts))
-    return text, [*distinct, *positions]
+            pieces[index] = f' d="@{distinct.setdefault(compact[_text(value)], len(distinct))}@"'
+        else:
+            pieces[index] = f' {name}="{SENTINEL + len(positions)}"'
+            positions.append(str(round(float(value))))
+        pieces[index + 1] = ""
+    return "".join(pieces), [*distinct, *positions]
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
