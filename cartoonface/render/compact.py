@@ -50,6 +50,7 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
+_ID = re.compile(rb' id="[^"]*"')  # an id attribute in serialized SVG (_content)
 # Path data read by _extent: a command letter and its numbers.
 _COMMAND = re.compile(r"([MmLlHhVvCcSsQqTtZz])([^A-Za-z]*)")
 _UNREAD = re.compile(r"[^MmLlHhVvCcSsQqTtZzEe\d\s,.+-]")  # arcs, anything else _extent does not read
@@ -279,10 +280,7 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
 
 def _content(definition: etree._Element) -> bytes:
     """`definition` serialized without the ids of its nodes: equal for definitions that define alike."""
-    copy = etree.fromstring(etree.tostring(definition))
-    for node in copy.iter():
-        node.attrib.pop("id", None)
-    return etree.tostring(copy)
+    return _ID.sub(b"", etree.tostring(definition))
 
 
 def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
