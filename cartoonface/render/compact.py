@@ -284,7 +284,7 @@ def _content(definition: etree._Element) -> bytes:
 
 
 def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
-    """Take the definitions that two or more of the `tidy` drawings (local ids "c0", "c0_", ...)
+    """Take the definitions that two or more of the `tidy` drawings (own ids "k5", "k5_", "k5-1", ...)
     hold alike out of them, in place, pointing their references at one shared copy; return the
     shared copies, ids "v0", "v1", ... (a clip path's only path "v0_", for its `<use>`s)."""
     keys = [[_content(node) if node.tag in DEFINITIONS else None for node in elements] for elements in tidy]
