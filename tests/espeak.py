@@ -31,6 +31,7 @@ _PHONEME_EVENTS = 1       # espeakINITIALIZE_PHONEME_EVENTS
 _WORD = 1                 # espeakEVENT_WORD
 _CHARACTER = 1            # espeak_POSITION_TYPE POS_CHARACTER
 _UTF8 = 1                 # espeakCHARS_UTF8
+_RATE, _PITCH = 1, 3      # espeak_PARAMETER espeakRATE (words a minute), espeakPITCH (0-100, 50 normal)
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,24 +90,45 @@ def _library() -> ctypes.CDLL | None:
 
 
 def _collect(wav: ctypes._Pointer, count: int, events: ctypes._Pointer) -> int:
-    """The synthesis callback: keep `count` samples of `wav` and the sample of each WORD event."""
+    """The synthesis callback: keep `count` samples of `wav` and the sample of each WORD event
+    that covers some text."""
     if wav and count > 0:
         _engine.chunks.append(np.ctypeslib.as_array(wav, (count,)).copy())
     i = 0
     while events[i].type != 0:
-        if events[i].type == _WORD:
+        if events[i].type == _WORD and events[i].length > 0:  # a sentence break gives an empty word
             _engine.words.append(events[i].sample)
         i += 1
     return 0
 
 
-def _speak_here(text: bytes) -> tuple[np.ndarray, int, list[int]] | None:
-    """Speak `text` in this process -> (int16 samples, rate, sample of each WORD event), or None
-    when the library or the voice is missing."""
+@dataclass(frozen=True)
+class Voice:
+    """How espeak-ng reads: `variant` one of its voice variants ("f3", "m1", ...; "" the plain
+    voice), `rate` words (syllables) a minute, `pitch` 0-100 (None: espeak-ng's defaults, 175
+    and 50)."""
+
+    variant: str = ""
+    rate: int | None = None
+    pitch: int | None = None
+
+    def __str__(self) -> str:
+        return f"{self.variant or 'plain'}, {self.rate or 175} words a minute, pitch {self.pitch or 50}"
+
+
+def _speak_here(text: bytes, voice: Voice = Voice()) -> tuple[np.ndarray, int, list[int]] | None:
+    """Speak `text` in this process with `voice` -> (int16 samples, rate, sample of each WORD
+    event), or None when the library or the voice is missing (espeak-ng reads an unknown variant
+    with the plain voice)."""
     with _lock:
         lib = _library()
         if lib is None:
             return None
+        if voice.variant and lib.espeak_SetVoiceByName(VOICE + b"+" + voice.variant.encode()) != 0:
+            return None
+        for parameter, value in ((_RATE, voice.rate), (_PITCH, voice.pitch)):
+            if value is not None:
+                lib.espeak_SetParameter(parameter, value, 0)
         _engine.chunks, _engine.words = [], []
         lib.espeak_Synth(text, len(text) + 1, 0, _CHARACTER, 0, _UTF8, None, None)
         chunks, words, rate = _engine.chunks, _engine.words, _engine.rate
@@ -114,28 +136,47 @@ def _speak_here(text: bytes) -> tuple[np.ndarray, int, list[int]] | None:
     return samples.astype(np.int16), rate, words
 
 
-def synthesize(syllables: Sequence[str]) -> Synthesis | None:
-    """Speak tone-numbered pinyin syllables (in a fresh process, so the result does not depend
-    on earlier syntheses); None when espeak-ng is unavailable or does not report exactly one
-    syllable per item (odd spellings it reads as letters)."""
+def synthesize(syllables: Sequence[str], voice: Voice = Voice()) -> Synthesis | None:
+    """Speak tone-numbered pinyin syllables with `voice` (in a fresh process, so the result does
+    not depend on earlier syntheses); None when espeak-ng is unavailable or does not report
+    exactly one syllable per item (odd spellings it reads as letters). A syllable may carry
+    punctuation ("hao3,", "ma5."): espeak-ng pauses after it as after a clause or a sentence."""
     text = " ".join(s for s in syllables if s.strip())
     if not text or len(text.split()) != len(syllables):
         return None
-    done = subprocess.run([sys.executable, __file__, text], capture_output=True, check=False)
+    spoken = read(text, voice)
+    return spoken if spoken is not None and len(spoken.onsets) == len(syllables) else None
+
+
+def read(text: str, voice: Voice = Voice()) -> Synthesis | None:
+    """Speak any `text` (pinyin or Hanzi, as samples/speech/make_speech.py does) with `voice` in a
+    fresh process; its onsets are espeak-ng's WORD events (one per Hanzi or pinyin syllable). None
+    when espeak-ng is unavailable or says nothing."""
+    options = json.dumps([voice.variant, voice.rate, voice.pitch])
+    done = subprocess.run([sys.executable, __file__, text, options], capture_output=True, check=False)
     header, _, raw = done.stdout.partition(b"\n")
-    if done.returncode != 0 or not header:
+    if done.returncode != 0 or not header or not raw:
         return None
     head = json.loads(header)
-    words, rate = head["words"], head["rate"]
-    if len(words) != len(syllables) or not raw:
-        return None
     samples = np.frombuffer(raw, dtype=np.int16).astype(np.float32) / 32768.0
-    return Synthesis(samples, rate, tuple(w / rate for w in words))
+    return Synthesis(samples, head["rate"], tuple(w / head["rate"] for w in head["words"]))
+
+
+def story() -> Synthesis | None:
+    """The project's sample story as samples/speech/make_speech.py reads it (story.txt, its voice and
+    rate): the samples of samples/speech/story.wav (which ends with a little more of the last sound)
+    and the onset of every syllable; None without espeak-ng."""
+    from samples.speech import make_speech  # here: this file also runs as a script, outside the checkout's path
+
+    text = (make_speech.HERE / "story.txt").read_text(encoding="utf-8")
+    sentences = " ".join(line.strip() for line in text.splitlines() if line.strip())
+    return read(sentences, Voice(make_speech.VOICE.partition("+")[2], make_speech.RATE))
 
 
 if __name__ == "__main__":
-    # one synthesis: argv[1] the text; stdout a JSON line {"rate", "words"} then the int16 samples
-    spoken = _speak_here(sys.argv[1].encode("utf-8"))
+    # one synthesis: argv[1] the text, argv[2] the Voice as a JSON list; stdout a JSON line
+    # {"rate", "words"} then the int16 samples
+    spoken = _speak_here(sys.argv[1].encode("utf-8"), Voice(*json.loads(sys.argv[2])))
     if spoken is None:
         sys.exit(1)
     pcm, hertz, events = spoken

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -161,87 +162,135 @@ def rig(lifted: LiftedFace) -> Rig:
 
 
 def _keep_in_lids(pupils: np.ndarray, upper: np.ndarray, lower: np.ndarray, iris_r: np.ndarray) -> np.ndarray:
-    """(2, 2) iris centres moved along the upper-to-lower lid line (all (2, 2) image
+    """(S, 2, 2) iris centres moved along the upper-to-lower lid line (all (S, 2, 2) image
     pixels) so that each lies at least IRIS_KEEP x its radius (iris_r (2,)) inside
     the lids, or in the middle of an opening narrower than that."""
     axis = lower - upper
-    length2 = np.maximum((axis * axis).sum(axis=1), 1e-12)
-    t = ((pupils - upper) * axis).sum(axis=1) / length2
+    length2 = np.maximum((axis * axis).sum(axis=-1), 1e-12)
+    t = ((pupils - upper) * axis).sum(axis=-1) / length2
     margin = np.minimum(0.5, IRIS_KEEP * iris_r / np.sqrt(length2))
-    return pupils + (np.clip(t, margin, 1.0 - margin) - t)[:, None] * axis
+    return pupils + (np.clip(t, margin, 1.0 - margin) - t)[..., None] * axis
 
 
 def _graze(q: np.ndarray, outline: tuple[np.ndarray, ...], view: np.ndarray) -> None:
-    """Move the outline points of `q` (M, 3, image orientation, before the rotation) in place
+    """Move the outline points of `q` (S, M, 3, image orientation, before the rotation) in place
     to the points of their cross-sections (face/lift.py's Silhouette) that the view grazes.
 
     `outline`: the rig's rows (k,), normals (k, 2) in image orientation, reach, front and
-    back depths (k,) in pixels; `view` (3,): the direction to the viewer in the same frame
-    (the third row of the rotation). A cross-section is a half ellipse from the point
+    back depths (k,) in pixels; `view` (S, 3): the direction to the viewer in the same frame
+    (the third row of each rotation). A cross-section is a half ellipse from the point
     inwards, semi-axes reach (along -normal) and front (forwards), and one backwards
     (depth `back`); the view grazes it where the ellipse's normal is perpendicular to the
     view: at angle t from the front with tan t = reach * view_z / (depth * -(normal . view)).
     Seen from the front (normal . view = 0) every point stays where it is."""
     rows, normals, reach, front, back = outline
-    along = normals @ view[:2]  # < 0: the point's side turns away (the far side)
+    along = (normals @ view[:, :2, None])[..., 0]  # (S, k); < 0: the point's side turns away (the far side)
     depth = np.where(along < 0, front, back)
-    sine, cosine = reach * view[2], depth * along  # cosine with its sign turned: -depth * along
+    sine, cosine = reach * view[:, 2:], depth * along  # cosine with its sign turned: -depth * along
     scale = 1.0 / np.sqrt(sine * sine + cosine * cosine)
-    move = np.empty((len(rows), 3))
-    move[:, :2] = normals * (reach * (sine * scale - 1.0))[:, None]
-    move[:, 2] = depth * cosine * -scale
-    q[rows] += move
+    move = np.empty((len(view), len(rows), 3))
+    move[..., :2] = normals * (reach * (sine * scale - 1.0))[..., None]
+    move[..., 2] = depth * cosine * -scale
+    q[:, rows] += move
 
 
 _N_MOUTH = len(MOUTH_SYMBOLS)
 _N_COEF = _N_MOUTH + len(EXPRESSIONS)
 
 
+@dataclass(frozen=True, eq=False)
+class PosedFaces:
+    """S posed faces at once: PosedFace's fields with a leading axis of S (xy (S, N, 2),
+    hair (S, H, 2), front (S, F, 2), pupils (S, 2, 2), nose_side (S,) int, mouth (S, 12)),
+    the iris radii (2,) shared. `faces[i]` is the PosedFace of state i (views, no copies)."""
+
+    xy: np.ndarray
+    hair: np.ndarray
+    front: np.ndarray
+    pupils: np.ndarray
+    iris_r: np.ndarray
+    nose_side: np.ndarray
+    mouth: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.xy)
+
+    def __getitem__(self, index: int) -> PosedFace:
+        return PosedFace(xy=self.xy[index], hair=self.hair[index], front=self.front[index],
+                         pupils=self.pupils[index], iris_r=self.iris_r, nose_side=int(self.nose_side[index]),
+                         mouth=self.mouth[index])
+
+    @classmethod
+    def stack(cls, faces: Sequence[PosedFace]) -> PosedFaces:
+        """The posed `faces` (one face model's) as one PosedFaces."""
+        xy, hair, front, pupils, mouth = (np.stack([getattr(face, name) for face in faces])
+                                          for name in ("xy", "hair", "front", "pupils", "mouth"))
+        return cls(xy=xy, hair=hair, front=front, pupils=pupils, iris_r=faces[0].iris_r,
+                   nose_side=np.array([face.nose_side for face in faces]), mouth=mouth)
+
+
+def _coefficients(states: Sequence[FaceState]) -> np.ndarray:
+    """(S, 12 + 3) weights of the rig's mouth and expression rows for each of `states`."""
+    rows = []
+    for state in states:
+        row = [0.0] * _N_COEF
+        for symbol, weight in state.mouth:
+            row[MOUTH_INDEX[symbol]] += weight
+        row[_N_MOUTH:] = (state.blink, state.smile, state.brow)
+        rows.append(row)
+    return np.array(rows, dtype=float).reshape(len(states), _N_COEF)
+
+
+def pose_faces(lifted: LiftedFace, states: Sequence[FaceState]) -> PosedFaces:
+    """pose_face of each of `states` at once, as array operations over the S states: the rig's
+    rows mixed by (S, 1, k) @ (k, 2N) products, the (S, M, 3) points rotated by (S, 3, 2)
+    stacked products (each slice the product pose_face made for one state, so the numbers are
+    the same to the last bit)."""
+    r = rig(lifted)
+    n, count = len(LIFTED_NAMES), len(states)
+    coef = _coefficients(states)
+    flat = r.neutral + (coef[:, None, :] @ r.basis[:_N_COEF])[:, 0]
+    moved = [index for index, state in enumerate(states) if state.emotion]
+    if moved:
+        weights = np.array([emotion_coefficients(states[index].emotion, states[index].lips) for index in moved])
+        flat[moved] += (weights[:, None, :] @ r.basis[_N_COEF:])[:, 0]
+    upper, lower = r.lids
+    flat[:, lower] = np.maximum(flat[:, lower], flat[:, upper])  # expression.close_lids on the flat rows
+
+    q = np.repeat(r.template[None], count, axis=0)
+    q[:, :n, :2] = flat.reshape(count, n, 2)
+    h = len(lifted.hair)
+    # Rotations of the local frame seen in image orientation (y flipped both ways).
+    m = np.array([rotation_matrix(state.pose) for state in states]).reshape(count, 3, 3)
+    m[:, 1, :] = -m[:, 1, :]
+    m[:, :, 1] = -m[:, :, 1]
+    _graze(q, r.outline, m[:, 2])
+    out = q @ m[:, :2].transpose(0, 2, 1) + r.origin
+
+    centres = r.centres @ m.transpose(0, 2, 1)
+    # The gaze (our addition to 2.4.3.2) moves the focus across the viewer's
+    # plane, FOCUS_DEPTH d in front: the eyes turn by about gaze_h, gaze_v degrees.
+    gaze = np.array([[math.tan(math.radians(state.gaze_h)), math.tan(math.radians(state.gaze_v)), 0.0]
+                     for state in states]).reshape(count, 3)
+    focus = r.focus + r.focus[2] * gaze
+    toward = focus[:, None, :] - centres
+    pupils = centres[..., :2] + (r.radius / np.sqrt((toward * toward).sum(axis=2)))[..., None] * toward[..., :2]
+    pupils += r.origin
+    xy = out[:, :n]
+    pupils = _keep_in_lids(pupils, xy[:, r.lid_rows[0]], xy[:, r.lid_rows[1]], r.iris_r)
+    xy[:, r.pupil_rows] = pupils
+    sides = np.array([1 if state.pose.turn > 0 else -1 for state in states], dtype=int)
+    return PosedFaces(xy=xy, hair=out[:, n:n + h], front=out[:, n + h:], pupils=pupils, iris_r=r.iris_r,
+                      nose_side=sides, mouth=coef[:, :_N_MOUTH])
+
+
 def pose_face(lifted: LiftedFace, state: FaceState) -> PosedFace:
     """The posed face: expressions + mouth + hair shift + rotation + projection + gaze.
 
-    Returns a PosedFace in image pixels. With Pose(0, 0, 0) and a neutral
-    state the model points come back unchanged.
+    Returns a PosedFace in image pixels (pose_faces of the one state). With Pose(0, 0, 0)
+    and a neutral state the model points come back unchanged.
     """
-    r = rig(lifted)
-    n = len(LIFTED_NAMES)
-    coef = np.zeros(_N_COEF)
-    for symbol, weight in state.mouth:
-        coef[MOUTH_INDEX[symbol]] += weight
-    coef[_N_MOUTH] = state.blink
-    coef[_N_MOUTH + 1] = state.smile
-    coef[_N_MOUTH + 2] = state.brow
-    flat = r.neutral + coef @ r.basis[:_N_COEF]
-    if state.emotion:
-        flat += emotion_coefficients(state.emotion, state.lips) @ r.basis[_N_COEF:]
-    upper, lower = r.lids
-    flat[lower] = np.maximum(flat[lower], flat[upper])  # expression.close_lids on the flat rows
-
-    pose = state.pose
-    q = r.template.copy()
-    q[:n, :2] = flat.reshape(n, 2)
-    h = len(lifted.hair)
-    # Rotation of the local frame seen in image orientation (y flipped both ways).
-    m = rotation_matrix(pose)
-    m[1, :] = -m[1, :]
-    m[:, 1] = -m[:, 1]
-    _graze(q, r.outline, m[2])
-    out = q @ m[:2].T + r.origin
-
-    centres = r.centres @ m.T
-    # The gaze (our addition to 2.4.3.2) moves the focus across the viewer's
-    # plane, FOCUS_DEPTH d in front: the eyes turn by about gaze_h, gaze_v degrees.
-    focus = r.focus + r.focus[2] * np.array([math.tan(math.radians(state.gaze_h)),
-                                             math.tan(math.radians(state.gaze_v)), 0.0])
-    toward = focus - centres
-    pupils = centres[:, :2] + (r.radius / np.sqrt((toward * toward).sum(axis=1)))[:, None] * toward[:, :2]
-    pupils += r.origin
-    xy = out[:n]
-    pupils = _keep_in_lids(pupils, xy[r.lid_rows[0]], xy[r.lid_rows[1]], r.iris_r)
-    xy[r.pupil_rows] = pupils
-
-    return PosedFace(xy=xy, hair=out[n:n + h], front=out[n + h:], pupils=pupils, iris_r=r.iris_r, nose_side=1 if pose.turn > 0 else -1,
-                     mouth=coef[:_N_MOUTH])
+    return pose_faces(lifted, (state,))[0]
 
 
 def unrolled(state: FaceState) -> FaceState:
@@ -251,20 +300,33 @@ def unrolled(state: FaceState) -> FaceState:
     return dataclasses.replace(state, pose=dataclasses.replace(state.pose, roll=0.0))
 
 
-def unroll(posed: PosedFace, roll: float, origin: np.ndarray) -> PosedFace:
-    """`posed` (a face posed with `roll` degrees) turned back by the roll about the rig's
-    `origin` (2,) pixels. pose_face rolls last, in the image plane about that origin
-    (rotation_matrix: Rz @ Rx @ Ry, y flipped: x' = cos x + sin y, y' = -sin x + cos y), so
-    this is the face posed without roll, except the pupils, which keep gazing at the fixed
+def unroll_faces(posed: PosedFaces, rolls: Sequence[float], origin: np.ndarray) -> PosedFaces:
+    """`posed` (S faces, each posed with its roll of `rolls`, degrees) turned back by their rolls
+    about the rig's `origin` (2,) pixels. pose_face rolls last, in the image plane about that
+    origin (rotation_matrix: Rz @ Rx @ Ry, y flipped: x' = cos x + sin y, y' = -sin x + cos y),
+    so this is each face posed without roll, except the pupils, which keep gazing at the fixed
     focus (up to 0.05 px per degree of roll apart); drawn and turned by `rotate(-roll)` (SVG
-    angles turn clockwise on screen) it is the posed face exactly."""
-    if not roll:
+    angles turn clockwise on screen) it is the posed face exactly. Faces without roll are
+    left as they are (the same numbers)."""
+    rolled = [index for index, roll in enumerate(rolls) if roll]
+    if not rolled:
         return posed
-    c, s = math.cos(math.radians(roll)), math.sin(math.radians(roll))
-    back = np.array([[c, s], [-s, c]])  # row vectors: (x', y') @ back = (c x' - s y', s x' + c y')
+    angles = [math.radians(rolls[index]) for index in rolled]
+    # row vectors: (x', y') @ back = (c x' - s y', s x' + c y')
+    back = np.array([[[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]] for a in angles])
 
     def turn(points: np.ndarray) -> np.ndarray:
-        return (points - origin) @ back + origin
+        turned = points.copy()
+        turned[rolled] = (points[rolled] - origin) @ back + origin
+        return turned
 
     return dataclasses.replace(posed, xy=turn(posed.xy), hair=turn(posed.hair), front=turn(posed.front),
                                pupils=turn(posed.pupils))
+
+
+def unroll(posed: PosedFace, roll: float, origin: np.ndarray) -> PosedFace:
+    """`posed` (a face posed with `roll` degrees) turned back by the roll about `origin` (2,)
+    pixels: unroll_faces of the one face."""
+    if not roll:
+        return posed
+    return unroll_faces(PosedFaces.stack([posed]), [roll], origin)[0]

@@ -63,14 +63,14 @@ from lxml import etree
 from cartoonface.animate.body import BodyMotion
 from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
-from cartoonface.face.pose import pose_face, rig, unroll
+from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Writer, bare, merge_alike, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
-from cartoonface.render.svg import face_defs, face_parts
+from cartoonface.render.svg import all_face_parts, face_defs
 
 # The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
@@ -105,9 +105,9 @@ STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders sh
 # layers, in steps of this many decimals of a degree: 0.01 degree moves a point 250 px from
 # the centre by 0.04 px.
 ROLL_DECIMALS = 2
-# animation_svg tells its progress every this many frames while it draws them (a new state takes
-# ~1 ms to draw: a report every ~0.1 s at most).
-PROGRESS_FRAMES = 64
+# animation_svg draws the distinct states this many at a time (array operations over all of them),
+# telling its progress after each batch (a state takes ~0.3 ms to draw: a report every ~0.1 s).
+BATCH = 256
 # animation_svg draws in two processes (drawing_workers) from this many distinct states (~1 ms
 # each to draw; starting the process and sending the drawings back take ~0.1 s).
 POOL_STATES = 400
@@ -340,24 +340,26 @@ def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
 
 def _draw(face: FaceModel, states: Sequence[FaceState],
           progress: Callable[[float], None] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
-    """Draw each of `states` (render/svg.py's face_parts, uid UID): its key and its parts. The
-    head's roll is not drawn (the layers turn): the face is posed with it and turned back by the
-    roll as written (ROLL_DECIMALS; the two turns cancel exactly). The drawing depends on the
-    state without roll and on the pupils (written to 0.1 px), the key: states that share it
-    differ by a turn of under 0.005 degrees (the roll's rounding), which moves no point by more
-    than 0.02 px. Equal parts are one object (a pickle then holds each once).
-    `progress(fraction)` is told the share drawn every PROGRESS_FRAMES states."""
+    """Draw each of `states` (render/svg.py's all_face_parts, uid UID, BATCH states at a time):
+    its key and its parts. The head's roll is not drawn (the layers turn): the face is posed with
+    it and turned back by the roll as written (ROLL_DECIMALS; the two turns cancel exactly). The
+    drawing depends on the state without roll and on the pupils (written to 0.1 px), the key:
+    states that share it differ by a turn of under 0.005 degrees (the roll's rounding), which
+    moves no point by more than 0.02 px. Equal parts are one object (a pickle then holds each
+    once). `progress(fraction)` is told the share drawn after every batch."""
     lifted = lift(face)
     origin = rig(lifted).origin
     known: dict[Part, Part] = {}
     drawings = []
-    for index, state in enumerate(states):
-        if progress is not None and index % PROGRESS_FRAMES == 0:
-            progress(index / len(states))
-        roll = round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS
-        posed = unroll(pose_face(lifted, state), roll, origin)
-        key = (*_unrolled_fields(state), *np.round(posed.pupils, 1).ravel().tolist())
-        drawings.append((key, tuple(known.setdefault(part, part) for part in face_parts(face, posed, UID))))
+    for start in range(0, len(states), BATCH):
+        if progress is not None:
+            progress(start / len(states))
+        batch = states[start:start + BATCH]
+        rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS for state in batch]
+        posed = unroll_faces(pose_faces(lifted, batch), rolls, origin)
+        pupils = np.round(posed.pupils, 1).reshape(len(batch), 4).tolist()
+        for state, eyes, parts in zip(batch, pupils, all_face_parts(face, posed, UID), strict=True):
+            drawings.append(((*_unrolled_fields(state), *eyes), tuple(known.setdefault(part, part) for part in parts)))
     return drawings
 
 
@@ -409,7 +411,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     The root is `<svg id="cf-face">`; each track is a `<g data-part="...">`;
     the mouth track's drawings carry `data-shape`, the dominant basic mouth shape they show.
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
-    drawn (every PROGRESS_FRAMES frames) and tidied, and 1.0 at the end.
+    drawn (every BATCH distinct states) and tidied, and 1.0 at the end.
     `workers`: processes to draw with (drawing_workers(); 1: this one alone), same bytes.
     """
     report = progress or (lambda fraction: None)
@@ -444,7 +446,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
     classes = writer.classes()
-    elements = {name: [merge_alike(drawing, classes) for drawing in drawings] for name, drawings in elements.items()}
+    elements = {name: [merge_alike(drawing, classes, writer.extents) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)
     style.text = writer.style_sheet()
     hair = element(root, "g", id="hair")

@@ -23,13 +23,13 @@ from __future__ import annotations
 import html
 import re
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, parse_elements
-from cartoonface.render.pathdata import compact_paths
+from cartoonface.render.pathdata import Extent, compact_extents
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -50,6 +50,7 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
+_ID = re.compile(rb' id="[^"]*"')  # an id attribute in serialized SVG (_content)
 # Path data read by _extent: a command letter and its numbers.
 _COMMAND = re.compile(r"([MmLlHhVvCcSsQqTtZz])([^A-Za-z]*)")
 _UNREAD = re.compile(r"[^MmLlHhVvCcSsQqTtZzEe\d\s,.+-]")  # arcs, anything else _extent does not read
@@ -66,6 +67,11 @@ _VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS))})="([^"]*)"')
 _TOKEN = re.compile(r'="@(\d+)@"')
 SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions
 _FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
+# A local definition's id ("c0", "c1_") where a tidy drawing's text names it: as an id, in a
+# url() reference or a <use>'s href. Writer.finish writes the drawing's own prefix in its place
+# (short_id("k", its number); LOCAL while drawings are compared).
+_LOCAL_ID = re.compile(r'(id="|url\(#|href="#)c(\d+)')
+LOCAL = "c"
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
@@ -91,6 +97,7 @@ class Writer:
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
+        self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
@@ -112,10 +119,11 @@ class Writer:
         several tidy drawings hold alike (an eye's clip path under different gazes) is taken out
         of them into `self.definitions` (ids "v0", "v1", ...: for the document's `<defs>`), which
         they refer to."""
-        compact = compact_paths(_text(d) for part in self.raw
-                                for raw in (part.element, *part.definitions) for d in _PATH_DATA.findall(raw))
+        compact, self.extents = compact_extents(_text(d) for part in self.raw
+                                                for raw in (part.element, *part.definitions)
+                                                for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
-        templates: dict[str, tuple[str, int]] = {}
+        templates: dict[str, tuple[str, int, bool]] = {}
         tidy_ids: dict[str, int] = {}
         texts: list[str] = []
         counts: list[int] = []
@@ -127,20 +135,20 @@ class Writer:
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
-            text = template[0].format(*values)
+            form, count, local = template
+            text = form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
             number = tidy_ids.get(text)
             if number is None:
                 number = tidy_ids[text] = len(texts)
-                texts.append(text)
-                counts.append(template[1])
+                # the local definitions' ids made the drawing's own: "k" and its number
+                texts.append(form.format(*values, k=short_id("k", number)) if local else text)
+                counts.append(count)
             mapping.append(number)
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
         tidy = [[next(nodes) for _ in range(count)] for count in counts]
         self.definitions = _hoist(tidy)
-        for number, elements in enumerate(tidy):
-            _own_ids(elements, short_id("k", number))
         self._short_classes(tidy)
         return mapping, tidy
 
@@ -154,18 +162,21 @@ class Writer:
             node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
 
-    def _template(self, skeleton: str) -> tuple[str, int]:
+    def _template(self, skeleton: str) -> tuple[str, int, bool]:
         """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
         positions SENTINEL + j) as a format string of its values (compact path data, then rounded
-        positions), and its number of elements. Style classes are made here, so in the order the
-        parts come."""
+        positions) and of the field `k` its local definitions' ids start with (their ids "c0",
+        "c1", "c0_" ... become k, k-1, k_ ...), its number of elements and whether it has local
+        definitions. Style classes are made here, so in the order the parts come."""
         distinct = len(set(_TOKEN.findall(skeleton)))
         elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
         holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
         holder.extend(elements)
         text = etree.tostring(holder, encoding="unicode")
         inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
-        return _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner), len(elements)
+        form = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
+        own = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), form)
+        return own, len(elements), own != form
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
@@ -235,17 +246,16 @@ def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, lis
     rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
     distinct: dict[str, int] = {}
     positions: list[str] = []
-
-    def field(match: re.Match[str]) -> str:
-        name, value = match.groups()
+    pieces = _VALUE.split("".join(texts))  # text, then (name, value, text) per value: one pass, no callback
+    for index in range(1, len(pieces), 3):
+        name, value = pieces[index], pieces[index + 1]
         if name == "d":
-            number = distinct.setdefault(compact[_text(value)], len(distinct))
-            return f' d="@{number}@"'
-        positions.append(str(round(float(value))))
-        return f' {name}="{SENTINEL + len(positions) - 1}"'
-
-    text = _VALUE.sub(field, "".join(texts))
-    return text, [*distinct, *positions]
+            pieces[index] = f' d="@{distinct.setdefault(compact[_text(value)], len(distinct))}@"'
+        else:
+            pieces[index] = f' {name}="{SENTINEL + len(positions)}"'
+            positions.append(str(round(float(value))))
+        pieces[index + 1] = ""
+    return "".join(pieces), [*distinct, *positions]
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
@@ -270,14 +280,11 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
 
 def _content(definition: etree._Element) -> bytes:
     """`definition` serialized without the ids of its nodes: equal for definitions that define alike."""
-    copy = etree.fromstring(etree.tostring(definition))
-    for node in copy.iter():
-        node.attrib.pop("id", None)
-    return etree.tostring(copy)
+    return _ID.sub(b"", etree.tostring(definition))
 
 
 def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
-    """Take the definitions that two or more of the `tidy` drawings (local ids "c0", "c0_", ...)
+    """Take the definitions that two or more of the `tidy` drawings (own ids "k5", "k5_", "k5-1", ...)
     hold alike out of them, in place, pointing their references at one shared copy; return the
     shared copies, ids "v0", "v1", ... (a clip path's only path "v0_", for its `<use>`s)."""
     keys = [[_content(node) if node.tag in DEFINITIONS else None for node in elements] for elements in tidy]
@@ -330,28 +337,6 @@ def short_id(letter: str, number: int) -> str:
             return letter + digits
 
 
-def _own_ids(elements: list[etree._Element], prefix: str) -> list[etree._Element]:
-    """`elements` with their local definition ids ("c0", "c1", ...) made unique: `prefix`,
-    `prefix`-1, ..., and the references to them."""
-    def own(local: str) -> str:  # "c0" -> prefix, "c0_" -> prefix + "_", "c1" -> prefix + "-1"
-        match = re.fullmatch(r"c(\d+)(\D*)", local)
-        if match is None:
-            raise ValueError(f"{local!r} is not a local definition id (c0, c1_, ...)")
-        number, rest = match.groups()
-        return prefix + ("" if number == "0" else f"-{number}") + rest
-
-    for top in elements:
-        for node in top.iter():
-            for name, value in node.attrib.items():
-                if name == "id":
-                    node.set(name, own(value))
-                elif value.startswith("url(#c"):
-                    node.set(name, f"url(#{own(value[5:-1])})")
-                elif name == "href" and value.startswith("#c"):
-                    node.set(name, f"#{own(value[1:])}")
-    return elements
-
-
 def _text(value: str) -> str:
     """An attribute value as written in a part's text, back to its value."""
     return html.unescape(value) if "&" in value else value
@@ -392,7 +377,7 @@ def _dissolve(top: etree._Element) -> list[etree._Element]:
     return [top]
 
 
-def _extent(d: str) -> tuple[float, float, float, float] | None:
+def _extent(d: str) -> Extent | None:
     """The box (x0, y0, x1, y1) holding every point and control point of the path data `d` (which
     holds its curves); None for data it does not read (arcs, a first command not a move)."""
     if _UNREAD.search(d):
@@ -443,27 +428,31 @@ def _absolute_start(d: str) -> str:
 _ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
 
 
-def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]]) -> list[etree._Element]:
+def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]],
+                extents: Mapping[str, Extent] | None = None) -> list[etree._Element]:
     """`elements` (a drawing's, in drawing order) with each run of consecutive paths of one opaque
     style (only `d` and a `class` of `styles`, no paint server, no opacity) whose extents lie apart
-    (_extent, MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
-    (the two brows). The first path of a run is changed in place."""
+    (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
+    (the two brows). The first path of a run is changed in place. A path data's extent is taken
+    from `extents` (Writer.extents: read off its numbers) when it is there, else read (_extent)."""
+    known = extents or {}
     merged: list[etree._Element] = []
-    extents: list[tuple[float, float, float, float]] = []
+    boxes: list[Extent] = []
     for node in elements:
         style = styles.get(node.get("class", ""))
-        extent = (_extent(node.get("d", "")) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
+        d = node.get("d", "")
+        extent = ((known.get(d) or _extent(d)) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
                   and style is not None and not any("url(" in v or "opacity" in k for k, v in style.items()) else None)
         last = merged[-1] if merged else None
-        if extent is not None and last is not None and last.get("class") == node.get("class") and extents:
+        if extent is not None and last is not None and last.get("class") == node.get("class") and boxes:
             pad = float((style or {}).get("stroke-width", "1")) + MERGE_GAP
             if all(a[2] + pad < extent[0] or extent[2] + pad < a[0] or a[3] + pad < extent[1] or extent[3] + pad < a[1]
-                   for a in extents):
-                last.set("d", last.get("d", "") + _absolute_start(node.get("d", "")))
-                extents.append(extent)
+                   for a in boxes):
+                last.set("d", last.get("d", "") + _absolute_start(d))
+                boxes.append(extent)
                 continue
         merged.append(node)
-        extents = [extent] if extent is not None else []
+        boxes = [extent] if extent is not None else []
     return merged
 
 

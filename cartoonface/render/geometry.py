@@ -61,6 +61,19 @@ class Posed(Protocol):
     def nose_side(self) -> int: ...
 
 
+class PosedStack(Protocol):
+    """What `all_face_shapes` reads from a `cartoonface.face.pose.PosedFaces` (read-only)."""
+
+    @property
+    def xy(self) -> np.ndarray: ...
+    @property
+    def hair(self) -> np.ndarray: ...
+    @property
+    def front(self) -> np.ndarray: ...
+    @property
+    def nose_side(self) -> np.ndarray: ...
+
+
 def arc(points: np.ndarray, before: np.ndarray | None = None, after: np.ndarray | None = None) -> np.ndarray:
     """Cubic Bezier pieces of the curve through `points`.
 
@@ -265,13 +278,46 @@ def face_shapes(posed: Posed) -> dict[str, str]:
     "face", "fringe" (the hair's front layer), "ear_l", "ear_r", "nose", "brow_l", "brow_r", "eye_l", "eye_r", "lid_l",
     "lid_r" (the mouth: render/mouth.py); coordinates in pixels rounded to 0.1.
     """
-    plan = _plan(LIFTED_NAMES + FRONT_NAMES, len(posed.hair), int(posed.nose_side))
-    hair = np.asarray(posed.hair, dtype=float).reshape(-1, 2)
-    written = plan.hair.shape[0]
-    coordinates = np.empty((written + len(plan.matrix), 2))
-    coordinates[:written] = plan.hair @ hair
-    points = np.concatenate([posed.xy, posed.front])
-    for axis in (0, 1):  # two matrix-vector products: 4x faster than one product with (N, 2)
-        coordinates[written:, axis] = plan.matrix @ points[:, axis]
-    text = fill(plan.template, number_texts(coordinates))
-    return dict(zip(plan.names, text.replace(" -", "-").split("|")))
+    return all_face_shapes(_Stacked(posed))[0]
+
+
+class _Stacked:
+    """One posed face as a stack of one (what all_face_shapes reads)."""
+
+    def __init__(self, posed: Posed) -> None:
+        self.xy = np.asarray(posed.xy, dtype=float)[None]
+        self.hair = np.asarray(posed.hair, dtype=float).reshape(1, -1, 2)
+        self.front = np.asarray(posed.front, dtype=float)[None]
+        self.nose_side = np.array([int(posed.nose_side)])
+
+
+def all_face_shapes(posed: PosedStack) -> list[dict[str, str]]:
+    """face_shapes of S posed faces at once (a `cartoonface.face.pose.PosedFaces`: `xy` (S, N, 2),
+    `hair` (S, H, 2), `front` (S, F, 2), `nose_side` (S,)): the maps applied to all of them by
+    stacked products (each slice the product of one face, so the same numbers), every number
+    written by one number_texts, each face's path data one template fill."""
+    count = len(posed.xy)
+    hair = np.asarray(posed.hair, dtype=float)
+    names = LIFTED_NAMES + FRONT_NAMES
+    plans = {side: _plan(names, hair.shape[1], side) for side in {int(side) for side in posed.nose_side}}
+    plan = next(iter(plans.values()))
+    written, size = plan.hair.shape[0], plan.hair.shape[0] + len(plan.matrix)
+    coordinates = np.empty((count, size, 2))
+    # the sparse map on the hair of all faces side by side: (8 H, H) @ (H, 2 S)
+    wide = plan.hair @ hair.transpose(1, 0, 2).reshape(hair.shape[1], -1)
+    coordinates[:, :written] = wide.reshape(written, count, 2).transpose(1, 0, 2)
+    # each axis of each face's points as a column (S, 2, N, 1): matrix-vector products, as
+    # face_shapes made them one face at a time (4x faster than one product with (N, 2))
+    columns = np.ascontiguousarray(np.concatenate([posed.xy, posed.front], axis=1).transpose(0, 2, 1))[..., None]
+    sides = np.asarray(posed.nose_side)
+    for side, side_plan in plans.items():
+        chosen = np.flatnonzero(sides == side)
+        coordinates[chosen, written:] = (side_plan.matrix @ columns[chosen])[..., 0].transpose(0, 2, 1)
+    texts = number_texts(coordinates)
+    numbers = 2 * size
+    shapes = []
+    for index, side in enumerate(sides.tolist()):
+        side_plan = plans[side]
+        text = fill(side_plan.template, texts[index * numbers:(index + 1) * numbers])
+        shapes.append(dict(zip(side_plan.names, text.replace(" -", "-").split("|"))))
+    return shapes

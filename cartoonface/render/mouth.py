@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -139,10 +140,46 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
 
     Takes `points` (8, 2) image pixels of MOUTH_POINTS, `shown` (4,) the amounts of
     face/mouth.py SHOWN (upper_teeth, lower_teeth, tongue, bite) of the mouth's mix of
-    shapes, and `d` the FAPU d in pixels. Returns the MouthOutlines in image pixels.
+    shapes, and `d` the FAPU d in pixels. Returns the MouthOutlines in image pixels
+    (all_mouth_outlines of the one mouth).
     """
-    upper_teeth, lower_teeth, tongue, bite = shown.tolist()
-    (lx, ly), (rx, ry), *others = points.tolist()
+    return all_mouth_outlines(np.asarray(points, dtype=float)[None], np.asarray(shown, dtype=float)[None], d)[0]
+
+
+def all_mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> list[MouthOutlines]:
+    """mouth_outlines of S mouths (`points` (S, 8, 2), `shown` (S, 4)): each mouth's curves built
+    in its own frame (_local: a few dozen plain floats), all turned into the image by one stacked
+    product (each slice the product of one mouth)."""
+    built = [_local(mouth, amounts, d) for mouth, amounts in zip(points.tolist(), shown.tolist(), strict=True)]
+    local = np.array([rows for rows, _, _ in built], dtype=float).reshape(len(built), -1, 2)
+    turns = np.array([[[ex, ey], [-ey, ex]] for _, (ex, ey, _, _), _ in built], dtype=float).reshape(-1, 2, 2)
+    shifts = np.array([(ox, oy) for _, (_, _, ox, oy), _ in built], dtype=float).reshape(-1, 1, 2)
+    images = local @ turns + shifts
+    outlines = []
+    for image, (_, _, sizes) in zip(images, built, strict=True):
+        upper_width, lower_width, bite_width, tongue_rx, tongue_ry, gloss_rx, gloss_ry = sizes
+        (tx, ty), (gx, gy) = image[-2:].tolist()
+        outlines.append(MouthOutlines(
+            lips=image[:19], opening=image[19:32],
+            upper_teeth=image[32:36], upper_width=upper_width,
+            lower_teeth=image[36:40], lower_width=lower_width,
+            bite=image[40:44], bite_width=bite_width,
+            tongue=(tx, ty, tongue_rx, tongue_ry),
+            gloss=(gx, gy, gloss_rx, gloss_ry),
+            rows=image[:44],
+        ))
+    return outlines
+
+
+def _local(points: list[list[float]], shown: list[float],
+           d: float) -> tuple[list[float], tuple[float, float, float, float], tuple[float, ...]]:
+    """One mouth of all_mouth_outlines in its frame (x from the corner 8.4 to 8.3, y down the face):
+    the rows of its paths and the tongue's and gloss's centres flattened (x, y, x, y, ...), the
+    frame (ex, ey: its x axis in the image; ox, oy: its origin) and the sizes (the rows' and the
+    bite's widths, the tongue's and the gloss's radii), from `points` (MOUTH_POINTS as [x, y]),
+    `shown` (the SHOWN amounts) and the FAPU `d`."""
+    upper_teeth, lower_teeth, tongue, bite = shown
+    (lx, ly), (rx, ry), *others = points
     width = max(math.hypot(rx - lx, ry - ly), 1e-9)
     ex, ey = (rx - lx) / width, (ry - ly) / width  # x along the mouth; y = (-ey, ex), down the face
     ox, oy = (lx + rx) / 2, (ly + ry) / 2
@@ -186,18 +223,8 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
     centres = [(inner_dn[0], top + tongue_ry), (0.45 * inner_dn[0] + 0.55 * bottom[0], 0.45 * inner_dn[1] + 0.55 * bottom[1])]
 
     rows = lips + opening + teeth + centres
-    local = np.fromiter(itertools.chain.from_iterable(rows), float, 2 * len(rows)).reshape(-1, 2)
-    image = local @ np.array([[ex, ey], [-ey, ex]]) + (ox, oy)
-    (tx, ty), (gx, gy) = image[-2:].tolist()
-    return MouthOutlines(
-        lips=image[:19], opening=image[19:32],
-        upper_teeth=image[32:36], upper_width=2 * upper_h,
-        lower_teeth=image[36:40], lower_width=2 * lower_h,
-        bite=image[40:44], bite_width=bite_h,
-        tongue=(tx, ty, tongue_rx, tongue_ry),
-        gloss=(gx, gy, GLOSS * 2 * inner_half, 0.22 * lower_lip),
-        rows=image[:44],
-    )
+    return (list(itertools.chain.from_iterable(rows)), (ex, ey, ox, oy),
+            (2 * upper_h, 2 * lower_h, bite_h, tongue_rx, tongue_ry, GLOSS * 2 * inner_half, 0.22 * lower_lip))
 
 
 # The SVG texts of a drawn mouth, "|" between them, in TEXTS order: the path data of the
@@ -214,9 +241,16 @@ def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
     """The SVG texts of `outlines` by the names in TEXTS: path data and positions to 0.1 px; the
     sizes (stroke widths, radii) in whole pixels, as the animation writer draws the paths: then
     mouths that differ by less than a pixel are written once, not once per tenth."""
-    sizes = np.rint([outlines.upper_width, outlines.lower_width, outlines.bite_width, *outlines.tongue[2:],
-                     *outlines.gloss[2:]])
-    numbers = np.concatenate([outlines.rows.ravel(), sizes[:3], outlines.tongue[:2], sizes[3:5], outlines.gloss[:2],
-                              sizes[5:]])
-    text = fill(_TEMPLATE, number_texts(numbers)).replace(" -", "-")
-    return dict(zip(TEXTS, text.split("|")))
+    return all_mouth_texts([outlines])[0]
+
+
+def all_mouth_texts(outlines: Sequence[MouthOutlines]) -> list[dict[str, str]]:
+    """mouth_texts of each of `outlines`, every number written by one number_texts."""
+    sizes = np.rint([[o.upper_width, o.lower_width, o.bite_width, *o.tongue[2:], *o.gloss[2:]] for o in outlines])
+    places = np.array([[*o.tongue[:2], *o.gloss[:2]] for o in outlines], dtype=float).reshape(-1, 4)
+    rows = np.array([o.rows for o in outlines], dtype=float).reshape(len(outlines), -1)
+    numbers = np.concatenate([rows, sizes[:, :3], places[:, :2], sizes[:, 3:5], places[:, 2:], sizes[:, 5:]], axis=1)
+    texts = number_texts(numbers)
+    count = numbers.shape[1]
+    return [dict(zip(TEXTS, fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|")))
+            for index in range(len(outlines))]

@@ -235,14 +235,25 @@ def _plain_numbers(paths: list[str], values: _Values) -> np.ndarray | None:
     return flat[~np.isnan(flat)].reshape(len(paths), int(counts[0]))
 
 
+Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data's points
+
+
 def compact_paths(paths: Iterable[str]) -> dict[str, str]:
     """Map each path data string of `paths` to its compact form (see the module docstring)."""
+    return compact_extents(paths)[0]
+
+
+def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Extent]]:
+    """compact_paths of `paths`, and the extent of each compact path data written (a path left as
+    it is has none): the box (x0, y0, x1, y1) of every point and control point it writes, read
+    off the rounded numbers (render/compact.py's merge_alike would otherwise parse the text)."""
     groups: dict[str, list[str]] = {}
     for d in set(paths):
         # Fast skeleton: the command letters, when every number is plain (no exponent).
         letters = d.translate(_ONLY_LETTERS)
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
     compact: dict[str, str] = {}
+    extents: dict[str, Extent] = {}
     values = _Values()
     for skeleton, members in groups.items():
         members.sort()
@@ -259,9 +270,26 @@ def compact_paths(paths: Iterable[str]) -> dict[str, str]:
         spans = _spans(commands)
         kept = _kept(commands, spans, rounded[0])
         smooth = _smooth(commands, spans, kept, rounded)
-        patterns, which = np.unique(smooth, axis=0, return_inverse=True)
-        for number, pattern in enumerate(patterns):
-            rows = np.flatnonzero(which.reshape(-1) == number)
-            plan = _plan(commands, spans, kept, tuple(pattern.tolist()))
-            compact.update(zip([members[i] for i in rows], _write(plan, rounded[rows]), strict=True))
-    return compact
+        for pattern, rows in _alike_rows(smooth):
+            plan = _plan(commands, spans, kept, pattern)
+            written = _write(plan, rounded[rows])
+            compact.update(zip([members[i] for i in rows], written, strict=True))
+            extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
+    return compact, extents
+
+
+def _alike_rows(marks: np.ndarray) -> list[tuple[tuple[bool, ...], np.ndarray]]:
+    """The distinct rows of the bool array `marks` (n, k) and where each occurs: (row, indices).
+    Rows packed into bytes and sorted as one 1-D array (np.unique with axis=0 is 10x slower)."""
+    packed = np.ascontiguousarray(np.packbits(marks, axis=1)).reshape(len(marks), -1)
+    keys = packed.view(f"V{max(packed.shape[1], 1)}").ravel() if packed.shape[1] else np.zeros(len(marks), "V1")
+    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    return [(tuple(marks[row].tolist()), np.flatnonzero(which.reshape(-1) == number))
+            for number, row in enumerate(first.tolist())]
+
+
+def _extents(plan: _Plan, rounded: np.ndarray) -> list[Extent]:
+    """The box of the points `plan` writes of each row of `rounded` (n, 2P) absolute coordinates."""
+    xs, ys = (rounded[:, plan.columns[plan.columns % 2 == axis]] for axis in (0, 1))
+    boxes = np.column_stack([xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)]).astype(float)
+    return [(x0, y0, x1, y1) for x0, y0, x1, y1 in boxes.tolist()]

@@ -30,13 +30,13 @@ from lxml import etree
 
 from cartoonface.face.lift import LIFTED_INDEX, lift
 from cartoonface.face.model import FaceModel
-from cartoonface.face.pose import PosedFace, pose_face
+from cartoonface.face.pose import PosedFace, PosedFaces, pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
-from cartoonface.render.geometry import face_shapes
+from cartoonface.render.geometry import all_face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import mouth_outlines, mouth_texts
+from cartoonface.render.mouth import all_mouth_outlines, all_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
@@ -190,16 +190,44 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     on the neck, under the posed chin: render/scenery.py's chin_shadow), "face", "fringe" (the
     hair's front layer, over the forehead), "cheeks", "nose", "brow-l", "brow-r", "eye-l",
     "eye-r", "mouth". Their clip paths' ids end in "-{uid}" (`uid`: letters, digits, "-").
-    Fills use face_defs' gradients. Written as text: the hot path of render/animation.py.
+    Fills use face_defs' gradients. all_face_parts of the one state.
     """
+    return all_face_parts(face, PosedFaces.stack([posed]), uid, neck_lean)[0]
+
+
+def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0) -> list[tuple[Part, ...]]:
+    """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
+    of them by geometry's all_face_shapes, the cheeks' and eyes' numbers written by one
+    number_texts; per state the templates filled (and the mouth and the chin's shadow drawn).
+    Written as text: the hot path of render/animation.py."""
     style = _style_texts(face)
-    shapes = face_shapes(posed)
-    points = posed.xy[_ROWS].tolist()
-    figure, chin = _canvas_figure(face), posed.p("2.1")
-    shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
-    left, right = _eyeballs(posed, points)
-    # the cheeks' and the eyes' numbers written in one call (CHEEK_COUNT, then EYE_COUNT per eye)
-    texts = number_texts(np.array(_cheek_numbers(points, face.fapu.d) + _eye_numbers(left) + _eye_numbers(right)))
+    shapes = all_face_shapes(posed)
+    figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
+    rows = posed.xy[:, _ROWS].tolist()
+    pupils, (r0, r1) = posed.pupils.tolist(), posed.iris_r.tolist()
+    numbers = []
+    for points, eyes in zip(rows, pupils, strict=True):
+        left, right = _eyeballs(eyes, (r0, r1), points)
+        numbers += _cheek_numbers(points, face.fapu.d) + _eye_numbers(left) + _eye_numbers(right)
+    texts = number_texts(np.array(numbers))
+    per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
+    # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
+    shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
+    mouths = all_mouth_texts(all_mouth_outlines(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d))
+    drawings = []
+    for index, (part_shapes, mouth) in enumerate(zip(shapes, mouths, strict=True)):
+        chin = chins[index]
+        shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
+        # the cheeks' and the eyes' numbers (CHEEK_COUNT, then EYE_COUNT per eye)
+        state_texts = texts[index * per_state:(index + 1) * per_state]
+        drawings.append(_parts(part_shapes, shadow, state_texts, _mouth(mouth, uid, style), uid, style))
+    return drawings
+
+
+def _parts(shapes: dict[str, str], shadow: str, texts: tuple[str, ...], mouth: Part, uid: str,
+           style: dict[str, str]) -> tuple[Part, ...]:
+    """face_parts' parts of one state from its path data `shapes` (geometry's face_shapes), the
+    chin's `shadow`, the number `texts` of the cheeks and the eyes and the `mouth`."""
     eyes = [_eye(shapes, "l", texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT], uid, style),
             _eye(shapes, "r", texts[_CHEEK_COUNT + _EYE_COUNT:], uid, style)]
     return (
@@ -214,7 +242,7 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
         *(Part(f"brow-{side}", f'<path class="brow-{side}" d="{shapes[f"brow_{side}"]}"{style["brow"]}/>')
           for side in "lr"),
         *eyes,
-        _mouth(posed, uid, style, face.fapu.d),
+        mouth,
     )
 
 
@@ -254,13 +282,15 @@ def _cheeks(texts: tuple[str, ...], style: dict[str, str]) -> str:
     return f'<g class="cheeks" fill="url(#cf-cheek)">{ellipses}</g>'
 
 
-def _eyeballs(posed: PosedFace, points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
-    """(x, y, iris radius) for the eye drawn "l" and "r", each pupil paired with the eye whose
-    outline centre (from `points`, the rows _ROWS) is nearest: PosedFace has its own order."""
-    (x0, y0), (x1, y1) = posed.pupils.tolist()
+def _eyeballs(pupils: list[list[float]], radii: tuple[float, float],
+             points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
+    """(x, y, iris radius) for the eye drawn "l" and "r", each pupil of `pupils` (PosedFace.pupils
+    as lists, iris radii `radii`) paired with the eye whose outline centre (from `points`, the
+    rows _ROWS) is nearest: PosedFace has its own order."""
+    (x0, y0), (x1, y1) = pupils
     cx = sum(p[0] for p in points[:4]) / 4
     cy = sum(p[1] for p in points[:4]) / 4
-    r0, r1 = (float(r) for r in posed.iris_r)
+    r0, r1 = radii
     if math.hypot(x0 - cx, y0 - cy) <= math.hypot(x1 - cx, y1 - cy):
         return (x0, y0, r0), (x1, y1, r1)
     return (x1, y1, r1), (x0, y0, r0)
@@ -288,13 +318,11 @@ def _eye(shapes: dict[str, str], side: str, texts: tuple[str, ...], uid: str, st
     return Part(f"eye-{side}", text, (f'<clipPath id="{clip_id}"><path d="{outline}"/></clipPath>',))
 
 
-def _mouth(posed: PosedFace, uid: str, style: dict[str, str], d: float) -> Part:
-    """The mouth (render/mouth.py): lips; the opening, its outline the line where the
+def _mouth(text: dict[str, str], uid: str, style: dict[str, str]) -> Part:
+    """The mouth (render/mouth.py's texts `text`): lips; the opening, its outline the line where the
     lips meet; the tongue and the lower and upper teeth clipped to it (when it is open by a
     pixel or more; each row when it shows a pixel or more); the upper teeth on the lower lip
-    (f, clipped by the lips); a gloss on the lower lip. `d` is the FAPU d in pixels."""
-    outlines = mouth_outlines(posed.xy[MOUTH_ROWS], posed.mouth @ shown_parts(), d)
-    text = mouth_texts(outlines)
+    (f, clipped by the lips); a gloss on the lower lip."""
     pieces = ['<g class="mouth" stroke-linejoin="round" stroke-linecap="round">',
               f'<path d="{text["lips"]}"{style["lips"]}/>', f'<path d="{text["opening"]}"{style["opening"]}/>']
     clips = []

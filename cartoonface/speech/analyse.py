@@ -48,9 +48,10 @@ MIN_RATE = 1.0
 # Syllables below this confidence (align.within_probability: the miss model's probability of the onset
 # lying within 50 ms) are reported as low-confidence: the threshold of best out-of-fold F1 for "more
 # than 50 ms off" over the aligner-alone tuning pool (Biaobei 000001-000035, its tempo, pitch and
-# paragraph copies; 7 folds of 5 recordings): `.venv/bin/python -m bench.align fit`, F1 33.0 / 34.3 /
-# 35.7 / 34.0 / 32.4 % at P(miss) 0.11 / 0.12 / 0.13 / 0.14 / 0.15 (docs/BENCHMARKS.md).
-LOW_CONFIDENCE = 0.87
+# paragraph copies, espeak-ng readings of the same sentences at weight 0.5; 7 folds of 5 sentences):
+# `.venv/bin/python -m bench.align fit`, F1 37.9 / 36.6 / 37.2 / 39.5 / 38.5 % at P(miss) 0.12 / 0.13 /
+# 0.14 / 0.15 / 0.16 (docs/BENCHMARKS.md).
+LOW_CONFIDENCE = 0.85
 # Sentences sharing a speaking part are aligned in one call up to this many seconds (the aligner's
 # cost grows with length times syllables); longer runs are aligned sentence by sentence at the cuts.
 MAX_JOINT = 60.0
