@@ -2,9 +2,9 @@
 
 `helper_pool(workers)` opens a forked one-process pool when `workers` is 2 or more (the caller
 decides, e.g. by render/animation.drawing_workers: no pool for a process with a CPU-time limit,
-whose limit counts per process); `offloaded(pool, fn, *args)` starts `fn(*args)` there and
-returns a getter of its result that computes it here instead when the pool is None, could not
-start, or broke (no memory, a killed child). The results are the same either way: the child is a
+whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)` there and
+returns a getter of its result that computes it here instead when the pool has not begun it, is
+None, could not start, or broke (no memory, a killed child). The results are the same either way: the child is a
 fork of this process running the same code.
 """
 
@@ -45,9 +45,11 @@ def helper_pool(workers: int) -> Iterator[Executor | None]:
 
 
 def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Callable[[], T]:
-    """fn(*args) started in `pool`; returns a function giving its result. Computed in this
-    process when `pool` is None or cannot run it (fork or thread start failed, broken pool).
-    An exception raised by `fn` itself is raised by the getter."""
+    """fn(*args) queued in `pool`; returns a function giving its result. Computed in this
+    process when the pool has not begun it by then (so a caller done with its own share takes
+    over the queued rest, asking for the last first), or when `pool` is None or cannot run it
+    (fork or thread start failed, broken pool). An exception raised by `fn` itself is raised by
+    the getter."""
     future = None
     if pool is not None:
         try:
@@ -56,7 +58,7 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Cal
             future = None
 
     def result() -> T:
-        if future is not None:
+        if future is not None and not future.cancel():  # begun (or done) there
             try:
                 return future.result()
             except (BrokenProcessPool, OSError, MemoryError):

@@ -7,6 +7,7 @@ import multiprocessing
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -25,7 +26,8 @@ from tests.synthetic import synthetic_talk
 STORY = ROOT / "samples" / "speech"
 
 
-def _pid_and_square(x: float) -> tuple[int, float]:
+def _pid_and_square(x: float, wait: float = 0.0) -> tuple[int, float]:
+    time.sleep(wait)
     return os.getpid(), x * x
 
 
@@ -52,8 +54,13 @@ def test_the_helper_is_forked_at_once_and_computes_the_same():
         # a subprocess started now hands over its output: the helper holds none of its pipe
         out = subprocess.run([sys.executable, "-c", "print(7)"], stdout=subprocess.PIPE, timeout=60, check=True)
         assert out.stdout.strip() == b"7"
-        pid, value = offloaded(pool, _pid_and_square, 1.5)()
-        assert pid != os.getpid() and value == 1.5 * 1.5
+        begun = offloaded(pool, _pid_and_square, 1.5, 0.5)  # busy for 0.5 s: the next ones wait
+        queued = [offloaded(pool, _pid_and_square, x) for x in range(6)]
+        # not begun there (at most two are handed to the process ahead of time): done here, the same
+        assert queued[-1]() == (os.getpid(), 25)
+        pid, value = begun()
+        assert pid != os.getpid() and value == 2.25
+        assert [getter()[1] for getter in queued] == [x * x for x in range(6)]
     with helper_pool(1) as none:
         assert none is None
         assert offloaded(none, _pid_and_square, 1.5)() == (os.getpid(), 2.25)

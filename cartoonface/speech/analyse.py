@@ -27,10 +27,11 @@ import numpy as np
 from pypinyin.seg.mmseg import seg
 
 from cartoonface.errors import TranscriptError
-from cartoonface.speech.align import align_syllables
+from cartoonface.speech.align import MARGIN, align_syllables
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.audio_only import analyse_audio
 from cartoonface.speech.english import analyse_english, detect_language
+from cartoonface.speech.features import HOP
 from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -212,18 +213,33 @@ def _align_jobs(audio: Audio, jobs: list[tuple[list[SentenceText], Span]], pool:
     there meanwhile. `report("align", fraction)` as this process's share goes on."""
     costs = [span.duration * sum(len(text.syllables) for text in texts) for texts, span in jobs]
     here, there = shares(costs) if pool is not None else (list(range(len(jobs))), [])
-    later = offloaded(pool if there else None, _aligned_all, audio, [jobs[k] for k in there])
+    later = {k: offloaded(pool, _aligned_part, *_part_samples(audio, jobs[k][1]), *jobs[k]) for k in there}
     done: dict[int, list[tuple[Sentence, tuple[float, ...]]]] = {}
     for number, k in enumerate(here):
         report("align", number / len(here))
         done[k] = _aligned(audio, *jobs[k])
-    done.update(zip(there, later()))
+    for k in reversed(there):  # the pool's last jobs first: those it has not begun are done here
+        done[k] = later[k]()
     return [done[k] for k in range(len(jobs))]
 
 
-def _aligned_all(audio: Audio, jobs: list[tuple[list[SentenceText], Span]]) -> list[list[tuple[Sentence, tuple[float, ...]]]]:
-    """`_aligned` of each job (sentences, span), in order (the pool's share of _align_jobs)."""
-    return [_aligned(audio, texts, span) for texts, span in jobs]
+def _part_samples(audio: Audio, span: Span) -> tuple[int, np.ndarray, int, int, str]:
+    """(offset, samples, length, rate, source) of the samples around `span` that align_syllables
+    reads (MARGIN frames either side) and what _aligned_part needs to put them back in place:
+    the pool is sent these, not the whole recording (12 MB for 3 minutes, per job)."""
+    reach = MARGIN * int(round(HOP * audio.rate)) + 1
+    first = max(int(round(span.start * audio.rate)) - reach, 0)
+    last = min(int(round(span.end * audio.rate)) + reach, len(audio.samples))
+    return first, audio.samples[first:max(last, first)], len(audio.samples), audio.rate, audio.source
+
+
+def _aligned_part(offset: int, samples: np.ndarray, length: int, rate: int, source: str, texts: list[SentenceText],
+                  span: Span) -> list[tuple[Sentence, tuple[float, ...]]]:
+    """`_aligned(audio, texts, span)` from `_part_samples(audio, span)`: the recording rebuilt with
+    zeros where the aligner does not read, so the result is the same."""
+    whole = np.zeros(length, dtype=samples.dtype)
+    whole[offset:offset + len(samples)] = samples
+    return _aligned(Audio(whole, rate, source), texts, span)
 
 
 def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[tuple[Sentence, tuple[float, ...]]]:
