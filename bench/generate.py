@@ -78,20 +78,24 @@ def children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def timed_run(face: Path, audio: Path, transcript: Path, out: Path) -> tuple[float, float, dict[str, float], Result]:
+def timed_run(face: Path, audio: Path, transcript: Path,
+              out: Path) -> tuple[float, float, dict[str, float], Result, dict[str, float]]:
     """One generate(); return wall seconds, CPU seconds of this process and its children, wall
-    seconds per stage, the Result.
+    seconds per stage, the Result, and CPU seconds of this process alone per stage.
 
     The machine is shared: CPU time shows the work done even when other jobs stretch the wall time.
     """
-    marks: list[tuple[str, float]] = []
+    marks: list[tuple[str, float, float]] = []
     started, cpu = time.perf_counter(), time.process_time() + children_cpu()
-    result = generate(face, audio, transcript, out, Options(), lambda stage, _: marks.append((stage, time.perf_counter())))
-    end, cpu = time.perf_counter(), time.process_time() + children_cpu() - cpu
+    result = generate(face, audio, transcript, out, Options(),
+                      lambda stage, _: marks.append((stage, time.perf_counter(), time.process_time())))
+    end, own, cpu = time.perf_counter(), time.process_time(), time.process_time() + children_cpu() - cpu
     stages: dict[str, float] = {}
-    for (stage, at), (_, after) in zip(marks, [*marks[1:], ("end", end)], strict=True):
+    cpu_stages: dict[str, float] = {}
+    for (stage, at, used), (_, after, later) in zip(marks, [*marks[1:], ("end", end, own)], strict=True):
         stages[stage] = stages.get(stage, 0.0) + after - at
-    return end - started, cpu, stages, result
+        cpu_stages[stage] = cpu_stages.get(stage, 0.0) + later - used
+    return end - started, cpu, stages, result, cpu_stages
 
 
 def command_wall(face: Path, audio: Path, transcript: Path, out: Path) -> float:
@@ -167,7 +171,7 @@ def profile(face: Path, audio: Path, transcript: Path, out: Path, lines: int = P
 
 def main() -> None:
     """Build the input, run generate RUNS times, print the figures (`--profile`: one profiled
-    run instead)."""
+    run instead; `--quick`: the times alone, without the command, memory, sizes and Chromium)."""
     face = sorted(SAMPLE_FACES.glob("*.json"))[0]
     args = sys.argv[1:]
     target = float(args[args.index("--minutes") + 1]) * 60 if "--minutes" in args else TARGET_SECONDS
@@ -179,19 +183,24 @@ def main() -> None:
         folder = Path(tmp)
         audio, transcript, seconds = build_input(folder, target)
         print(f"input: {seconds:.1f} s of THCHS-30 speech ({seconds / 60:.2f} min), face {face.name}")
-        walls, cpus, stage_runs = [], [], []
+        walls, cpus, stage_runs, cpu_runs = [], [], [], []
         runs = RUNS if seconds < LONG else 1
         for run in range(runs):
-            wall, cpu, stages, result = timed_run(face, audio, transcript, folder / f"out{run}")
+            wall, cpu, stages, result, cpu_stages = timed_run(face, audio, transcript, folder / f"out{run}")
             walls.append(wall)
             cpus.append(cpu)
             stage_runs.append(stages)
+            cpu_runs.append(cpu_stages)
         wall = statistics.median(walls)
         print(f"generate wall time: median {wall:.2f} s of {runs} (runs {', '.join(f'{w:.2f}' for w in walls)}); "
               f"{result.duration / wall:.0f}x real time; CPU time (with children) median {statistics.median(cpus):.2f} s; "
               f"{result.frames} frames at 30 fps; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
         shares = {stage: statistics.median(s.get(stage, 0.0) for s in stage_runs) for stage in stage_runs[0]}
         print("stages (median s): " + ", ".join(f"{stage} {value:.2f}" for stage, value in shares.items()))
+        own = {stage: statistics.median(s.get(stage, 0.0) for s in cpu_runs) for stage in cpu_runs[0]}
+        print("CPU of this process per stage (median s): " + ", ".join(f"{stage} {value:.2f}" for stage, value in own.items()))
+        if "--quick" in sys.argv[1:]:  # for A/B runs: the times alone
+            return
         print(f"`cartoonface generate` command wall time (imports included, one run): "
               f"{command_wall(face, audio, transcript, folder / 'cli'):.2f} s")
         print(f"peak memory (max RSS, one run in a fresh process): {peak_memory(face, audio, transcript, folder / 'mem'):.0f} MB")
