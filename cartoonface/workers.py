@@ -4,8 +4,8 @@
 decides, e.g. by render/animation.drawing_workers: no pool for a process with a CPU-time limit,
 whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)` there and
 returns a getter of its result that computes it here instead when the pool has not begun it, is
-None, could not start, or broke (no memory, a killed child). The results are the same either way: the child is a
-fork of this process running the same code.
+None, could not start, or broke (no memory, a killed child); `shares(costs)` splits work in two.
+The results are the same either way: the child is a fork of this process running the same code.
 """
 
 from __future__ import annotations
