@@ -1,0 +1,230 @@
+"""Drawings shown as an affine transform of an earlier drawing of their track (issue 16).
+
+Most distinct drawings of a track differ from an earlier one by little more than a small change
+of head pose (under a turn of a fraction of a degree a part's points move almost affinely) or an
+unseen change of the mouth mix. Such a drawing is written as `<use href="#fM"
+transform="matrix(a b c d e f)">` of the earlier one (render/animation.py `_track_group`).
+
+A drawing can be reused when it has the earlier drawing's *skeleton* (the same elements,
+attributes, style classes and path commands; its numbers taken out) and a least-squares affine
+maps the earlier drawing's points onto its own, every point within TOLERANCE px once the matrix
+is rounded as written. The points are those a transform moves: every path point and control
+point, eight points on each circle or ellipse (the axes' ends and the diagonals between: a
+circle turned into an ellipse by shear or unequal scale is compared along its whole outline,
+the differences being first-order sines of the angle, at most 1.08 times the largest of eight
+samples), the points of the hoisted clip paths a drawing refers to (they are drawn in its user
+space, so they move with it). A stroke scales with the transform: half the widest stroke times
+the largest change of scale is added to the error. Gradients are in the shapes' bounding boxes
+(render/svg.py's face_defs) and move with them. A drawing holding what this does not read (a
+transform of its own, arcs, other shapes) is always written.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from cartoonface.render.numbers import decimal_text
+
+# Largest distance (px) between a point of the reused drawing, transformed and rounded as
+# written, and the same point of the drawing it stands for (whole pixels).
+TOLERANCE = 0.5
+# An earlier drawing of the same skeleton is looked for among the last CANDIDATES written ones
+# (pose changes slowly: the nearest in time are the likeliest).
+CANDIDATES = 16
+# The matrix as written: a..d to 4 decimals (1e-4 of 400 px is 0.04 px), e and f to 1 (0.05 px).
+LINEAR_DECIMALS = 4
+SHIFT_DECIMALS = 1
+# The affine is fitted on about FIT_POINTS of a drawing's points (every k-th: a fit on a few dozen
+# points spread over the drawing is as good as on all of them, and 5x cheaper); the error is then
+# measured on them and, for the pairs within the tolerance there, on all the points.
+FIT_POINTS = 24
+_ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1)] + [(s * x, t * x) for s in (1, -1) for t in (1, -1)
+                                                             for x in (np.sqrt(0.5),)], dtype=float)
+_TAG = re.compile(r"<(\w+)")
+_READ = frozenset(("path", "circle", "ellipse", "g", "clipPath"))  # the elements whose geometry shape_of reads
+_GEOMETRY = re.compile(r' (d|cx|cy|r|rx|ry)="([^"]*)"')  # the attributes whose numbers are points
+_PAIRS = re.compile(r"[MLCSQTZ\d\s.,-]*")  # path data of absolute commands taking point pairs
+_STROKE = re.compile(r' stroke-width="([\d.]+)"')
+_LETTERS_TO_SPACES = str.maketrans({**{c: " " for c in "MLCSQTZHVAmlcsqtzhva,\x01"}})
+_NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skeleton
+
+
+@dataclass(frozen=True)
+class Shape:
+    """What a transform moves in a drawing (or a tidy part): `skeleton` (equal for drawings
+    with the same elements, attributes and path commands), `points` (N, 2) px, and `stroke`,
+    the widest stroke width (px) in it."""
+
+    skeleton: str
+    points: np.ndarray
+    stroke: float
+
+
+@dataclass(frozen=True)
+class Reuse:
+    """Drawing `source` (a written one of the same track) transformed by `matrix` (the SVG text
+    "a b c d e f") stands for the drawing; `error` is the largest distance (px) of a point."""
+
+    source: int
+    matrix: str
+    error: float
+
+
+def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> np.ndarray | None:
+    """The linear map (2P, V) from the V geometry numbers of a part (attributes `names` with
+    `values`, in order; `rest` the text around them) to its P points, x and y interleaved: a path's
+    numbers in pairs (absolute commands of point pairs: face_parts' M, L, C, Z), eight points on
+    each circle or ellipse. None for a part with other path data, elements or a transform."""
+    if not set(_TAG.findall(rest)) <= _READ or " transform=" in rest:
+        return None
+    rows: list[np.ndarray] = []
+    numbers = [len(value.translate(_LETTERS_TO_SPACES).split()) for value in values]
+    width = sum(numbers)
+    column = 0
+    circle: dict[str, int] = {}
+
+    def close() -> None:  # the circle or ellipse whose attributes `circle` holds (their columns)
+        radii = (circle.get("r", circle.get("rx")), circle.get("r", circle.get("ry")))
+        for unit in _ELLIPSE if circle else ():
+            for centre, radius, step in zip((circle.get("cx"), circle.get("cy")), radii, unit, strict=True):
+                row = np.zeros(width)
+                if centre is not None:
+                    row[centre] = 1
+                if radius is not None:
+                    row[radius] += step
+                rows.append(row)
+        circle.clear()
+
+    for name, value, count in zip(names, values, numbers, strict=True):
+        if name == "d":
+            close()
+            if not _PAIRS.fullmatch(value) or count % 2:
+                return None
+            rows.extend(np.eye(1, width, column + index).ravel() for index in range(count))
+        else:
+            if name in circle:
+                close()
+            circle[name] = column
+        column += count
+    close()
+    return np.array(rows).reshape(-1, width) if rows else np.zeros((0, width))
+
+
+def shape_of(texts: Sequence[str], layouts: dict[str, np.ndarray | None]) -> Shape | None:
+    """The Shape of a part as render/svg.py's face_parts drew it: `texts`, its element and the
+    definitions (clip paths) it refers to, coordinates in tenths of a pixel. None when it holds an
+    element or attribute this does not read (a transform, an arc, a rect, ...). `layouts` caches
+    _layout by skeleton."""
+    pieces = _GEOMETRY.split("".join(texts))
+    names, values = pieces[1::3], pieces[2::3]
+    joined_values = "\x01".join(values)
+    rest = "\x02".join(pieces[0::3])
+    skeleton = f"{rest}\x03{'|'.join(names)}\x03{joined_values.translate(_NUMBER_CHARACTERS)}"
+    if skeleton not in layouts:
+        layouts[skeleton] = _layout(names, values, rest)
+    layout = layouts[skeleton]
+    if layout is None:
+        return None
+    tokens = joined_values.translate(_LETTERS_TO_SPACES).split()
+    flat = np.fromiter(map(float, tokens), float, len(tokens))
+    widest = max(map(float, _STROKE.findall(rest)), default=0.0)
+    return Shape(skeleton, (layout @ flat).reshape(-1, 2), widest)
+
+
+def joined(shapes: Sequence[Shape | None]) -> Shape | None:
+    """The Shape of a drawing made of parts of `shapes` (None if any is)."""
+    if any(shape is None for shape in shapes):
+        return None
+    present = [shape for shape in shapes if shape is not None]
+    return Shape("|".join(s.skeleton for s in present), np.concatenate([s.points for s in present]),
+                 max((s.stroke for s in present), default=0.0))
+
+
+def _inverses(points: np.ndarray) -> np.ndarray:
+    """The pseudo-inverses (M, 3, N) of `points` (M, N, 2) with a column of ones (by the normal
+    equations: 3 unknowns): times a target's points (N, 2), the least-squares affine (3, 2)
+    mapping the points onto them."""
+    design = np.concatenate([points, np.ones((*points.shape[:2], 1))], axis=2)
+    transposed = np.transpose(design, (0, 2, 1))
+    return np.linalg.pinv(transposed @ design) @ transposed
+
+
+def _scale_change(linear: np.ndarray) -> np.ndarray:
+    """The largest distance from 1 of the singular values of each 2x2 of `linear` (M, 2, 2)."""
+    squares = np.sum(linear ** 2, axis=(1, 2))
+    determinant = linear[:, 0, 0] * linear[:, 1, 1] - linear[:, 0, 1] * linear[:, 1, 0]
+    root = np.sqrt(np.maximum(squares ** 2 - 4 * determinant ** 2, 0))
+    return np.maximum(np.abs(np.sqrt((squares + root) / 2) - 1), np.abs(np.sqrt(np.maximum(squares - root, 0) / 2) - 1))
+
+
+def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray, strokes: np.ndarray,
+        step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The least-squares affines (M, 2, 3) mapping each of `sources` (M, N, 2) onto `targets`
+    (M, N, 2), fitted on every `step`-th point (`inverses`: the _inverses of those) and rounded as
+    written (LINEAR_DECIMALS, SHIFT_DECIMALS); half the widest stroke (`strokes` (M,) px) times
+    the largest change of scale (M,) px; and the largest distance (M,) px of a fitted point, mapped,
+    from its target (the error on all points, `error`, is at least that)."""
+    matrices = np.einsum("mkn,mnj->mjk", inverses, targets[:, ::step])  # (M, 2, 3): [[a c e], [b d f]]
+    matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
+    matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
+    sampled = np.max(_distances(sources[:, ::step], matrices, targets[:, ::step]), axis=1, initial=0.0)
+    return matrices, _scale_change(matrices[:, :, :2]) * strokes / 2, sampled
+
+
+def error(source: Shape, matrix: np.ndarray, target: Shape) -> float:
+    """The largest distance (px) of `source`'s points mapped by `matrix` (2, 3) from `target`'s
+    plus half the widest stroke times the largest change of scale: within it, every edge of the
+    transformed drawing lies near the target's."""
+    distance = np.max(_distances(source.points[None], matrix[None], target.points[None]), initial=0.0)
+    return float(distance + _scale_change(matrix[None, :, :2])[0] * max(source.stroke, target.stroke) / 2)
+
+
+def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The distances (M, N) px of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from `targets` (M, N, 2)."""
+    x, y = sources[..., 0], sources[..., 1]
+    a, c, e, b, d, f = (matrices[:, row, column, None] for row in (0, 1) for column in (0, 1, 2))
+    return np.hypot(a * x + c * y + e - targets[..., 0], b * x + d * y + f - targets[..., 1])
+
+
+def matrix_text(matrix: np.ndarray) -> str:
+    """`matrix` (2, 3) as the numbers of SVG's matrix(a b c d e f), short: "1 .0012 -.0012 1 .3 -1.2"."""
+    (a, c, e), (b, d, f) = matrix.tolist()
+    texts = [*(decimal_text(v, LINEAR_DECIMALS) for v in (a, b, c, d)), *(decimal_text(v, SHIFT_DECIMALS) for v in (e, f))]
+    return " ".join("0" if text == "-0" else text.replace("0.", ".", 1) if text[:2] in ("0.", "-0") else text
+                    for text in texts)
+
+
+def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
+         candidates: int = CANDIDATES) -> dict[int, Reuse]:
+    """For the drawings of one track (`shapes`, in order of first use), the ones that can be shown
+    as a transform of an earlier written drawing: drawing number -> Reuse. Each drawing is fitted
+    (in bulk, on a sample of its points) to the last `candidates` drawings of its skeleton before
+    it; the nearest in time that is written (not itself reused) and within `tolerance` px on all
+    its points is taken."""
+    groups: dict[str, list[int]] = {}
+    for number, shape in enumerate(shapes):
+        if shape is not None:
+            groups.setdefault(shape.skeleton, []).append(number)
+    found: dict[int, Reuse] = {}
+    for numbers in groups.values():
+        group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
+        points = np.stack([shape.points for shape in group])
+        strokes = np.array([shape.stroke for shape in group])
+        step = max(1, points.shape[1] // FIT_POINTS)
+        inverses = _inverses(points[:, ::step])
+        written = np.ones(len(numbers), dtype=bool)
+        pairs: list[tuple[int, int, np.ndarray]] = []  # (drawing, lag back to the earlier one, matrix): the nearest first, within the tolerance on the sample
+        for lag in range(1, min(candidates, len(numbers) - 1) + 1):
+            matrices, scale, sampled = fit(points[:-lag], inverses[:-lag], points[lag:],
+                                           np.maximum(strokes[:-lag], strokes[lag:]), step)
+            pairs.extend((int(index) + lag, lag, matrices[index]) for index in np.flatnonzero(scale + sampled <= tolerance))
+        for index, lag, matrix in sorted(pairs, key=lambda pair: pair[:2]):
+            if written[index] and written[index - lag]:
+                within = error(group[index - lag], matrix, group[index])
+                if within <= tolerance:
+                    found[numbers[index]] = Reuse(numbers[index - lag], matrix_text(matrix), within)
+                    written[index] = False
+    return found
