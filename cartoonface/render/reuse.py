@@ -6,9 +6,12 @@ unseen change of the mouth mix. Such a drawing is written as `<use href="#fM"
 transform="matrix(a b c d e f)">` of the earlier one (render/animation.py `_track_group`).
 
 A drawing can be reused when it has the earlier drawing's *skeleton* (the same elements,
-attributes, style classes and path commands; its numbers taken out) and a least-squares affine
-maps the earlier drawing's points onto its own, every point within TOLERANCE px once the matrix
-is rounded as written. The points are those a transform moves: every path point and control
+attributes and path commands; its numbers taken out) and a least-squares affine maps the earlier
+drawing's points onto its own, every point within TOLERANCE px once the matrix is rounded as
+written. The points are those of the parts as render/svg.py's face_parts drew them (tenths of a
+pixel), before the compactor rounds them to whole pixels: what is shown is then the written form
+of a drawing within TOLERANCE of the exact one (comparing the whole-pixel forms, the rounding of
+both, up to 0.7 px each, would hide every match). The points are those a transform moves: every path point and control
 point, eight points on each circle or ellipse (the axes' ends and the diagonals between: a
 circle turned into an ellipse by shear or unequal scale is compared along its whole outline,
 the differences being first-order sines of the angle, at most 1.08 times the largest of eight
@@ -26,13 +29,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
 from cartoonface.render.numbers import decimal_text
 
-# Largest distance (px) between a point of the reused drawing, transformed and rounded as
-# written, and the same point of the drawing it stands for (whole pixels).
+# Largest distance (px) between a point of the earlier drawing as drawn, moved by the matrix as
+# written, and the same point of the drawing it stands for (0.35 / 0.5 / 0.7 measured:
+# docs/BENCHMARKS.md, "Reused drawings").
 TOLERANCE = 0.5
-# An earlier drawing of the same skeleton is looked for among the last CANDIDATES written ones
-# (pose changes slowly: the nearest in time are the likeliest).
+# A drawing is compared with the last CANDIDATES drawings of its skeleton before it, the nearest in
+# time first (pose changes slowly), and shown as a transform of the first written one that fits.
 CANDIDATES = 16
 # The matrix as written: a..d to 4 decimals (1e-4 of 400 px is 0.04 px), e and f to 1 (0.05 px).
 LINEAR_DECIMALS = 4
@@ -41,8 +46,9 @@ SHIFT_DECIMALS = 1
 # points spread over the drawing is as good as on all of them, and 5x cheaper); the error is then
 # measured on them and, for the pairs within the tolerance there, on all the points.
 FIT_POINTS = 24
-_ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1)] + [(s * x, t * x) for s in (1, -1) for t in (1, -1)
-                                                             for x in (np.sqrt(0.5),)], dtype=float)
+_DIAGONAL = np.sqrt(0.5)
+_ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1), (_DIAGONAL, _DIAGONAL), (_DIAGONAL, -_DIAGONAL),
+                     (-_DIAGONAL, _DIAGONAL), (-_DIAGONAL, -_DIAGONAL)])  # eight points on a unit circle
 _TAG = re.compile(r"<(\w+)")
 _READ = frozenset(("path", "circle", "ellipse", "g", "clipPath"))  # the elements whose geometry shape_of reads
 _GEOMETRY = re.compile(r' (d|cx|cy|r|rx|ry)="([^"]*)"')  # the attributes whose numbers are points
@@ -54,7 +60,7 @@ _NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skel
 
 @dataclass(frozen=True)
 class Shape:
-    """What a transform moves in a drawing (or a tidy part): `skeleton` (equal for drawings
+    """What a transform moves in a drawing (or one of its parts): `skeleton` (equal for drawings
     with the same elements, attributes and path commands), `points` (N, 2) px, and `stroke`,
     the widest stroke width (px) in it."""
 
@@ -166,7 +172,7 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray, strokes:
     (M, N, 2), fitted on every `step`-th point (`inverses`: the _inverses of those) and rounded as
     written (LINEAR_DECIMALS, SHIFT_DECIMALS); half the widest stroke (`strokes` (M,) px) times
     the largest change of scale (M,) px; and the largest distance (M,) px of a fitted point, mapped,
-    from its target (the error on all points, `error`, is at least that)."""
+    from its target (the error on all points, _error, is at least that)."""
     matrices = np.einsum("mkn,mnj->mjk", inverses, targets[:, ::step])  # (M, 2, 3): [[a c e], [b d f]]
     matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
     matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
@@ -174,7 +180,7 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray, strokes:
     return matrices, _scale_change(matrices[:, :, :2]) * strokes / 2, sampled
 
 
-def error(source: Shape, matrix: np.ndarray, target: Shape) -> float:
+def _error(source: Shape, matrix: np.ndarray, target: Shape) -> float:
     """The largest distance (px) of `source`'s points mapped by `matrix` (2, 3) from `target`'s
     plus half the widest stroke times the largest change of scale: within it, every edge of the
     transformed drawing lies near the target's."""
@@ -216,14 +222,15 @@ def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
         step = max(1, points.shape[1] // FIT_POINTS)
         inverses = _inverses(points[:, ::step])
         written = np.ones(len(numbers), dtype=bool)
-        pairs: list[tuple[int, int, np.ndarray]] = []  # (drawing, lag back to the earlier one, matrix): the nearest first, within the tolerance on the sample
+        # (drawing, how many drawings back the earlier one is, matrix), within the tolerance on the sample
+        pairs: list[tuple[int, int, np.ndarray]] = []
         for lag in range(1, min(candidates, len(numbers) - 1) + 1):
             matrices, scale, sampled = fit(points[:-lag], inverses[:-lag], points[lag:],
                                            np.maximum(strokes[:-lag], strokes[lag:]), step)
             pairs.extend((int(index) + lag, lag, matrices[index]) for index in np.flatnonzero(scale + sampled <= tolerance))
         for index, lag, matrix in sorted(pairs, key=lambda pair: pair[:2]):
             if written[index] and written[index - lag]:
-                within = error(group[index - lag], matrix, group[index])
+                within = _error(group[index - lag], matrix, group[index])
                 if within <= tolerance:
                     found[numbers[index]] = Reuse(numbers[index - lag], matrix_text(matrix), within)
                     written[index] = False
