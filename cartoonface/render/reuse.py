@@ -42,9 +42,9 @@ CANDIDATES = 16
 # The matrix as written: a..d to 4 decimals (1e-4 of 400 px is 0.04 px), e and f to 1 (0.05 px).
 LINEAR_DECIMALS = 4
 SHIFT_DECIMALS = 1
-# The affine is fitted on about FIT_POINTS of a drawing's points (every k-th: a fit on a few dozen
-# points spread over the drawing is as good as on all of them, and 5x cheaper); the error is then
-# measured on them and, for the pairs within the tolerance there, on all the points.
+# The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
+# dozen points is about as good as on all of them, and all pairs of a track fit in one go); the
+# error is measured on them and, for a pair within the tolerance there, on all the points.
 FIT_POINTS = 24
 _DIAGONAL = np.sqrt(0.5)
 _ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1), (_DIAGONAL, _DIAGONAL), (_DIAGONAL, -_DIAGONAL),
@@ -56,6 +56,18 @@ _PAIRS = re.compile(r"[MLCSQTZ\d\s.,-]*")  # path data of absolute commands taki
 _STROKE = re.compile(r' stroke-width="([\d.]+)"')
 _LETTERS_TO_SPACES = str.maketrans({**{c: " " for c in "MLCSQTZHVAmlcsqtzhva,\x01"}})
 _NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skeleton
+
+
+class _Values(dict[str, float]):
+    """Number texts and their values, each text converted once (coordinates in tenths of a pixel
+    repeat: a few thousand texts for a million numbers)."""
+
+    def __missing__(self, text: str) -> float:
+        value = self[text] = float(text)
+        return value
+
+
+_VALUES = _Values()
 
 
 @dataclass(frozen=True)
@@ -135,7 +147,7 @@ def shape_of(texts: Sequence[str], layouts: dict[str, np.ndarray | None]) -> Sha
     if layout is None:
         return None
     tokens = joined_values.translate(_LETTERS_TO_SPACES).split()
-    flat = np.fromiter(map(float, tokens), float, len(tokens))
+    flat = np.fromiter(map(_VALUES.__getitem__, tokens), float, len(tokens))
     widest = max(map(float, _STROKE.findall(rest)), default=0.0)
     return Shape(skeleton, (layout @ flat).reshape(-1, 2), widest)
 
@@ -166,26 +178,23 @@ def _scale_change(linear: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(np.sqrt((squares + root) / 2) - 1), np.abs(np.sqrt(np.maximum(squares - root, 0) / 2) - 1))
 
 
-def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray, strokes: np.ndarray,
-        step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The least-squares affines (M, 2, 3) mapping each of `sources` (M, N, 2) onto `targets`
-    (M, N, 2), fitted on every `step`-th point (`inverses`: the _inverses of those) and rounded as
-    written (LINEAR_DECIMALS, SHIFT_DECIMALS); half the widest stroke (`strokes` (M,) px) times
-    the largest change of scale (M,) px; and the largest distance (M,) px of a fitted point, mapped,
-    from its target (the error on all points, _error, is at least that)."""
-    matrices = np.einsum("mkn,mnj->mjk", inverses, targets[:, ::step])  # (M, 2, 3): [[a c e], [b d f]]
+def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The least-squares affines (M, 2, 3) mapping each of `sources` (M, F, 2; `inverses` their
+    _inverses) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS); the
+    largest change of scale of each (M,); and the largest distance (M,) px of a mapped source point
+    from its target."""
+    matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
     matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
     matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
-    sampled = np.max(_distances(sources[:, ::step], matrices, targets[:, ::step]), axis=1, initial=0.0)
-    return matrices, _scale_change(matrices[:, :, :2]) * strokes / 2, sampled
+    return matrices, _scale_change(matrices[:, :, :2]), np.max(_distances(sources, matrices, targets), axis=1)
 
 
-def _error(source: Shape, matrix: np.ndarray, target: Shape) -> float:
+def _error(source: Shape, matrix: np.ndarray, target: Shape, scale: float) -> float:
     """The largest distance (px) of `source`'s points mapped by `matrix` (2, 3) from `target`'s
-    plus half the widest stroke times the largest change of scale: within it, every edge of the
-    transformed drawing lies near the target's."""
-    distance = np.max(_distances(source.points[None], matrix[None], target.points[None]), initial=0.0)
-    return float(distance + _scale_change(matrix[None, :, :2])[0] * max(source.stroke, target.stroke) / 2)
+    plus half the widest stroke times `scale`, the matrix's largest change of scale: within it,
+    every edge of the transformed drawing lies near the target's."""
+    moved = source.points @ matrix[:, :2].T + matrix[:, 2]
+    return float(np.sqrt(np.max(np.sum((moved - target.points) ** 2, axis=1))) + scale * max(source.stroke, target.stroke) / 2)
 
 
 def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -203,35 +212,52 @@ def matrix_text(matrix: np.ndarray) -> str:
                     for text in texts)
 
 
+def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair of a drawing and one of the last `candidates` drawings of its skeleton before it
+    (`skeletons` in order): the later's and the earlier's index, and how many drawings of the
+    skeleton lie back from one to the other (1: the one just before)."""
+    groups: dict[str, list[int]] = {}
+    for index, skeleton in enumerate(skeletons):
+        groups.setdefault(skeleton, []).append(index)
+    later, earlier, lags = [], [], []
+    for members in groups.values():
+        indices = np.array(members)
+        for lag in range(1, min(candidates, len(members) - 1) + 1):
+            later.append(indices[lag:])
+            earlier.append(indices[:-lag])
+            lags.append(np.full(len(members) - lag, lag))
+    if not later:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    return np.concatenate(later), np.concatenate(earlier), np.concatenate(lags)
+
+
 def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
          candidates: int = CANDIDATES) -> dict[int, Reuse]:
     """For the drawings of one track (`shapes`, in order of first use), the ones that can be shown
     as a transform of an earlier written drawing: drawing number -> Reuse. Each drawing is fitted
-    (in bulk, on a sample of its points) to the last `candidates` drawings of its skeleton before
-    it; the nearest in time that is written (not itself reused) and within `tolerance` px on all
-    its points is taken."""
-    groups: dict[str, list[int]] = {}
-    for number, shape in enumerate(shapes):
-        if shape is not None:
-            groups.setdefault(shape.skeleton, []).append(number)
+    (all pairs at once, on FIT_POINTS points of each) to the last `candidates` drawings of its
+    skeleton before it; the nearest in time that is written (not itself reused) and within
+    `tolerance` px on all its points is taken."""
+    numbers = [number for number, shape in enumerate(shapes) if shape is not None and len(shape.points) >= 3]
+    group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
+    later, earlier, lags = _pairs([shape.skeleton for shape in group], candidates)
+    if not len(later):
+        return {}
+    spread: dict[int, np.ndarray] = {}  # FIT_POINTS indices spread over N points, by N
+    samples = np.stack([shape.points[spread.get(len(shape.points)) if len(shape.points) in spread else
+                                     spread.setdefault(len(shape.points), np.linspace(0, len(shape.points) - 1,
+                                                                                      FIT_POINTS).round().astype(int))]
+                        for shape in group]).astype(np.float32)  # (D, FIT_POINTS, 2); single precision: 1e-4 px
+    strokes = np.array([shape.stroke for shape in group])
+    matrices, scales, sampled = fit(samples[earlier], _inverses(samples)[earlier], samples[later])
+    near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
+    written = np.ones(len(group), dtype=bool)
     found: dict[int, Reuse] = {}
-    for numbers in groups.values():
-        group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
-        points = np.stack([shape.points for shape in group])
-        strokes = np.array([shape.stroke for shape in group])
-        step = max(1, points.shape[1] // FIT_POINTS)
-        inverses = _inverses(points[:, ::step])
-        written = np.ones(len(numbers), dtype=bool)
-        # (drawing, how many drawings back the earlier one is, matrix), within the tolerance on the sample
-        pairs: list[tuple[int, int, np.ndarray]] = []
-        for lag in range(1, min(candidates, len(numbers) - 1) + 1):
-            matrices, scale, sampled = fit(points[:-lag], inverses[:-lag], points[lag:],
-                                           np.maximum(strokes[:-lag], strokes[lag:]), step)
-            pairs.extend((int(index) + lag, lag, matrices[index]) for index in np.flatnonzero(scale + sampled <= tolerance))
-        for index, lag, matrix in sorted(pairs, key=lambda pair: pair[:2]):
-            if written[index] and written[index - lag]:
-                within = _error(group[index - lag], matrix, group[index])
-                if within <= tolerance:
-                    found[numbers[index]] = Reuse(numbers[index - lag], matrix_text(matrix), within)
-                    written[index] = False
+    for pair in near[np.lexsort((lags[near], later[near]))].tolist():  # by drawing, the nearest candidate first
+        target, source = int(later[pair]), int(earlier[pair])
+        if written[target] and written[source]:
+            within = _error(group[source], matrices[pair], group[target], float(scales[pair]))
+            if within <= tolerance:
+                found[numbers[target]] = Reuse(numbers[source], matrix_text(matrices[pair]), within)
+                written[target] = False
     return found
