@@ -142,7 +142,8 @@ def page_ready(index: Path) -> tuple[list[float], float]:
 
 def bytes_by_track(svg: bytes, minutes: float) -> str:
     """Raw / gzipped KB per minute of the document's <defs> and of each part track
-    (`<g data-part>`), with the track's number of drawings (frames), as one line."""
+    (`<g data-part>`), with the track's number of drawings and of those reused (render/reuse.py:
+    a `<use>` with a transform), as one line."""
     from lxml import etree
 
     root = etree.fromstring(svg)
@@ -152,9 +153,10 @@ def bytes_by_track(svg: bytes, minutes: float) -> str:
     texts = []
     for name, element in pieces:
         data = etree.tostring(element)
-        frames = len(element.findall(f"{ns}defs/{ns}g")) if name != "defs" else 0  # a track's drawings
+        drawings = list(element.find(f"{ns}defs")) if name != "defs" and element.find(f"{ns}defs") is not None else []
+        reused = sum(node.tag == f"{ns}use" and node.get("transform") is not None for node in drawings)
         texts.append(f"{name} {len(data) / minutes / 1e3:.0f}/{len(gzip.compress(data, 6)) / minutes / 1e3:.0f}"
-                     + (f" ({frames} frames)" if frames else ""))
+                     + (f" ({len(drawings)} drawings, {reused} reused)" if drawings else ""))
     return "KB per minute raw/gzipped: " + ", ".join(texts)
 
 

@@ -3,7 +3,8 @@
 For each video frame the animation is resolved at the frame's time (`<set>` intervals,
 discrete `<animate>` and `<animateTransform>`; docs/output.md describes what
 render/animation.py writes) and the drawings a frame does not show are left out (of each
-track's `<defs>` only the one its `<use>` points at).
+track's `<defs>` only the one its `<use>` points at, and the earlier drawing it shows transformed
+when it is a reused one, render/reuse.py).
 """
 
 from __future__ import annotations
@@ -127,7 +128,12 @@ class FrameDocuments:
         if element in self.shown_by:
             use, drawings = self.shown_by[element]
             drawing = drawings.get(self._attributes(use, frame).get("href", "").removeprefix("#"))
-            return "" if drawing is None else f"<defs>{self.text(drawing, frame)}</defs>"
+            if drawing is None:
+                return ""
+            # a reused drawing (render/reuse.py) is a <use> of an earlier drawing of the track
+            source = drawings.get(drawing.get("href", "").removeprefix("#")) if drawing.get("href") else None
+            shown = "" if source is None else self.text(source, frame)
+            return f"<defs>{shown}{self.text(drawing, frame)}</defs>"
         opening = self.start_tag(element, frame, override)
         if opening is None:
             return ""

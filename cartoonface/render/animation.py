@@ -68,6 +68,7 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Writer, bare, merge_alike, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
+from cartoonface.render.reuse import TOLERANCE, Reuse, Shape, find, joined, shape_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
@@ -212,8 +213,33 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
             "keyTimes": times, "dur": clock(total), "fill": "freeze"}
 
 
+def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int],
+            tolerance: float) -> dict[str, dict[int, Reuse]]:
+    """The drawings of each of `tracks` shown as a transform of an earlier drawing of their track
+    within `tolerance` px (render/reuse.py; none for 0), by track and drawing number. A drawing's parts are tidy part numbers;
+    `mapping` gives the tidy number of each of `writer`'s raw parts, the first of which is the
+    part's geometry as drawn (the others differ by less than the whole-pixel rounding)."""
+    if tolerance <= 0:
+        return {name: {} for name in tracks}
+    first: dict[int, int] = {}
+    for raw, tidy in enumerate(mapping):
+        first.setdefault(tidy, raw)
+    parts: dict[int, Shape | None] = {}
+    layouts: dict[str, np.ndarray | None] = {}
+
+    def part(number: int) -> Shape | None:
+        if number not in parts:
+            raw = writer.raw[first[number]]
+            parts[number] = shape_of((raw.element, *raw.definitions), layouts)
+        return parts[number]
+
+    return {name: find([joined([part(number) for number in drawing]) for drawing in track.drawings], tolerance)
+            for name, track in tracks.items()}
+
+
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
-                 keys: Sequence[int], fps: int, shapes: Sequence[str], names: Iterator[str]) -> None:
+                 keys: Sequence[int], fps: int, shapes: Sequence[str], names: Iterator[str],
+                 reused: dict[int, Reuse]) -> None:
     """Write one track into `parent` as a `<g data-part>`: its drawing as is if it never changes,
     else each distinct drawing once as a `<g id>` (ids from `names`) in the track's own `<defs>`
     and one `<use>` whose `href` a discrete `<animate>` (_discrete) points at the drawing of
@@ -227,6 +253,12 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
     store = element(holder, "defs")
     ids = [next(names) for _ in drawings]
     for number, (name, drawing) in enumerate(zip(ids, drawings, strict=True)):
+        if number in reused:
+            shown = element(store, "use", id=name, href=f"#{ids[reused[number].source]}",
+                            transform=f"matrix({reused[number].matrix})")
+            if track == MOUTH_TRACK:
+                shown.set("data-shape", shapes[number])
+            continue
         if track != MOUTH_TRACK and bare(drawing):
             drawing[0].set("id", name)
             store.append(drawing[0])
@@ -399,7 +431,7 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
                   body: BodyMotion | None = None, progress: Callable[[float], None] | None = None,
-                  workers: int = 1) -> bytes:
+                  workers: int = 1, tolerance: float = TOLERANCE) -> bytes:
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
@@ -413,6 +445,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
     drawn (every BATCH distinct states) and tidied, and 1.0 at the end.
     `workers`: processes to draw with (drawing_workers(); 1: this one alone), same bytes.
+    `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
+    shown as that (render/reuse.py); 0: every distinct drawing written in full.
     """
     report = progress or (lambda fraction: None)
     width, height = float(face.width), float(face.height)
@@ -444,7 +478,9 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
-    elements = share({name: track.drawings for name, track in tracks.items()}, tidy, defs)
+    reused = _reused(tracks, writer, mapping, tolerance)
+    elements = share({name: [[] if number in reused[name] else drawing for number, drawing in enumerate(track.drawings)]
+                      for name, track in tracks.items()}, tidy, defs)
     classes = writer.classes()
     elements = {name: [merge_alike(drawing, classes, writer.extents) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)
@@ -461,7 +497,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     layer = element(root, "g", id="face")
     names = (short_id(FRAME_LETTER, number) for number in count())
     for number, (name, track) in enumerate(tracks.items(), 1):
-        _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes, names)
+        _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes, names,
+                     reused[name])
         report(SHARED_SHARE + (TRACKED_SHARE - SHARED_SHARE) * number / len(tracks))
     _roll((hair, layer), rolls, fps,
           f"{origin[0]:.6g} {origin[1]:.6g}")

@@ -1,0 +1,263 @@
+"""Drawings shown as an affine transform of an earlier drawing of their track (issue 16).
+
+Most distinct drawings of a track differ from an earlier one by little more than a small change
+of head pose (under a turn of a fraction of a degree a part's points move almost affinely) or an
+unseen change of the mouth mix. Such a drawing is written as `<use href="#fM"
+transform="matrix(a b c d e f)">` of the earlier one (render/animation.py `_track_group`).
+
+A drawing can be reused when it has the earlier drawing's *skeleton* (the same elements,
+attributes and path commands; its numbers taken out) and a least-squares affine maps the earlier
+drawing's points onto its own, every point within TOLERANCE px once the matrix is rounded as
+written. The points are those of the parts as render/svg.py's face_parts drew them (tenths of a
+pixel), before the compactor rounds them to whole pixels: what is shown is then the written form
+of a drawing within TOLERANCE of the exact one (comparing the whole-pixel forms, the rounding of
+both, up to 0.7 px each, would hide every match). The points are those a transform moves: every path point and control
+point, eight points on each circle or ellipse (the axes' ends and the diagonals between: a
+circle turned into an ellipse by shear or unequal scale is compared along its whole outline,
+the differences being first-order sines of the angle, at most 1.08 times the largest of eight
+samples), the points of the hoisted clip paths a drawing refers to (they are drawn in its user
+space, so they move with it). A stroke scales with the transform: half the widest stroke times
+the largest change of scale is added to the error. Gradients are in the shapes' bounding boxes
+(render/svg.py's face_defs) and move with them. A drawing holding what this does not read (a
+transform of its own, arcs, other shapes) is always written.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from cartoonface.render.numbers import decimal_text
+
+# Largest distance (px) between a point of the earlier drawing as drawn, moved by the matrix as
+# written, and the same point of the drawing it stands for (0.35 / 0.5 / 0.7 measured:
+# docs/BENCHMARKS.md, "Reused drawings").
+TOLERANCE = 0.5
+# A drawing is compared with the last CANDIDATES drawings of its skeleton before it, the nearest in
+# time first (pose changes slowly), and shown as a transform of the first written one that fits.
+CANDIDATES = 16
+# The matrix as written: a..d to 4 decimals (1e-4 of 400 px is 0.04 px), e and f to 1 (0.05 px).
+LINEAR_DECIMALS = 4
+SHIFT_DECIMALS = 1
+# The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
+# dozen points is about as good as on all of them, and all pairs of a track fit in one go); the
+# error is measured on them and, for a pair within the tolerance there, on all the points.
+FIT_POINTS = 24
+_DIAGONAL = np.sqrt(0.5)
+_ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1), (_DIAGONAL, _DIAGONAL), (_DIAGONAL, -_DIAGONAL),
+                     (-_DIAGONAL, _DIAGONAL), (-_DIAGONAL, -_DIAGONAL)])  # eight points on a unit circle
+_TAG = re.compile(r"<(\w+)")
+_READ = frozenset(("path", "circle", "ellipse", "g", "clipPath"))  # the elements whose geometry shape_of reads
+_GEOMETRY = re.compile(r' (d|cx|cy|r|rx|ry)="([^"]*)"')  # the attributes whose numbers are points
+_PAIRS = re.compile(r"[MLCSQTZ\d\s.,-]*")  # path data of absolute commands taking point pairs
+_STROKE = re.compile(r' stroke-width="([\d.]+)"')
+_LETTERS_TO_SPACES = str.maketrans({**{c: " " for c in "MLCSQTZHVAmlcsqtzhva,\x01"}})
+_NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skeleton
+
+
+class _Values(dict[str, float]):
+    """Number texts and their values, each text converted once (coordinates in tenths of a pixel
+    repeat: a few thousand texts for a million numbers)."""
+
+    def __missing__(self, text: str) -> float:
+        value = self[text] = float(text)
+        return value
+
+
+_VALUES = _Values()
+
+
+@dataclass(frozen=True)
+class Shape:
+    """What a transform moves in a drawing (or one of its parts): `skeleton` (equal for drawings
+    with the same elements, attributes and path commands), `points` (N, 2) px, and `stroke`,
+    the widest stroke width (px) in it."""
+
+    skeleton: str
+    points: np.ndarray
+    stroke: float
+
+
+@dataclass(frozen=True)
+class Reuse:
+    """Drawing `source` (a written one of the same track) transformed by `matrix` (the SVG text
+    "a b c d e f") stands for the drawing; `error` is the largest distance (px) of a point."""
+
+    source: int
+    matrix: str
+    error: float
+
+
+def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> np.ndarray | None:
+    """The linear map (2P, V) from the V geometry numbers of a part (attributes `names` with
+    `values`, in order; `rest` the text around them) to its P points, x and y interleaved: a path's
+    numbers in pairs (absolute commands of point pairs: face_parts' M, L, C, Z), eight points on
+    each circle or ellipse. None for a part with other path data, elements or a transform."""
+    if not set(_TAG.findall(rest)) <= _READ or " transform=" in rest:
+        return None
+    rows: list[np.ndarray] = []
+    numbers = [len(value.translate(_LETTERS_TO_SPACES).split()) for value in values]
+    width = sum(numbers)
+    column = 0
+    circle: dict[str, int] = {}
+
+    def close() -> None:  # the circle or ellipse whose attributes `circle` holds (their columns)
+        radii = (circle.get("r", circle.get("rx")), circle.get("r", circle.get("ry")))
+        for unit in _ELLIPSE if circle else ():
+            for centre, radius, step in zip((circle.get("cx"), circle.get("cy")), radii, unit, strict=True):
+                row = np.zeros(width)
+                if centre is not None:
+                    row[centre] = 1
+                if radius is not None:
+                    row[radius] += step
+                rows.append(row)
+        circle.clear()
+
+    for name, value, count in zip(names, values, numbers, strict=True):
+        if name == "d":
+            close()
+            if not _PAIRS.fullmatch(value) or count % 2:
+                return None
+            rows.extend(np.eye(1, width, column + index).ravel() for index in range(count))
+        else:
+            if name in circle:
+                close()
+            circle[name] = column
+        column += count
+    close()
+    return np.array(rows).reshape(-1, width) if rows else np.zeros((0, width))
+
+
+def shape_of(texts: Sequence[str], layouts: dict[str, np.ndarray | None]) -> Shape | None:
+    """The Shape of a part as render/svg.py's face_parts drew it: `texts`, its element and the
+    definitions (clip paths) it refers to, coordinates in tenths of a pixel. None when it holds an
+    element or attribute this does not read (a transform, an arc, a rect, ...). `layouts` caches
+    _layout by skeleton."""
+    pieces = _GEOMETRY.split("".join(texts))
+    names, values = pieces[1::3], pieces[2::3]
+    joined_values = "\x01".join(values)
+    rest = "\x02".join(pieces[0::3])
+    skeleton = f"{rest}\x03{'|'.join(names)}\x03{joined_values.translate(_NUMBER_CHARACTERS)}"
+    if skeleton not in layouts:
+        layouts[skeleton] = _layout(names, values, rest)
+    layout = layouts[skeleton]
+    if layout is None:
+        return None
+    tokens = joined_values.translate(_LETTERS_TO_SPACES).split()
+    flat = np.fromiter(map(_VALUES.__getitem__, tokens), float, len(tokens))
+    widest = max(map(float, _STROKE.findall(rest)), default=0.0)
+    return Shape(skeleton, (layout @ flat).reshape(-1, 2), widest)
+
+
+def joined(shapes: Sequence[Shape | None]) -> Shape | None:
+    """The Shape of a drawing made of parts of `shapes` (None if any is)."""
+    if any(shape is None for shape in shapes):
+        return None
+    present = [shape for shape in shapes if shape is not None]
+    return Shape("|".join(s.skeleton for s in present), np.concatenate([s.points for s in present]),
+                 max((s.stroke for s in present), default=0.0))
+
+
+def _inverses(points: np.ndarray) -> np.ndarray:
+    """The pseudo-inverses (M, 3, N) of `points` (M, N, 2) with a column of ones (by the normal
+    equations: 3 unknowns): times a target's points (N, 2), the least-squares affine (3, 2)
+    mapping the points onto them."""
+    design = np.concatenate([points, np.ones((*points.shape[:2], 1))], axis=2)
+    transposed = np.transpose(design, (0, 2, 1))
+    return np.linalg.pinv(transposed @ design) @ transposed
+
+
+def _scale_change(linear: np.ndarray) -> np.ndarray:
+    """The largest distance from 1 of the singular values of each 2x2 of `linear` (M, 2, 2)."""
+    squares = np.sum(linear ** 2, axis=(1, 2))
+    determinant = linear[:, 0, 0] * linear[:, 1, 1] - linear[:, 0, 1] * linear[:, 1, 0]
+    root = np.sqrt(np.maximum(squares ** 2 - 4 * determinant ** 2, 0))
+    return np.maximum(np.abs(np.sqrt((squares + root) / 2) - 1), np.abs(np.sqrt(np.maximum(squares - root, 0) / 2) - 1))
+
+
+def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The least-squares affines (M, 2, 3) mapping each of `sources` (M, F, 2; `inverses` their
+    _inverses) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS); the
+    largest change of scale of each (M,); and the largest distance (M,) px of a mapped source point
+    from its target."""
+    matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
+    matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
+    matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
+    return matrices, _scale_change(matrices[:, :, :2]), np.max(_distances(sources, matrices, targets), axis=1)
+
+
+def _error(source: Shape, matrix: np.ndarray, target: Shape, scale: float) -> float:
+    """The largest distance (px) of `source`'s points mapped by `matrix` (2, 3) from `target`'s
+    plus half the widest stroke times `scale`, the matrix's largest change of scale: within it,
+    every edge of the transformed drawing lies near the target's."""
+    moved = source.points @ matrix[:, :2].T + matrix[:, 2]
+    return float(np.sqrt(np.max(np.sum((moved - target.points) ** 2, axis=1))) + scale * max(source.stroke, target.stroke) / 2)
+
+
+def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The distances (M, N) px of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from `targets` (M, N, 2)."""
+    x, y = sources[..., 0], sources[..., 1]
+    a, c, e, b, d, f = (matrices[:, row, column, None] for row in (0, 1) for column in (0, 1, 2))
+    return np.hypot(a * x + c * y + e - targets[..., 0], b * x + d * y + f - targets[..., 1])
+
+
+def matrix_text(matrix: np.ndarray) -> str:
+    """`matrix` (2, 3) as the numbers of SVG's matrix(a b c d e f), short: "1 .0012 -.0012 1 .3 -1.2"."""
+    (a, c, e), (b, d, f) = matrix.tolist()
+    texts = [*(decimal_text(v, LINEAR_DECIMALS) for v in (a, b, c, d)), *(decimal_text(v, SHIFT_DECIMALS) for v in (e, f))]
+    return " ".join("0" if text == "-0" else text.replace("0.", ".", 1) if text[:2] in ("0.", "-0") else text
+                    for text in texts)
+
+
+def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair of a drawing and one of the last `candidates` drawings of its skeleton before it
+    (`skeletons` in order): the later's and the earlier's index, and how many drawings of the
+    skeleton lie back from one to the other (1: the one just before)."""
+    groups: dict[str, list[int]] = {}
+    for index, skeleton in enumerate(skeletons):
+        groups.setdefault(skeleton, []).append(index)
+    later, earlier, lags = [], [], []
+    for members in groups.values():
+        indices = np.array(members)
+        for lag in range(1, min(candidates, len(members) - 1) + 1):
+            later.append(indices[lag:])
+            earlier.append(indices[:-lag])
+            lags.append(np.full(len(members) - lag, lag))
+    if not later:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    return np.concatenate(later), np.concatenate(earlier), np.concatenate(lags)
+
+
+def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
+         candidates: int = CANDIDATES) -> dict[int, Reuse]:
+    """For the drawings of one track (`shapes`, in order of first use), the ones that can be shown
+    as a transform of an earlier written drawing: drawing number -> Reuse. Each drawing is fitted
+    (all pairs at once, on FIT_POINTS points of each) to the last `candidates` drawings of its
+    skeleton before it; the nearest in time that is written (not itself reused) and within
+    `tolerance` px on all its points is taken."""
+    numbers = [number for number, shape in enumerate(shapes) if shape is not None and len(shape.points) >= 3]
+    group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
+    later, earlier, lags = _pairs([shape.skeleton for shape in group], candidates)
+    if not len(later):
+        return {}
+    spread: dict[int, np.ndarray] = {}  # FIT_POINTS indices spread over N points, by N
+    samples = np.stack([shape.points[spread.get(len(shape.points)) if len(shape.points) in spread else
+                                     spread.setdefault(len(shape.points), np.linspace(0, len(shape.points) - 1,
+                                                                                      FIT_POINTS).round().astype(int))]
+                        for shape in group]).astype(np.float32)  # (D, FIT_POINTS, 2); single precision: 1e-4 px
+    strokes = np.array([shape.stroke for shape in group])
+    matrices, scales, sampled = fit(samples[earlier], _inverses(samples)[earlier], samples[later])
+    near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
+    written = np.ones(len(group), dtype=bool)
+    found: dict[int, Reuse] = {}
+    for pair in near[np.lexsort((lags[near], later[near]))].tolist():  # by drawing, the nearest candidate first
+        target, source = int(later[pair]), int(earlier[pair])
+        if written[target] and written[source]:
+            within = _error(group[source], matrices[pair], group[target], float(scales[pair]))
+            if within <= tolerance:
+                found[numbers[target]] = Reuse(numbers[source], matrix_text(matrices[pair]), within)
+                written[target] = False
+    return found

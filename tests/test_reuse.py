@@ -1,0 +1,156 @@
+"""Drawings shown as an affine transform of an earlier drawing of their track (render/reuse.py):
+the transform found puts every point within the tolerance, what is not a transform is written,
+the document's references resolve and the frames look as when every drawing is written."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+import pytest
+from lxml import etree
+from PIL import Image
+
+from cartoonface.face.lift import lift
+from cartoonface.face.model import load_face
+from cartoonface.face.pose import pose_face
+from cartoonface.face.state import FaceState, Pose
+from cartoonface.render.animation import MOUTH_TRACK, animation_svg
+from cartoonface.render.png import svg_to_png
+from cartoonface.render.reuse import TOLERANCE, Shape, find, shape_of
+from cartoonface.render.svg import face_parts
+from tests.stills import frozen
+
+ROOT = Path(__file__).resolve().parent.parent
+NS = {"s": "http://www.w3.org/2000/svg"}
+S = "{http://www.w3.org/2000/svg}"
+FPS = 30
+
+
+@pytest.fixture(scope="module")
+def face():
+    return load_face(ROOT / "samples" / "faces" / "female.json")
+
+
+def nodding(count: int) -> list[FaceState]:
+    """`count` frames of a head turning and nodding slowly (a fraction of a degree a frame) while it
+    talks and glances: drawings that differ by small pose changes, and mouths that change."""
+    mouths = "amfoeiu"
+    return [FaceState(pose=Pose(turn=6 * np.sin(i / 9), tilt=3 * np.sin(i / 13), roll=2 * np.sin(i / 11)),
+                      gaze_h=4 * np.sin(i / 5), mouth=((mouths[i // 4 % len(mouths)], 1.0),))
+            for i in range(count)]
+
+
+@pytest.fixture(scope="module")
+def documents(face):
+    """The animation of `nodding` with every drawing written (tolerance 0) and with reuse."""
+    states = nodding(90)
+    return animation_svg(face, states, FPS, tolerance=0), animation_svg(face, states, FPS)
+
+
+def part_shape(face, state: FaceState, name: str) -> Shape:
+    parts = {part.name: part for part in face_parts(face, pose_face(lift(face), state), "u")}
+    shape = shape_of((parts[name].text, *parts[name].clips), {})
+    assert shape is not None and len(shape.points) > 10
+    return shape
+
+
+def apply(matrix: str, points: np.ndarray) -> np.ndarray:
+    """SVG's matrix(a b c d e f) applied to `points` (N, 2)."""
+    a, b, c, d, e, f = (float(v) for v in matrix.split())
+    return np.column_stack([a * points[:, 0] + c * points[:, 1] + e, b * points[:, 0] + d * points[:, 1] + f])
+
+
+def moved(shape: Shape, linear: np.ndarray, shift: tuple[float, float], noise: float = 0.0) -> Shape:
+    rng = np.random.default_rng(7)
+    points = shape.points @ linear.T + shift + rng.uniform(-noise, noise, shape.points.shape)
+    return Shape(shape.skeleton, points, shape.stroke)
+
+
+def turn(degrees: float, scale: float = 1.0) -> np.ndarray:
+    angle = np.radians(degrees)
+    return scale * np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+
+
+@pytest.mark.parametrize("linear, shift, noise", [
+    (turn(0.4), (1.3, -0.6), 0.0),
+    (turn(-0.3, 1.01), (-2.0, 0.4), 0.15),
+    (np.array([[1.0, 0.004], [0.0, 0.995]]), (0.0, 0.0), 0.1),  # a small shear, unequal scale
+    (np.array([[-1.0, 0.0], [0.0, 1.0]]), (400.0, 0.0), 0.0),  # the mirror image: an affine too
+])
+def test_a_transformed_drawing_is_shown_by_a_transform_that_puts_every_point_within_the_tolerance(
+        face, linear, shift, noise):
+    source = part_shape(face, FaceState(gaze_h=3.0), "eye-l")
+    target = moved(source, linear, shift, noise)
+    found = find([source, target])
+    assert set(found) == {1} and found[1].source == 0
+    distances = np.hypot(*(apply(found[1].matrix, source.points) - target.points).T)
+    assert distances.max() <= TOLERANCE
+    assert found[1].error >= distances.max() - 1e-9, "the error told covers every point"
+
+
+def test_what_is_not_a_transform_of_an_earlier_drawing_is_written(face):
+    source = part_shape(face, FaceState(mouth=(("a", 1.0),)), "mouth")
+    bent = source.points.copy()
+    bent[len(bent) // 2] += (1.5, 0.0)  # one point off by more than the tolerance
+    blended = part_shape(face, FaceState(mouth=(("a", 0.5), ("e", 0.5))), "mouth")
+    assert find([source, Shape(source.skeleton, bent, source.stroke)]) == {}
+    assert blended.skeleton == source.skeleton, "the same elements, other numbers"
+    assert find([source, blended]) == {}, "a mouth half way to another shape is not a transform of it"
+    # a scale that moves no point far from the centre still thickens the strokes: 9 px lid shadow
+    eye = part_shape(face, FaceState(), "eye-l")
+    centre = eye.points.mean(axis=0)
+    grown = Shape(eye.skeleton, (eye.points - centre) * 1.2 + centre, eye.stroke)
+    assert eye.stroke >= 2 and find([eye, grown], tolerance=1000.0)[1].error >= 0.2 * eye.stroke / 2
+
+
+def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_reference_resolves(documents):
+    exact, reused = (etree.fromstring(data) for data in documents)
+    assert len(documents[1]) < 0.9 * len(documents[0]), "reuse makes the document smaller"
+    ids = {node.get("id") for node in reused.iter() if node.get("id")}
+    for node in reused.iter():
+        for name, value in node.attrib.items():
+            if name == "href" or value.startswith("url(#"):
+                assert value.removeprefix("url(").removesuffix(")").removeprefix("#") in ids, value
+    exact_drawings = {node.get("id"): node for node in exact.iter() if node.get("id")}
+    count = 0
+    for track in reused.iterfind(".//s:g[@data-part]", NS):
+        defs = track.find("s:defs", NS)
+        own = {node.get("id"): node for node in defs} if defs is not None else {}
+        assert set(own) <= set(exact_drawings), "the same drawings, by the same ids"
+        for node in own.values():
+            if node.tag == f"{S}use" and node.get("transform", "").startswith("matrix("):
+                count += 1
+                source = own[node.get("href")[1:]]
+                assert source.tag != f"{S}use" or not source.get("transform"), "no chains of reuse"
+                assert len(node.get("transform")[7:-1].split()) == 6
+                if track.get("data-part") == MOUTH_TRACK:
+                    assert node.get("data-shape") == exact_drawings[node.get("id")].get("data-shape")
+    assert count > 0
+
+
+def pixels(data: bytes) -> np.ndarray:
+    with Image.open(io.BytesIO(svg_to_png(data))) as image:
+        return np.asarray(image.convert("RGB"), dtype=np.int16)
+
+
+def outside(a: np.ndarray, b: np.ndarray, slack: int = 16) -> np.ndarray:
+    """Pixels of `b` outside the range `a` takes in their 3x3 neighbourhood by more than `slack`
+    levels: where an edge of `b` lies more than a pixel from `a`'s (or a colour changed)."""
+    pad = np.pad(a, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    rows, columns = a.shape[:2]
+    near = np.stack([pad[1 + dy:1 + dy + rows, 1 + dx:1 + dx + columns] for dy in (-1, 0, 1) for dx in (-1, 0, 1)])
+    return np.any((b < near.min(axis=0) - slack) | (b > near.max(axis=0) + slack), axis=2)
+
+
+@pytest.mark.parametrize("frame", [5, 23, 41, 60, 88])
+def test_a_frame_with_reused_drawings_looks_as_with_every_drawing_written(documents, frame):
+    exact, reused = (pixels(frozen(data, frame, FPS)) for data in documents)
+    difference = np.abs(exact - reused).max(axis=2)
+    # edges move by a fraction of a pixel (the tolerance beside the whole-pixel rounding of both
+    # drawings): a thin antialiased rim, under a level on average over the picture (from one frame
+    # to the next of this nodding head the exact pictures differ by 1-5 levels on average)
+    assert difference.mean() < 1.0
+    moved_far = outside(exact, reused) | outside(reused, exact)
+    assert moved_far.mean() < 1e-3, f"{moved_far.sum()} pixels farther than a pixel from the exact picture's"
