@@ -107,8 +107,13 @@ STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders sh
 # the centre by 0.04 px.
 ROLL_DECIMALS = 2
 # animation_svg draws the distinct states this many at a time (array operations over all of them),
-# telling its progress after each batch (a state takes ~0.3 ms to draw: a report every ~0.1 s).
+# telling its progress after each batch (a state takes ~0.3 ms to draw: a report every ~0.1 s);
+# fewer states are drawn in at least BATCHES batches (a short recording's drawing is most of its
+# job: three batches of the sample story made a progress bar stand still for a quarter of it), never
+# under MIN_BATCH. The batch's size changes no byte (tests/test_batches.py).
 BATCH = 256
+BATCHES = 8
+MIN_BATCH = 32
 # animation_svg draws in two processes (drawing_workers) from this many distinct states (~1 ms
 # each to draw; starting the process and sending the drawings back take ~0.1 s).
 POOL_STATES = 400
@@ -372,7 +377,7 @@ def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
 
 def _draw(face: FaceModel, states: Sequence[FaceState],
           progress: Callable[[float], None] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
-    """Draw each of `states` (render/svg.py's all_face_parts, uid UID, BATCH states at a time):
+    """Draw each of `states` (render/svg.py's all_face_parts, uid UID, up to BATCH states at a time):
     its key and its parts. The head's roll is not drawn (the layers turn): the face is posed with
     it and turned back by the roll as written (ROLL_DECIMALS; the two turns cancel exactly). The
     drawing depends on the state without roll and on the pupils (written to 0.1 px), the key:
@@ -383,10 +388,11 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
     origin = rig(lifted).origin
     known: dict[Part, Part] = {}
     drawings = []
-    for start in range(0, len(states), BATCH):
+    size = min(BATCH, max(MIN_BATCH, len(states) // BATCHES))
+    for start in range(0, len(states), size):
         if progress is not None:
             progress(start / len(states))
-        batch = states[start:start + BATCH]
+        batch = states[start:start + size]
         rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS for state in batch]
         posed = unroll_faces(pose_faces(lifted, batch), rolls, origin)
         pupils = np.round(posed.pupils, 1).reshape(len(batch), 4).tolist()
