@@ -151,13 +151,11 @@ def clock(ms: int) -> str:
 
 def runs(keys: Sequence[int]) -> tuple[Run, ...]:
     """Merge consecutive equal drawing numbers `keys` (one per frame) into Runs, in time order."""
-    merged: list[Run] = []
-    for index, key in enumerate(keys):
-        if merged and merged[-1].drawing == key:
-            merged[-1] = Run(key, merged[-1].first, merged[-1].count + 1)
-        else:
-            merged.append(Run(key, index, 1))
-    return tuple(merged)
+    if not len(keys):
+        return ()
+    array = np.asarray(keys)
+    firsts = np.flatnonzero(np.concatenate(([True], array[1:] != array[:-1]))).tolist()
+    return tuple(Run(keys[first], first, end - first) for first, end in zip(firsts, [*firsts[1:], len(keys)]))
 
 
 def track_of(name: str) -> str:
@@ -433,13 +431,14 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
     # the neck's lean in each frame, in steps of LEAN_DECIMALS: it follows the roll as written
     leans = [round(lean(figure, origin, roll / 10 ** ROLL_DECIMALS) * 10 ** LEAN_DECIMALS) for roll in rolls]
-    distinct = list(dict.fromkeys(states))
+    numbers: dict[FaceState, int] = {}
+    shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
+    distinct = list(numbers)
     drawings = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
     # states whose drawings have one key share the first one's drawing
     drawn: dict[DrawingKey, tuple[int, ...]] = {}
-    by_state = {state: drawn.get(key) or drawn.setdefault(key, writer.collect(parts))
-                for state, (key, parts) in zip(distinct, drawings, strict=True)}
-    frames = [(state, by_state[state]) for state in states]
+    raw = [drawn.get(key) or drawn.setdefault(key, writer.collect(parts)) for key, parts in drawings]
+    frames = [(distinct[number], raw[number]) for number in shown]
     mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied))
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)

@@ -60,6 +60,7 @@ _ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "z": 0
 # apart beyond half their stroke width: antialiasing reaches 1 px.
 MERGE_GAP = 1.0
 _PATH_DATA = re.compile(r' d="([^"]*)"')
+_CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's text (Writer._short_classes)
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
 # the attributes it takes out (path data and positions), a path data's token, and the
 # placeholder positions (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
@@ -123,10 +124,9 @@ class Writer:
                                                 for raw in (part.element, *part.definitions)
                                                 for d in _PATH_DATA.findall(raw))
         self.raw_ids.clear()
-        templates: dict[str, tuple[str, int, bool]] = {}
+        templates: dict[str, tuple[str, int]] = {}
         tidy_ids: dict[str, int] = {}
-        texts: list[str] = []
-        counts: list[int] = []
+        distinct: list[tuple[str, list[str]]] = []  # skeleton and values of each distinct tidy drawing
         mapping = []
         for index, part in enumerate(self.raw):
             if progress is not None and index % PROGRESS_PARTS == 0:
@@ -135,39 +135,44 @@ class Writer:
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
-            form, count, local = template
-            text = form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
+            text = template[0].format(*values, k=LOCAL)  # alike drawings alike, with the local ids
             number = tidy_ids.get(text)
             if number is None:
-                number = tidy_ids[text] = len(texts)
-                # the local definitions' ids made the drawing's own: "k" and its number
-                texts.append(form.format(*values, k=short_id("k", number)) if local else text)
-                counts.append(count)
+                number = tidy_ids[text] = len(distinct)
+                distinct.append((skeleton, values))
             mapping.append(number)
+        forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
+        # the local definitions' ids made the drawing's own: "k" and its number
+        texts = [forms[skeleton].format(*values, k=short_id("k", number))
+                 for number, (skeleton, values) in enumerate(distinct)]
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        tidy = [[next(nodes) for _ in range(count)] for count in counts]
+        tidy = [[next(nodes) for _ in range(templates[skeleton][1])] for skeleton, _ in distinct]
         self.definitions = _hoist(tidy)
-        self._short_classes(tidy)
         return mapping, tidy
 
-    def _short_classes(self, tidy: list[list[etree._Element]]) -> None:
-        """Rename the style classes of the `tidy` drawings (each written once in the document) by
-        how often they are used: the most used ones get one letter ("a".."z", "A".."Z")."""
-        nodes = [node for elements in tidy for top in elements for node in top.iter() if node.get("class")]
-        counts = Counter(node.get("class") for node in nodes)
+    def _short_classes(self, templates: dict[str, tuple[str, int]], uses: Counter[str]) -> dict[str, str]:
+        """Rename the style classes by how often the distinct tidy drawings use them (`uses`: how
+        many are made from each skeleton of `templates`, in the order they come): the most used
+        ones get one letter ("a".."z", "A".."Z"). Returns each skeleton's format string with the
+        new names. (The hoisted definitions carry no class, so counting on the templates counts
+        what the document holds.)"""
+        counts: Counter[str] = Counter()
+        for skeleton, drawings in uses.items():  # first uses in order: ties keep that order
+            for label in _CLASS.findall(templates[skeleton][0]):
+                counts[label] += drawings
         names = {label: _letters(rank) for rank, (label, _) in enumerate(counts.most_common())}
-        for node in nodes:
-            node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
+        return {skeleton: _CLASS.sub(lambda m: f' class="{names[m.group(1)]}"', templates[skeleton][0])
+                for skeleton in uses}
 
-    def _template(self, skeleton: str) -> tuple[str, int, bool]:
+    def _template(self, skeleton: str) -> tuple[str, int]:
         """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
         positions SENTINEL + j) as a format string of its values (compact path data, then rounded
         positions) and of the field `k` its local definitions' ids start with (their ids "c0",
-        "c1", "c0_" ... become k, k-1, k_ ...), its number of elements and whether it has local
-        definitions. Style classes are made here, so in the order the parts come."""
+        "c1", "c0_" ... become k, k-1, k_ ...) and its number of elements. Style classes are made
+        here, so in the order the parts come."""
         distinct = len(set(_TOKEN.findall(skeleton)))
         elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
         holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
@@ -176,7 +181,7 @@ class Writer:
         inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
         form = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
         own = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), form)
-        return own, len(elements), own != form
+        return own, len(elements)
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact

@@ -23,8 +23,8 @@ left as they are.
 from __future__ import annotations
 
 import functools
-import math
 import re
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -37,7 +37,7 @@ _ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "Z": 0}
 _LETTERS = "".join(chr(c) for c in range(65, 91)) + "".join(chr(c) for c in range(97, 123))
 _ONLY_LETTERS = {ord(c): None for c in "0123456789.,+- \t\n\r"}
 _LETTERS_TO_SPACES = {ord(c): " " for c in _LETTERS + ","}
-_SEPARATOR = "|"  # between the paths _plain_numbers splits together
+_SEPARATOR = "|"  # between the paths _plain_numbers reads together
 
 
 @dataclass(frozen=True)
@@ -214,20 +214,18 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     return ["".join(row) + plan.tail for row in pieces.tolist()]
 
 
-class _Values(dict[str, float]):
-    """Number texts and their values, each text converted once (float()); _SEPARATOR is nan."""
-
-    def __missing__(self, text: str) -> float:
-        value = self[text] = math.nan if text == _SEPARATOR else float(text)
-        return value
-
-
-def _plain_numbers(paths: list[str], values: _Values) -> np.ndarray | None:
+def _plain_numbers(paths: list[str]) -> np.ndarray | None:
     """The numbers of `paths` (path data of plain numbers: letters, commas, spaces and signs
-    between them) as an (n, k) float array, k each; None when they hold different counts. One
-    split of all of them and a look-up per number text (which repeat: coordinates in tenths)."""
-    tokens = f" {_SEPARATOR} ".join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").split()
-    flat = np.fromiter(map(values.__getitem__, tokens), float, len(tokens))
+    between them) as an (n, k) float array, k each; None when they hold different counts or a
+    text that is no number. All of them read by one np.fromstring (C's strtod: the values
+    float() gives), "nan" between the paths."""
+    text = _SEPARATOR.join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").replace(_SEPARATOR, " nan ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)  # numpy's word for text it cannot read
+        try:
+            flat = np.fromstring(text, dtype=float, sep=" ")
+        except DeprecationWarning:
+            return None
     ends = np.flatnonzero(np.isnan(flat))
     counts = np.diff(np.concatenate(([-1], ends, [len(flat)]))) - 1
     if np.any(counts != counts[0]):
@@ -254,14 +252,13 @@ def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Ext
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
     compact: dict[str, str] = {}
     extents: dict[str, Extent] = {}
-    values = _Values()
     for skeleton, members in groups.items():
         members.sort()
         if "#" in skeleton:
             texts = [_NUMBER.findall(d) for d in members]
             numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
         else:
-            numbers = _plain_numbers(members, values)
+            numbers = _plain_numbers(members)
         commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
         if commands is None or numbers is None:
             compact.update((d, d) for d in members)
