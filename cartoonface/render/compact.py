@@ -23,13 +23,13 @@ from __future__ import annotations
 import html
 import re
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, parse_elements
-from cartoonface.render.pathdata import Extent, compact_extents
+from cartoonface.render.pathdata import Compacted, Extent, compacted
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -113,16 +113,17 @@ class Writer:
             numbers.append(number)
         return tuple(numbers)
 
-    def finish(self, progress: Callable[[float], None] | None = None) -> tuple[list[int], list[list[etree._Element]]]:
+    def finish(self, progress: Callable[[float], None] | None = None,
+               done: Compacted | None = None) -> tuple[list[int], list[list[etree._Element]]]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
         and the tidy drawings (each a list of elements). `progress(fraction)`, when given, is
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. A definition that
         several tidy drawings hold alike (an eye's clip path under different gazes) is taken out
         of them into `self.definitions` (ids "v0", "v1", ...: for the document's `<defs>`), which
-        they refer to."""
-        compact, self.extents = compact_extents(_text(d) for part in self.raw
-                                                for raw in (part.element, *part.definitions)
-                                                for d in _PATH_DATA.findall(raw))
+        they refer to. `done`: path data compacted already (pathdata.compacted of the drawing
+        processes' parts, pathdata.merged), which may hold more than the parts collected."""
+        done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
+        compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
         templates: dict[str, tuple[str, int]] = {}
         tidy_ids: dict[str, int] = {}
@@ -240,6 +241,11 @@ class Writer:
     def style_sheet(self) -> str:
         """The CSS of the style classes, one rule each."""
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
+
+
+def part_paths(parts: Iterable[Sequence[str]]) -> Iterator[str]:
+    """The path data of `parts` (each the texts of a part's element and its definitions), as values."""
+    return (_text(d) for texts in parts for text in texts for d in _PATH_DATA.findall(text))
 
 
 def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, list[str]]:

@@ -245,34 +245,93 @@ def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Ext
     """compact_paths of `paths`, and the extent of each compact path data written (a path left as
     it is has none): the box (x0, y0, x1, y1) of every point and control point it writes, read
     off the rounded numbers (render/compact.py's merge_alike would otherwise parse the text)."""
+    done = compacted(paths)
+    return done.compact, done.extents
+
+
+@dataclass(frozen=True)
+class Compacted:
+    """compact_extents' dicts `compact` and `extents` for some paths, and `firsts`: the first (in
+    sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
+    all of them (_kept). Paths compacted in two processes are put together by `merged`."""
+
+    compact: dict[str, str]
+    extents: dict[str, Extent]
+    firsts: dict[str, str]
+
+
+def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
+    """compact_extents of `paths` as a Compacted, going on from `done` (a Compacted of other paths,
+    or of some of these and others): its compact forms are taken where its first path data of a
+    skeleton is the first of these paths too (so its points are the ones kept), the others are
+    compacted here."""
+    known = Compacted(dict(done.compact), dict(done.extents), {}) if done else Compacted({}, {}, {})
+    firsts = done.firsts if done else {}
+    for skeleton, members in _groups(set(paths)).items():
+        first = firsts.get(skeleton)
+        new = [d for d in members if d not in known.compact]
+        if first is None or first in members and (not new or first < min(new)):
+            if first is not None:
+                known.firsts[skeleton] = first
+            if new:  # compacted with the first, its kept points
+                _compact_group(skeleton, new if first is None else [first, *new], known)
+        else:
+            _compact_group(skeleton, members, known)
+    return known
+
+
+def merged(first: Compacted, second: Compacted) -> Compacted:
+    """The Compacted of the paths of `first` and `second` together, as compacted of all of them
+    gives it: where a skeleton's first path data differs, the paths of the side whose first comes
+    later are compacted again with the other's (its points kept)."""
+    done = Compacted({**first.compact, **second.compact}, {**first.extents, **second.extents},
+                     {**first.firsts, **second.firsts})
+    redo = [(skeleton, min(one, other), second if one < other else first)
+            for skeleton, one in first.firsts.items()
+            if (other := second.firsts.get(skeleton)) is not None and one != other]
+    later_groups: dict[int, dict[str, list[str]]] = {}
+    for skeleton, start, later in redo:
+        groups = later_groups.get(id(later))
+        if groups is None:
+            groups = later_groups[id(later)] = _groups(later.compact)
+        _compact_group(skeleton, [start, *groups[skeleton]], done)
+    return done
+
+
+def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
+    """The distinct `paths` by skeleton: the command letters when every number is plain (no
+    exponent), else the text with "#" for each number."""
     groups: dict[str, list[str]] = {}
-    for d in set(paths):
-        # Fast skeleton: the command letters, when every number is plain (no exponent).
+    for d in paths:
         letters = d.translate(_ONLY_LETTERS)
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
-    compact: dict[str, str] = {}
-    extents: dict[str, Extent] = {}
-    for skeleton, members in groups.items():
-        members.sort()
-        if "#" in skeleton:
-            texts = [_NUMBER.findall(d) for d in members]
-            numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
-        else:
-            numbers = _plain_numbers(members)
-        commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
-        if commands is None or numbers is None:
-            compact.update((d, d) for d in members)
-            continue
-        rounded = np.rint(numbers).astype(np.int64)
-        spans = _spans(commands)
-        kept = _kept(commands, spans, rounded[0])
-        smooth = _smooth(commands, spans, kept, rounded)
-        for pattern, rows in _alike_rows(smooth):
-            plan = _plan(commands, spans, kept, pattern)
-            written = _write(plan, rounded[rows])
-            compact.update(zip([members[i] for i in rows], written, strict=True))
-            extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
-    return compact, extents
+    return groups
+
+
+def _compact_group(skeleton: str, members: list[str], done: Compacted) -> None:
+    """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
+    the first one's points kept in all)."""
+    members.sort()
+    if "#" in skeleton:
+        texts = [_NUMBER.findall(d) for d in members]
+        numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
+    else:
+        numbers = _plain_numbers(members)
+    commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
+    if commands is None or numbers is None:
+        done.compact.update((d, d) for d in members)
+        return
+    if "L" in skeleton:
+        done.firsts[skeleton] = members[0]
+    rounded = np.rint(numbers).astype(np.int64)
+    spans = _spans(commands)
+    kept = _kept(commands, spans, rounded[0])
+    smooth = _smooth(commands, spans, kept, rounded)
+    for pattern, rows in _alike_rows(smooth):
+        plan = _plan(commands, spans, kept, pattern)
+        written = _write(plan, rounded[rows])
+        done.compact.update(zip([members[i] for i in rows], written, strict=True))
+        done.extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
 
 
 def _alike_rows(marks: np.ndarray) -> list[tuple[tuple[bool, ...], np.ndarray]]:
