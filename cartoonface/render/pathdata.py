@@ -266,17 +266,21 @@ def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
     skeleton is the first of these paths too (so its points are the ones kept), the others are
     compacted here."""
     known = Compacted(dict(done.compact), dict(done.extents), {}) if done else Compacted({}, {}, {})
+    distinct = set(paths)
+    new = _groups(d for d in distinct if d not in known.compact)
     firsts = done.firsts if done else {}
-    for skeleton, members in _groups(set(paths)).items():
-        first = firsts.get(skeleton)
-        new = [d for d in members if d not in known.compact]
-        if first is None or first in members and (not new or first < min(new)):
-            if first is not None:
-                known.firsts[skeleton] = first
-            if new:  # compacted with the first, its kept points
-                _compact_group(skeleton, new if first is None else [first, *new], known)
-        else:
-            _compact_group(skeleton, members, known)
+    # skeletons whose first path data is not among these, or comes after a new one: done again
+    stale = {skeleton for skeleton, first in firsts.items()
+             if first not in distinct or skeleton in new and min(new[skeleton]) < first}
+    every = _groups(distinct) if stale else {}
+    for skeleton, first in firsts.items():
+        if skeleton not in stale:
+            known.firsts[skeleton] = first
+        elif skeleton in every:
+            _compact_group(skeleton, every[skeleton], known)
+    for skeleton, members in new.items():
+        if skeleton not in stale:  # compacted with the first, whose points are kept
+            _compact_group(skeleton, [firsts[skeleton], *members] if skeleton in firsts else members, known)
     return known
 
 
