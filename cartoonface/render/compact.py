@@ -51,6 +51,8 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
 _ID = re.compile(rb' id="[^"]*"')  # an id attribute in serialized SVG (_content)
+_TAG = re.compile(r"<[^\s/>]+")  # an element's start tag up to its name
+_OWN_ID = re.compile(r'<[^>]*? id="([^"]*)"')  # the id in an element's start tag
 # Path data read by _extent: a command letter and its numbers.
 _COMMAND = re.compile(r"([MmLlHhVvCcSsQqTtZz])([^A-Za-z]*)")
 _UNREAD = re.compile(r"[^MmLlHhVvCcSsQqTtZzEe\d\s,.+-]")  # arcs, anything else _extent does not read
@@ -75,6 +77,17 @@ _LOCAL_ID = re.compile(r'(id="|url\(#|href="#)c(\d+)')
 LOCAL = "c"
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
+
+
+@dataclass(frozen=True)
+class _Template:
+    """A skeleton's tidy drawing as format strings (Writer._template): `form` the whole, `pieces`
+    the same cut into its top-level definitions (True) and runs of other elements (False), `count`
+    its top-level elements."""
+
+    form: str
+    pieces: tuple[tuple[str, bool], ...]
+    count: int
 
 
 @dataclass(frozen=True)
@@ -125,7 +138,7 @@ class Writer:
         done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
         compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
-        templates: dict[str, tuple[str, int]] = {}
+        templates: dict[str, _Template] = {}
         tidy_ids: dict[str, int] = {}
         distinct: list[tuple[str, list[str]]] = []  # skeleton and values of each distinct tidy drawing
         mapping = []
@@ -136,7 +149,7 @@ class Writer:
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
-            text = template[0].format(*values, k=LOCAL)  # alike drawings alike, with the local ids
+            text = template.form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
             number = tidy_ids.get(text)
             if number is None:
                 number = tidy_ids[text] = len(distinct)
@@ -144,45 +157,55 @@ class Writer:
             mapping.append(number)
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
         # the local definitions' ids made the drawing's own: "k" and its number
-        texts = [forms[skeleton].format(*values, k=short_id("k", number))
-                 for number, (skeleton, values) in enumerate(distinct)]
+        texts, lost, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
+                                                 for piece, definition in forms[skeleton]]
+                                                for number, (skeleton, values) in enumerate(distinct)])
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        tidy = [[next(nodes) for _ in range(templates[skeleton][1])] for skeleton, _ in distinct]
-        self.definitions = _hoist(tidy)
+        tidy = [[next(nodes) for _ in range(templates[skeleton].count - hoisted)]
+                for (skeleton, _), hoisted in zip(distinct, lost, strict=True)]
         return mapping, tidy
 
-    def _short_classes(self, templates: dict[str, tuple[str, int]], uses: Counter[str]) -> dict[str, str]:
+    def _short_classes(self, templates: dict[str, _Template],
+                       uses: Counter[str]) -> dict[str, tuple[tuple[str, bool], ...]]:
         """Rename the style classes by how often the distinct tidy drawings use them (`uses`: how
         many are made from each skeleton of `templates`, in the order they come): the most used
-        ones get one letter ("a".."z", "A".."Z"). Returns each skeleton's format string with the
-        new names. (The hoisted definitions carry no class, so counting on the templates counts
-        what the document holds.)"""
+        ones get one letter ("a".."z", "A".."Z"). Returns each skeleton's pieces (_Template's) with
+        the new names. (The definitions carry no class, so counting on the templates counts what
+        the document holds.)"""
         counts: Counter[str] = Counter()
         for skeleton, drawings in uses.items():  # first uses in order: ties keep that order
-            for label in _CLASS.findall(templates[skeleton][0]):
+            for label in _CLASS.findall(templates[skeleton].form):
                 counts[label] += drawings
         names = {label: _letters(rank) for rank, (label, _) in enumerate(counts.most_common())}
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
-        return {skeleton: _CLASS.sub(lambda m: f' class="{names[m.group(1)]}"', templates[skeleton][0])
+        return {skeleton: tuple((_CLASS.sub(lambda m: f' class="{names[m.group(1)]}"', piece), definition)
+                                for piece, definition in templates[skeleton].pieces)
                 for skeleton in uses}
 
-    def _template(self, skeleton: str) -> tuple[str, int]:
+    def _template(self, skeleton: str) -> _Template:
         """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
-        positions SENTINEL + j) as a format string of its values (compact path data, then rounded
+        positions SENTINEL + j) as format strings of its values (compact path data, then rounded
         positions) and of the field `k` its local definitions' ids start with (their ids "c0",
-        "c1", "c0_" ... become k, k-1, k_ ...) and its number of elements. Style classes are made
-        here, so in the order the parts come."""
+        "c1", "c0_" ... become k, k-1, k_ ...). Style classes are made here, so in the order the
+        parts come."""
         distinct = len(set(_TOKEN.findall(skeleton)))
         elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
         holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
         holder.extend(elements)
-        text = etree.tostring(holder, encoding="unicode")
-        inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
-        form = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
-        own = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), form)
-        return own, len(elements)
+        pieces: list[tuple[str, bool]] = []
+        for node in elements:  # each as it is written inside the holder (no namespace declaration)
+            text = etree.tostring(node, encoding="unicode").replace(f' xmlns="{SVG}"', "", 1)
+            text = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"',
+                              text.replace("{", "{{").replace("}", "}}"))
+            text = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), text)
+            definition = node.tag in DEFINITIONS
+            if pieces and not definition and not pieces[-1][1]:
+                pieces[-1] = (pieces[-1][0] + text, False)
+            else:
+                pieces.append((text, definition))
+        return _Template("".join(piece for piece, _ in pieces), tuple(pieces), len(elements))
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
@@ -289,23 +312,32 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
         elements[index] = use
 
 
-def _content(definition: etree._Element) -> bytes:
-    """`definition` serialized without the ids of its nodes: equal for definitions that define alike."""
-    return _ID.sub(b"", etree.tostring(definition))
+def _content(definition: str) -> bytes:
+    """The text of a `definition` as lxml serializes it on its own (the namespace declared) and
+    without the ids of its nodes: equal for definitions that define alike."""
+    name = _TAG.match(definition)
+    assert name is not None, definition
+    return _ID.sub(b"", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}'.encode())
 
 
-def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
-    """Take the definitions that two or more of the `tidy` drawings (own ids "k5", "k5_", "k5-1", ...)
-    hold alike out of them, in place, pointing their references at one shared copy; return the
-    shared copies, ids "v0", "v1", ... (a clip path's only path "v0_", for its `<use>`s)."""
-    keys = [[_content(node) if node.tag in DEFINITIONS else None for node in elements] for elements in tidy]
+def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int], list[etree._Element]]:
+    """Take the definitions that two or more of the tidy `drawings` (each its top-level definitions'
+    texts (True) and other elements' (False), own ids "k5", "k5_", "k5-1", ...) hold alike out of
+    them, pointing their references at one shared copy. Returns each drawing's text left, how many
+    definitions it lost, and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
+    for its `<use>`s)."""
+    keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
     counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
     names: dict[bytes, str] = {}
     shared: list[etree._Element] = []
-    for elements, drawing in zip(tidy, keys, strict=True):
+    texts: list[str] = []
+    lost: list[int] = []
+    for pieces, drawing in zip(drawings, keys, strict=True):
         local: dict[str, str] = {}
-        for node, key in zip(list(elements), drawing, strict=True):
+        kept = []
+        for (text, _), key in zip(pieces, drawing, strict=True):
             if key is None or counts[key] < 2:
+                kept.append(text)
                 continue
             name = names.get(key)
             if name is None:
@@ -315,17 +347,15 @@ def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
                 if len(copy) == 1:
                     copy[0].set("id", name + "_")
                 shared.append(copy)
-            local[node.get("id")] = name
-            elements.remove(node)
-        if local:
-            for top in elements:
-                for node in top.iter():
-                    for attribute, value in node.attrib.items():
-                        if value.startswith("url(#") and value[5:-1] in local:
-                            node.set(attribute, f"url(#{local[value[5:-1]]})")
-                        elif attribute == "href" and value.endswith("_") and value[1:-1] in local:
-                            node.set(attribute, f"#{local[value[1:-1]]}_")
-    return shared
+            own = _OWN_ID.match(text)
+            assert own is not None, text
+            local[own.group(1)] = name
+        joined = "".join(kept)
+        for old, new in local.items():  # references by url() and a clip path's path's <use>
+            joined = joined.replace(f'="url(#{old})"', f'="url(#{new})"').replace(f' href="#{old}_"', f' href="#{new}_"')
+        texts.append(joined)
+        lost.append(len(pieces) - len(kept))
+    return texts, lost, shared
 
 
 def _letters(number: int) -> str:
