@@ -476,6 +476,9 @@ def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]
     (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). The first path of a run is changed in place. A path data's extent is taken
     from `extents` (Writer.extents: read off its numbers) when it is there, else read (_extent)."""
+    labels = [node.get("class") for node in elements]
+    if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
+        return list(elements)  # only consecutive paths of one class join: none here (most drawings)
     known = extents or {}
     merged: list[etree._Element] = []
     boxes: list[Extent] = []
