@@ -14,8 +14,11 @@ browser to build (docs/BENCHMARKS.md, "Fewer elements").
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
 forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
-tidied as lxml elements and the others' values are filled into its text. The distinct tidy
-drawings are then parsed in one go.
+tidied as lxml elements and the others' values are filled into its text. The style classes
+are renamed and the clip paths several drawings hold alike taken out on those texts, and the
+distinct tidy drawings are then parsed in one go. When two processes draw (render/animation.py),
+each compacts its own half's path data (render/pathdata.py's compacted and merged) and finish
+goes on from that ("Finishing in parallel").
 """
 
 from __future__ import annotations

@@ -18,6 +18,12 @@ animation repeats a part in thousands of frames, so `compact_paths` rewrites the
 All paths with one command skeleton (the same commands, different numbers) are done
 together with numpy. Paths with other commands (H, V, S, T, A, relative ones) are
 left as they are.
+
+"On its first drawing" is the first path data of the skeleton in sorted order, so paths
+compacted in two processes (render/animation.py's drawing processes, `compacted`) are put
+together (`merged`, and `compacted` going on from a `done`) by comparing those firsts: where
+one side's first comes later, its paths of that skeleton are compacted again with the other's.
+The result is the one a single call over all the paths gives.
 """
 
 from __future__ import annotations
