@@ -23,7 +23,9 @@ left as they are.
 compacted in two processes (render/animation.py's drawing processes, `compacted`) are put
 together (`merged`, and `compacted` going on from a `done`) by comparing those firsts: where
 one side's first comes later, its paths of that skeleton are compacted again with the other's.
-The result is the one a single call over all the paths gives.
+The result is the one a single call over all the paths gives, for path data that writes out
+every command, as the drawing does (a skeleton mixing such path data with path data that repeats
+a command implicitly is left as it is by one call, but each side may hold only the first kind).
 """
 
 from __future__ import annotations
