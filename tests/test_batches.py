@@ -1,7 +1,8 @@
 """Drawing many states at once (face/pose.py pose_faces, render/geometry.py all_face_shapes,
 render/mouth.py all_mouth_outlines / all_mouth_texts, render/svg.py all_face_parts): each state
 in a batch comes out to the last bit as it does alone, whatever the other states of its batch;
-the compactor's extents read off numbers are the extents of the written path data."""
+the compactor's extents read off numbers are the extents of the written path data; path data
+compacted in two processes and put together are compacted as all at once."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import _extent
 from cartoonface.render.geometry import all_face_shapes, face_shapes
 from cartoonface.render.mouth import ROWS, all_mouth_outlines, all_mouth_texts, mouth_outlines, mouth_texts
-from cartoonface.render.pathdata import _alike_rows, compact_extents
+from cartoonface.render.pathdata import _alike_rows, compact_extents, compacted, merged
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.conftest import ROOT
 
@@ -111,6 +112,27 @@ def test_extents_read_off_the_numbers_are_those_of_the_text(face):
     for d in set(compact.values()):
         if d in extents:
             assert extents[d] == _extent(d)
+
+
+def test_path_data_compacted_in_two_halves_as_all_at_once(face):
+    lifted = lift(face)
+    drawn = [list(shapes.values()) for shapes in all_face_shapes(pose_faces(lifted, random_states(40, 6)))]
+    paths = [d for shapes in drawn for d in shapes]
+    whole = compacted(paths)
+    assert whole.firsts  # the corner-cut outlines, whose first path data chooses the points kept
+    # drawings left out (a process draws states the parts of another's stand for): extra path data
+    extra = [d for shapes in all_face_shapes(pose_faces(lifted, random_states(40, 7))) for d in shapes.values()]
+    other_firsts = 0
+    for cut in (5, 20, 35):
+        halves = [d for shapes in drawn[:cut] for d in shapes], [d for shapes in drawn[cut:] for d in shapes]
+        for done in (merged(compacted(halves[0]), compacted(halves[1] + extra)),
+                     merged(compacted(halves[1]), compacted(halves[0])), compacted(halves[0] + extra)):
+            other_firsts += done.firsts != whole.firsts
+            result = compacted(paths, done)
+            assert {d: result.compact[d] for d in set(paths)} == whole.compact
+            assert all(result.extents[form] == whole.extents[form] for form in whole.extents)
+            assert result.firsts == whole.firsts
+    assert other_firsts  # some went on from other first path data than all at once have
 
 
 def test_alike_rows_group_equal_rows():

@@ -65,9 +65,10 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Writer, bare, merge_alike, share, short_id
+from cartoonface.render.compact import Writer, bare, merge_alike, part_paths, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
+from cartoonface.render.pathdata import Compacted, compacted, merged
 from cartoonface.render.reuse import TOLERANCE, Reuse, Shape, find, joined, shape_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
@@ -157,13 +158,11 @@ def clock(ms: int) -> str:
 
 def runs(keys: Sequence[int]) -> tuple[Run, ...]:
     """Merge consecutive equal drawing numbers `keys` (one per frame) into Runs, in time order."""
-    merged: list[Run] = []
-    for index, key in enumerate(keys):
-        if merged and merged[-1].drawing == key:
-            merged[-1] = Run(key, merged[-1].first, merged[-1].count + 1)
-        else:
-            merged.append(Run(key, index, 1))
-    return tuple(merged)
+    if not len(keys):
+        return ()
+    array = np.asarray(keys)
+    firsts = np.flatnonzero(np.concatenate(([True], array[1:] != array[:-1]))).tolist()
+    return tuple(Run(keys[first], first, end - first) for first, end in zip(firsts, [*firsts[1:], len(keys)]))
 
 
 def track_of(name: str) -> str:
@@ -414,24 +413,35 @@ def drawing_workers() -> int:
     return 1 if limited or multiprocessing.current_process().daemon or (os.cpu_count() or 1) < 2 else 2
 
 
+def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
+                    progress: Callable[[float], None] | None = None) -> tuple[list[tuple[DrawingKey, tuple[Part, ...]]], Compacted]:
+    """_draw of `states`, and the path data of the drawings compacted (render/pathdata.py's
+    compacted): what a drawing process does of compact.Writer.finish's work."""
+    drawings = _draw(face, states, progress)
+    parts = dict.fromkeys(part for _, drawn in drawings for part in drawn)  # equal parts are one object
+    return drawings, compacted(part_paths((part.text, *part.clips) for part in parts))
+
+
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
-              progress: Callable[[float], None]) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
+              progress: Callable[[float], None]) -> tuple[list[tuple[DrawingKey, tuple[Part, ...]]], Compacted | None]:
     """_draw of `states`, in order; with `workers` 2 and at least POOL_STATES states the second
-    half is drawn by a forked process meanwhile. When that process cannot be started or fails
-    (no memory, no thread, a broken pool) its half is drawn here."""
+    half is drawn by a forked process meanwhile, and each process compacts its half's path data
+    (_draw_compacted; then returned, pathdata.merged, else None). When that process cannot be
+    started or fails (no memory, no thread, a broken pool) its half is drawn here."""
     if workers < 2 or len(states) < POOL_STATES:
-        return _draw(face, states, progress)
+        return _draw(face, states, progress), None
     half = len(states) // 2
     try:
         with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
-            other = pool.submit(_draw, face, states[half:])
-            first = _draw(face, states[:half], lambda done: progress(done / 2))
+            other = pool.submit(_draw_compacted, face, states[half:])
+            first, own = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
             try:
-                return first + other.result()
+                second, theirs = other.result()
+                return first + second, merged(own, theirs)
             except (BrokenProcessPool, OSError, MemoryError):
-                return first + _draw(face, states[half:], lambda done: progress((1 + done) / 2))
+                return first + _draw(face, states[half:], lambda done: progress((1 + done) / 2)), None
     except (BrokenProcessPool, OSError, RuntimeError):  # fork / thread start failed
-        return _draw(face, states, progress)
+        return _draw(face, states, progress), None
 
 
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
@@ -473,14 +483,15 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) for state in states]
     # the neck's lean in each frame, in steps of LEAN_DECIMALS: it follows the roll as written
     leans = [round(lean(figure, origin, roll / 10 ** ROLL_DECIMALS) * 10 ** LEAN_DECIMALS) for roll in rolls]
-    distinct = list(dict.fromkeys(states))
-    drawings = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
+    numbers: dict[FaceState, int] = {}
+    shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
+    distinct = list(numbers)
+    drawings, done = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
     # states whose drawings have one key share the first one's drawing
     drawn: dict[DrawingKey, tuple[int, ...]] = {}
-    by_state = {state: drawn.get(key) or drawn.setdefault(key, writer.collect(parts))
-                for state, (key, parts) in zip(distinct, drawings, strict=True)}
-    frames = [(state, by_state[state]) for state in states]
-    mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied))
+    raw = [drawn.get(key) or drawn.setdefault(key, writer.collect(parts)) for key, parts in drawings]
+    frames = [(distinct[number], raw[number]) for number in shown]
+    mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)

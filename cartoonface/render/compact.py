@@ -14,8 +14,11 @@ browser to build (docs/BENCHMARKS.md, "Fewer elements").
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
 forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
-tidied as lxml elements and the others' values are filled into its text. The distinct tidy
-drawings are then parsed in one go.
+tidied as lxml elements and the others' values are filled into its text. The style classes
+are renamed and the clip paths several drawings hold alike taken out on those texts, and the
+distinct tidy drawings are then parsed in one go. When two processes draw (render/animation.py),
+each compacts its own half's path data (render/pathdata.py's compacted and merged) and finish
+goes on from that ("Finishing in parallel").
 """
 
 from __future__ import annotations
@@ -23,13 +26,13 @@ from __future__ import annotations
 import html
 import re
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, parse_elements
-from cartoonface.render.pathdata import Extent, compact_extents
+from cartoonface.render.pathdata import Compacted, Extent, compacted
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -51,6 +54,8 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
 _ID = re.compile(rb' id="[^"]*"')  # an id attribute in serialized SVG (_content)
+_TAG = re.compile(r"<[^\s/>]+")  # an element's start tag up to its name
+_OWN_ID = re.compile(r'<[^>]*? id="([^"]*)"')  # the id in an element's start tag
 # Path data read by _extent: a command letter and its numbers.
 _COMMAND = re.compile(r"([MmLlHhVvCcSsQqTtZz])([^A-Za-z]*)")
 _UNREAD = re.compile(r"[^MmLlHhVvCcSsQqTtZzEe\d\s,.+-]")  # arcs, anything else _extent does not read
@@ -60,6 +65,7 @@ _ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "z": 0
 # apart beyond half their stroke width: antialiasing reaches 1 px.
 MERGE_GAP = 1.0
 _PATH_DATA = re.compile(r' d="([^"]*)"')
+_CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's text (Writer._short_classes)
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
 # the attributes it takes out (path data and positions), a path data's token, and the
 # placeholder positions (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
@@ -74,6 +80,17 @@ _LOCAL_ID = re.compile(r'(id="|url\(#|href="#)c(\d+)')
 LOCAL = "c"
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
+
+
+@dataclass(frozen=True)
+class _Template:
+    """A skeleton's tidy drawing as format strings (Writer._template): `form` the whole, `pieces`
+    the same cut into its top-level definitions (True) and runs of other elements (False), `count`
+    its top-level elements."""
+
+    form: str
+    pieces: tuple[tuple[str, bool], ...]
+    count: int
 
 
 @dataclass(frozen=True)
@@ -112,21 +129,21 @@ class Writer:
             numbers.append(number)
         return tuple(numbers)
 
-    def finish(self, progress: Callable[[float], None] | None = None) -> tuple[list[int], list[list[etree._Element]]]:
+    def finish(self, progress: Callable[[float], None] | None = None,
+               done: Compacted | None = None) -> tuple[list[int], list[list[etree._Element]]]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
         and the tidy drawings (each a list of elements). `progress(fraction)`, when given, is
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. A definition that
         several tidy drawings hold alike (an eye's clip path under different gazes) is taken out
         of them into `self.definitions` (ids "v0", "v1", ...: for the document's `<defs>`), which
-        they refer to."""
-        compact, self.extents = compact_extents(_text(d) for part in self.raw
-                                                for raw in (part.element, *part.definitions)
-                                                for d in _PATH_DATA.findall(raw))
+        they refer to. `done`: path data compacted already (pathdata.compacted of the drawing
+        processes' parts, pathdata.merged), which may hold more than the parts collected."""
+        done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
+        compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
-        templates: dict[str, tuple[str, int, bool]] = {}
+        templates: dict[str, _Template] = {}
         tidy_ids: dict[str, int] = {}
-        texts: list[str] = []
-        counts: list[int] = []
+        distinct: list[tuple[str, list[str]]] = []  # skeleton and values of each distinct tidy drawing
         mapping = []
         for index, part in enumerate(self.raw):
             if progress is not None and index % PROGRESS_PARTS == 0:
@@ -135,48 +152,63 @@ class Writer:
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
-            form, count, local = template
-            text = form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
+            text = template.form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
             number = tidy_ids.get(text)
             if number is None:
-                number = tidy_ids[text] = len(texts)
-                # the local definitions' ids made the drawing's own: "k" and its number
-                texts.append(form.format(*values, k=short_id("k", number)) if local else text)
-                counts.append(count)
+                number = tidy_ids[text] = len(distinct)
+                distinct.append((skeleton, values))
             mapping.append(number)
+        forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
+        # the local definitions' ids made the drawing's own: "k" and its number
+        texts, lost, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
+                                                 for piece, definition in forms[skeleton]]
+                                                for number, (skeleton, values) in enumerate(distinct)])
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        tidy = [[next(nodes) for _ in range(count)] for count in counts]
-        self.definitions = _hoist(tidy)
-        self._short_classes(tidy)
+        tidy = [[next(nodes) for _ in range(templates[skeleton].count - hoisted)]
+                for (skeleton, _), hoisted in zip(distinct, lost, strict=True)]
         return mapping, tidy
 
-    def _short_classes(self, tidy: list[list[etree._Element]]) -> None:
-        """Rename the style classes of the `tidy` drawings (each written once in the document) by
-        how often they are used: the most used ones get one letter ("a".."z", "A".."Z")."""
-        nodes = [node for elements in tidy for top in elements for node in top.iter() if node.get("class")]
-        counts = Counter(node.get("class") for node in nodes)
+    def _short_classes(self, templates: dict[str, _Template],
+                       uses: Counter[str]) -> dict[str, tuple[tuple[str, bool], ...]]:
+        """Rename the style classes by how often the distinct tidy drawings use them (`uses`: how
+        many are made from each skeleton of `templates`, in the order they come): the most used
+        ones get one letter ("a".."z", "A".."Z"). Returns each skeleton's pieces (_Template's) with
+        the new names. (The definitions carry no class, so counting on the templates counts what
+        the document holds.)"""
+        counts: Counter[str] = Counter()
+        for skeleton, drawings in uses.items():  # first uses in order: ties keep that order
+            for label in _CLASS.findall(templates[skeleton].form):
+                counts[label] += drawings
         names = {label: _letters(rank) for rank, (label, _) in enumerate(counts.most_common())}
-        for node in nodes:
-            node.set("class", names[node.get("class")])
         self.styles = {key: names[label] for key, label in self.styles.items() if label in names}
+        return {skeleton: tuple((_CLASS.sub(lambda m: f' class="{names[m.group(1)]}"', piece), definition)
+                                for piece, definition in templates[skeleton].pieces)
+                for skeleton in uses}
 
-    def _template(self, skeleton: str) -> tuple[str, int, bool]:
+    def _template(self, skeleton: str) -> _Template:
         """The tidy drawing (_tidy_part) of the part text `skeleton` (_skeleton's: path data "@k@",
-        positions SENTINEL + j) as a format string of its values (compact path data, then rounded
+        positions SENTINEL + j) as format strings of its values (compact path data, then rounded
         positions) and of the field `k` its local definitions' ids start with (their ids "c0",
-        "c1", "c0_" ... become k, k-1, k_ ...), its number of elements and whether it has local
-        definitions. Style classes are made here, so in the order the parts come."""
+        "c1", "c0_" ... become k, k-1, k_ ...). Style classes are made here, so in the order the
+        parts come."""
         distinct = len(set(_TOKEN.findall(skeleton)))
         elements = self._tidy_part((skeleton,), {f"@{k}@": f"@{k}@" for k in range(distinct)})
         holder = etree.Element(f"{{{SVG}}}g", nsmap={None: SVG})
         holder.extend(elements)
-        text = etree.tostring(holder, encoding="unicode")
-        inner = text[text.index(">") + 1: -len("</g>")].replace("{", "{{").replace("}", "}}")
-        form = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"', inner)
-        own = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), form)
-        return own, len(elements), own != form
+        pieces: list[tuple[str, bool]] = []
+        for node in elements:  # each as it is written inside the holder (no namespace declaration)
+            text = etree.tostring(node, encoding="unicode").replace(f' xmlns="{SVG}"', "", 1)
+            text = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"',
+                              text.replace("{", "{{").replace("}", "}}"))
+            text = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), text)
+            definition = node.tag in DEFINITIONS
+            if pieces and not definition and not pieces[-1][1]:
+                pieces[-1] = (pieces[-1][0] + text, False)
+            else:
+                pieces.append((text, definition))
+        return _Template("".join(piece for piece, _ in pieces), tuple(pieces), len(elements))
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
@@ -237,6 +269,11 @@ class Writer:
         return "".join(f".{label}{{{';'.join(f'{k}:{v}' for k, v in key)}}}" for key, label in self.styles.items())
 
 
+def part_paths(parts: Iterable[Sequence[str]]) -> Iterator[str]:
+    """The path data of `parts` (each the texts of a part's element and its definitions), as values."""
+    return (_text(d) for texts in parts for text in texts for d in _PATH_DATA.findall(text))
+
+
 def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, list[str]]:
     """A part's `texts` (its element, then its definitions) with the values that tidying only
     passes on taken out: each path data as "@k@", k numbering its distinct compact forms
@@ -278,23 +315,32 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
         elements[index] = use
 
 
-def _content(definition: etree._Element) -> bytes:
-    """`definition` serialized without the ids of its nodes: equal for definitions that define alike."""
-    return _ID.sub(b"", etree.tostring(definition))
+def _content(definition: str) -> bytes:
+    """The text of a `definition` as lxml serializes it on its own (the namespace declared) and
+    without the ids of its nodes: equal for definitions that define alike."""
+    name = _TAG.match(definition)
+    assert name is not None, definition
+    return _ID.sub(b"", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}'.encode())
 
 
-def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
-    """Take the definitions that two or more of the `tidy` drawings (own ids "k5", "k5_", "k5-1", ...)
-    hold alike out of them, in place, pointing their references at one shared copy; return the
-    shared copies, ids "v0", "v1", ... (a clip path's only path "v0_", for its `<use>`s)."""
-    keys = [[_content(node) if node.tag in DEFINITIONS else None for node in elements] for elements in tidy]
+def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int], list[etree._Element]]:
+    """Take the definitions that two or more of the tidy `drawings` (each its top-level definitions'
+    texts (True) and other elements' (False), own ids "k5", "k5_", "k5-1", ...) hold alike out of
+    them, pointing their references at one shared copy. Returns each drawing's text left, how many
+    definitions it lost, and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
+    for its `<use>`s)."""
+    keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
     counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
     names: dict[bytes, str] = {}
     shared: list[etree._Element] = []
-    for elements, drawing in zip(tidy, keys, strict=True):
+    texts: list[str] = []
+    lost: list[int] = []
+    for pieces, drawing in zip(drawings, keys, strict=True):
         local: dict[str, str] = {}
-        for node, key in zip(list(elements), drawing, strict=True):
+        kept = []
+        for (text, _), key in zip(pieces, drawing, strict=True):
             if key is None or counts[key] < 2:
+                kept.append(text)
                 continue
             name = names.get(key)
             if name is None:
@@ -304,17 +350,15 @@ def _hoist(tidy: list[list[etree._Element]]) -> list[etree._Element]:
                 if len(copy) == 1:
                     copy[0].set("id", name + "_")
                 shared.append(copy)
-            local[node.get("id")] = name
-            elements.remove(node)
-        if local:
-            for top in elements:
-                for node in top.iter():
-                    for attribute, value in node.attrib.items():
-                        if value.startswith("url(#") and value[5:-1] in local:
-                            node.set(attribute, f"url(#{local[value[5:-1]]})")
-                        elif attribute == "href" and value.endswith("_") and value[1:-1] in local:
-                            node.set(attribute, f"#{local[value[1:-1]]}_")
-    return shared
+            own = _OWN_ID.match(text)
+            assert own is not None, text
+            local[own.group(1)] = name
+        joined = "".join(kept)
+        for old, new in local.items():  # references by url() and a clip path's path's <use>
+            joined = joined.replace(f'="url(#{old})"', f'="url(#{new})"').replace(f' href="#{old}_"', f' href="#{new}_"')
+        texts.append(joined)
+        lost.append(len(pieces) - len(kept))
+    return texts, lost, shared
 
 
 def _letters(number: int) -> str:
@@ -435,6 +479,9 @@ def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]
     (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). The first path of a run is changed in place. A path data's extent is taken
     from `extents` (Writer.extents: read off its numbers) when it is there, else read (_extent)."""
+    labels = [node.get("class") for node in elements]
+    if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
+        return list(elements)  # only consecutive paths of one class join: none here (most drawings)
     known = extents or {}
     merged: list[etree._Element] = []
     boxes: list[Extent] = []

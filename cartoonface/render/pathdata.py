@@ -18,13 +18,21 @@ animation repeats a part in thousands of frames, so `compact_paths` rewrites the
 All paths with one command skeleton (the same commands, different numbers) are done
 together with numpy. Paths with other commands (H, V, S, T, A, relative ones) are
 left as they are.
+
+"On its first drawing" is the first path data of the skeleton in sorted order, so paths
+compacted in two processes (render/animation.py's drawing processes, `compacted`) are put
+together (`merged`, and `compacted` going on from a `done`) by comparing those firsts: where
+one side's first comes later, its paths of that skeleton are compacted again with the other's.
+The result is the one a single call over all the paths gives, for path data that writes out
+every command, as the drawing does (a skeleton mixing such path data with path data that repeats
+a command implicitly is left as it is by one call, but each side may hold only the first kind).
 """
 
 from __future__ import annotations
 
 import functools
-import math
 import re
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -37,7 +45,7 @@ _ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "Z": 0}
 _LETTERS = "".join(chr(c) for c in range(65, 91)) + "".join(chr(c) for c in range(97, 123))
 _ONLY_LETTERS = {ord(c): None for c in "0123456789.,+- \t\n\r"}
 _LETTERS_TO_SPACES = {ord(c): " " for c in _LETTERS + ","}
-_SEPARATOR = "|"  # between the paths _plain_numbers splits together
+_SEPARATOR = "|"  # between the paths _plain_numbers reads together
 
 
 @dataclass(frozen=True)
@@ -214,20 +222,18 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     return ["".join(row) + plan.tail for row in pieces.tolist()]
 
 
-class _Values(dict[str, float]):
-    """Number texts and their values, each text converted once (float()); _SEPARATOR is nan."""
-
-    def __missing__(self, text: str) -> float:
-        value = self[text] = math.nan if text == _SEPARATOR else float(text)
-        return value
-
-
-def _plain_numbers(paths: list[str], values: _Values) -> np.ndarray | None:
+def _plain_numbers(paths: list[str]) -> np.ndarray | None:
     """The numbers of `paths` (path data of plain numbers: letters, commas, spaces and signs
-    between them) as an (n, k) float array, k each; None when they hold different counts. One
-    split of all of them and a look-up per number text (which repeat: coordinates in tenths)."""
-    tokens = f" {_SEPARATOR} ".join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").split()
-    flat = np.fromiter(map(values.__getitem__, tokens), float, len(tokens))
+    between them) as an (n, k) float array, k each; None when they hold different counts or a
+    text that is no number. All of them read by one np.fromstring (C's strtod: the values
+    float() gives), "nan" between the paths."""
+    text = _SEPARATOR.join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").replace(_SEPARATOR, " nan ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)  # numpy's word for text it cannot read
+        try:
+            flat = np.fromstring(text, dtype=float, sep=" ")
+        except DeprecationWarning:
+            return None
     ends = np.flatnonzero(np.isnan(flat))
     counts = np.diff(np.concatenate(([-1], ends, [len(flat)]))) - 1
     if np.any(counts != counts[0]):
@@ -247,35 +253,97 @@ def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Ext
     """compact_paths of `paths`, and the extent of each compact path data written (a path left as
     it is has none): the box (x0, y0, x1, y1) of every point and control point it writes, read
     off the rounded numbers (render/compact.py's merge_alike would otherwise parse the text)."""
+    done = compacted(paths)
+    return done.compact, done.extents
+
+
+@dataclass(frozen=True)
+class Compacted:
+    """compact_extents' dicts `compact` and `extents` for some paths, and `firsts`: the first (in
+    sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
+    all of them (_kept). Paths compacted in two processes are put together by `merged`."""
+
+    compact: dict[str, str]
+    extents: dict[str, Extent]
+    firsts: dict[str, str]
+
+
+def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
+    """compact_extents of `paths` as a Compacted, going on from `done` (a Compacted of other paths,
+    or of some of these and others): its compact forms are taken where its first path data of a
+    skeleton is the first of these paths too (so its points are the ones kept), the others are
+    compacted here."""
+    known = Compacted(dict(done.compact), dict(done.extents), {}) if done else Compacted({}, {}, {})
+    distinct = set(paths)
+    new = _groups(d for d in distinct if d not in known.compact)
+    firsts = done.firsts if done else {}
+    # skeletons whose first path data is not among these, or comes after a new one: done again
+    stale = {skeleton for skeleton, first in firsts.items()
+             if first not in distinct or skeleton in new and min(new[skeleton]) < first}
+    every = _groups(distinct) if stale else {}
+    for skeleton, first in firsts.items():
+        if skeleton not in stale:
+            known.firsts[skeleton] = first
+        elif skeleton in every:
+            _compact_group(skeleton, every[skeleton], known)
+    for skeleton, members in new.items():
+        if skeleton not in stale:  # compacted with the first, whose points are kept
+            _compact_group(skeleton, [firsts[skeleton], *members] if skeleton in firsts else members, known)
+    return known
+
+
+def merged(first: Compacted, second: Compacted) -> Compacted:
+    """The Compacted of the paths of `first` and `second` together, as compacted of all of them
+    gives it: where a skeleton's first path data differs, the paths of the side whose first comes
+    later are compacted again with the other's (its points kept)."""
+    done = Compacted({**first.compact, **second.compact}, {**first.extents, **second.extents},
+                     {**first.firsts, **second.firsts})
+    redo = [(skeleton, min(one, other), second if one < other else first)
+            for skeleton, one in first.firsts.items()
+            if (other := second.firsts.get(skeleton)) is not None and one != other]
+    later_groups: dict[int, dict[str, list[str]]] = {}
+    for skeleton, start, later in redo:
+        groups = later_groups.get(id(later))
+        if groups is None:
+            groups = later_groups[id(later)] = _groups(later.compact)
+        _compact_group(skeleton, [start, *groups[skeleton]], done)
+    return done
+
+
+def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
+    """The distinct `paths` by skeleton: the command letters when every number is plain (no
+    exponent), else the text with "#" for each number."""
     groups: dict[str, list[str]] = {}
-    for d in set(paths):
-        # Fast skeleton: the command letters, when every number is plain (no exponent).
+    for d in paths:
         letters = d.translate(_ONLY_LETTERS)
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
-    compact: dict[str, str] = {}
-    extents: dict[str, Extent] = {}
-    values = _Values()
-    for skeleton, members in groups.items():
-        members.sort()
-        if "#" in skeleton:
-            texts = [_NUMBER.findall(d) for d in members]
-            numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
-        else:
-            numbers = _plain_numbers(members, values)
-        commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
-        if commands is None or numbers is None:
-            compact.update((d, d) for d in members)
-            continue
-        rounded = np.rint(numbers).astype(np.int64)
-        spans = _spans(commands)
-        kept = _kept(commands, spans, rounded[0])
-        smooth = _smooth(commands, spans, kept, rounded)
-        for pattern, rows in _alike_rows(smooth):
-            plan = _plan(commands, spans, kept, pattern)
-            written = _write(plan, rounded[rows])
-            compact.update(zip([members[i] for i in rows], written, strict=True))
-            extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
-    return compact, extents
+    return groups
+
+
+def _compact_group(skeleton: str, members: list[str], done: Compacted) -> None:
+    """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
+    the first one's points kept in all)."""
+    members.sort()
+    if "#" in skeleton:
+        texts = [_NUMBER.findall(d) for d in members]
+        numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
+    else:
+        numbers = _plain_numbers(members)
+    commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
+    if commands is None or numbers is None:
+        done.compact.update((d, d) for d in members)
+        return
+    if "L" in skeleton:
+        done.firsts[skeleton] = members[0]
+    rounded = np.rint(numbers).astype(np.int64)
+    spans = _spans(commands)
+    kept = _kept(commands, spans, rounded[0])
+    smooth = _smooth(commands, spans, kept, rounded)
+    for pattern, rows in _alike_rows(smooth):
+        plan = _plan(commands, spans, kept, pattern)
+        written = _write(plan, rounded[rows])
+        done.compact.update(zip([members[i] for i in rows], written, strict=True))
+        done.extents.update(zip(written, _extents(plan, rounded[rows]), strict=True))
 
 
 def _alike_rows(marks: np.ndarray) -> list[tuple[tuple[bool, ...], np.ndarray]]:
