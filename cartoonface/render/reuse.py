@@ -20,6 +20,10 @@ space, so they move with it). A stroke scales with the transform: half the wides
 the largest change of scale is added to the error. Gradients are in the shapes' bounding boxes
 (render/svg.py's face_defs) and move with them. A drawing holding what this does not read (a
 transform of its own, arcs, other shapes) is always written.
+
+A part of a drawing still written in full (its mouth, an eye: find_alike) is reused on its own the
+same way, its candidates found among all earlier parts of its skeleton by their shape once
+normalised by a least-squares affine, not only among the recent ones.
 """
 
 from __future__ import annotations
@@ -308,9 +312,10 @@ def _normalised(samples: np.ndarray, inverses: np.ndarray) -> np.ndarray:
 
 
 def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, candidates: int) -> tuple[np.ndarray, ...]:
-    """Every pair of a shape of `group` (`samples` and `inverses` as _choose's) and one of the `candidates` earlier shapes of its skeleton
-    nearest to it once both are _normalised (at any distance back in time): the later's and the
-    earlier's index, and the rank of the earlier by that nearness (0: the nearest)."""
+    """Every pair of a shape of `group` (`samples` and `inverses` as _choose's) and one of the
+    `candidates` earlier shapes of its skeleton nearest to it once both are _normalised (at any
+    distance back in time): the later's and the earlier's index, and the rank of the earlier by
+    that nearness (0: the nearest)."""
     groups: dict[str, list[int]] = {}
     for index, shape in enumerate(group):
         groups.setdefault(shape.skeleton, []).append(index)
@@ -339,7 +344,7 @@ def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, ca
 
 def find_alike(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
                candidates: int = ALIKE) -> dict[int, Reuse]:
-    """For parts (`shapes`, in order of first use: the mouths of written face drawings), the ones
+    """For parts (`shapes`, in order of first use: the mouths, eyes and face outlines of written drawings), the ones
     that can be shown as a transform of an earlier written part: number -> Reuse. Candidates are
     the `candidates` earlier parts of the same skeleton that are nearest once each is moved by a
     least-squares affine onto the first (_alike: an index over all earlier parts, not only recent
