@@ -18,7 +18,7 @@ from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.reuse import TOLERANCE, Shape, find, shape_of
+from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, find, find_alike, shape_of
 from cartoonface.render.svg import face_parts
 from tests.stills import frozen
 
@@ -105,6 +105,23 @@ def test_what_is_not_a_transform_of_an_earlier_drawing_is_written(face):
     assert eye.stroke >= 2 and find([eye, grown], tolerance=1000.0)[1].error >= 0.2 * eye.stroke / 2
 
 
+def test_a_part_is_found_among_all_earlier_parts_of_its_skeleton_not_only_recent_ones(face):
+    """A mouth under another pose, many mouths of other mixes after the one it repeats."""
+    source = part_shape(face, FaceState(mouth=(("a", 1.0),)), "mouth")
+    mixes = [(("a", 1 - w), ("e", w)) for w in np.linspace(0.05, 0.95, 3 * CANDIDATES)]
+    others = [shape for shape in (part_shape(face, FaceState(mouth=mix), "mouth") for mix in mixes)
+              if shape.skeleton == source.skeleton]  # some mixes show the teeth: another skeleton
+    assert len(others) > CANDIDATES
+    target = moved(source, turn(0.3, 0.99), (1.5, -2.0))
+    shapes = [source, *others, target]
+    assert len(shapes) - 1 not in find(shapes), "beyond the recent drawings find looks at"
+    found = find_alike(shapes)
+    assert found[len(shapes) - 1].source == 0
+    distances = np.hypot(*(apply(found[len(shapes) - 1].matrix, source.points) - target.points).T)
+    assert distances.max() <= TOLERANCE
+    assert all(reuse.error <= TOLERANCE for reuse in found.values())
+
+
 def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_reference_resolves(documents):
     exact, reused = (etree.fromstring(data) for data in documents)
     assert len(documents[1]) < 0.9 * len(documents[0]), "reuse makes the document smaller"
@@ -128,6 +145,15 @@ def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_refe
                 if track.get("data-part") == MOUTH_TRACK:
                     assert node.get("data-shape") == exact_drawings[node.get("id")].get("data-shape")
     assert count > 0
+    # parts reused on their own (a mouth, an eye) inside drawings written in full: transforms of a
+    # part in the document's <defs>, which is itself written (no chains)
+    shared = {node.get("id"): node for node in reused.find("s:defs", NS)}
+    alone = [node for track in reused.iterfind(".//s:g[@data-part]", NS) for drawing in track.iterfind("s:defs/s:g", NS)
+             for node in drawing.iter(f"{S}use") if node.get("transform", "").startswith("matrix(")]
+    assert alone, "some parts are reused on their own"
+    for node in alone:
+        source = shared[node.get("href")[1:]]
+        assert source.tag != f"{S}use" and source.find(f".//{S}use[@transform]") is None
 
 
 def pixels(data: bytes) -> np.ndarray:

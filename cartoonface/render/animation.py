@@ -69,7 +69,7 @@ from cartoonface.render.compact import Writer, bare, merge_alike, part_paths, sh
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.pathdata import Compacted, compacted, merged
-from cartoonface.render.reuse import TOLERANCE, Reuse, Shape, find, joined, shape_of
+from cartoonface.render.reuse import TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
@@ -85,6 +85,9 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "fa
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
+# The parts reused on their own (_reused), by how render/svg.py's face_parts begins them: those
+# that pay (docs/BENCHMARKS.md, "Mouths reused"; the chin's shadow, an ellipse, is as short as a <use>).
+ALONE = ('<g class="mouth"', '<g class="eye-', '<path class="face"')
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
 # Discrete animations (the tracks' drawings, the head's roll, the body) last a power of ten of
 # milliseconds, the first at or above the frames' end (the last value is frozen after that), so that a
@@ -218,27 +221,32 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
 
 
 def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int],
-            tolerance: float) -> dict[str, dict[int, Reuse]]:
+            tolerance: float) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
     """The drawings of each of `tracks` shown as a transform of an earlier drawing of their track
-    within `tolerance` px (render/reuse.py; none for 0), by track and drawing number. A drawing's parts are tidy part numbers;
-    `mapping` gives the tidy number of each of `writer`'s raw parts, the first of which is the
-    part's geometry as drawn (the others differ by less than the whole-pixel rounding)."""
+    within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing number; and
+    the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings still written
+    shown as a transform of an earlier written part (reuse.find_alike): the mouth mix changes in
+    nearly every face drawing, so most are written, but their parts repeat under other poses. A drawing's
+    parts are tidy part numbers; `mapping` gives the tidy number of each of `writer`'s raw parts,
+    the first of which is the part's geometry as drawn (the others differ by less than the
+    whole-pixel rounding)."""
     if tolerance <= 0:
-        return {name: {} for name in tracks}
+        return {name: {} for name in tracks}, {}
     first: dict[int, int] = {}
     for raw, tidy in enumerate(mapping):
         first.setdefault(tidy, raw)
-    parts: dict[int, Shape | None] = {}
-    layouts: dict[str, np.ndarray | None] = {}
-
-    def part(number: int) -> Shape | None:
-        if number not in parts:
-            raw = writer.raw[first[number]]
-            parts[number] = shape_of((raw.element, *raw.definitions), layouts)
-        return parts[number]
-
-    return {name: find([joined([part(number) for number in drawing]) for drawing in track.drawings], tolerance)
-            for name, track in tracks.items()}
+    numbers = list(dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing))
+    parts = dict(zip(numbers, shapes_of([(writer.raw[first[number]].element, *writer.raw[first[number]].definitions)
+                                         for number in numbers], {}), strict=True))
+    drawings = {name: find([joined([parts[number] for number in drawing]) for drawing in track.drawings], tolerance)
+                for name, track in tracks.items()}
+    written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
+               if number not in drawings[name]]
+    alone = list(dict.fromkeys(number for drawing in written for number in drawing
+                               if writer.raw[first[number]].element.startswith(ALONE)))
+    found = find_alike([parts[number] for number in alone], tolerance)
+    return drawings, {alone[number]: Reuse(alone[reuse.source], reuse.matrix, reuse.error)
+                      for number, reuse in found.items()}
 
 
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
@@ -495,9 +503,10 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
-    reused = _reused(tracks, writer, mapping, tolerance)
+    reused, moved = _reused(tracks, writer, mapping, tolerance)
     elements = share({name: [[] if number in reused[name] else drawing for number, drawing in enumerate(track.drawings)]
-                      for name, track in tracks.items()}, tidy, defs)
+                      for name, track in tracks.items()}, tidy, defs,
+                     {number: (reuse.source, reuse.matrix) for number, reuse in moved.items()})
     classes = writer.classes()
     elements = {name: [merge_alike(drawing, classes, writer.extents) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)

@@ -510,13 +510,18 @@ def bare(elements: Sequence[etree._Element]) -> bool:
 
 
 def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
-           defs: etree._Element) -> dict[str, list[list[etree._Element]]]:
+          defs: etree._Element, moved: Mapping[int, tuple[int, str]] | None = None) -> dict[str, list[list[etree._Element]]]:
     """The elements of every drawing of `drawings` (lists of tidy part numbers by group, as
     Writer.finish numbered them into `tidy`): a part drawn in one drawing only is itself; a
     part in several is put once into `defs` as `<g id="gN">` (a part of one element: that element
-    with the id, no `<g>`: bare) and each drawing shows it with `<use>`. Returns the drawings'
+    with the id, no `<g>`: bare) and each drawing shows it with `<use>`. A part of `moved` (part ->
+    an earlier part and the SVG matrix "a b c d e f" that shows it, render/reuse.py) is a
+    `<use transform="matrix(...)">` of that part, put into `defs` as shared. Returns the drawings'
     element lists by group."""
-    uses = Counter(part for track in drawings.values() for drawing in track for part in drawing)
+    shown = moved or {}
+    # a moved part counts as a use of its source (which its own drawing uses too: shared)
+    uses = Counter(shown[part][0] if part in shown else part
+                   for track in drawings.values() for drawing in track for part in drawing)
     names: dict[int, str] = {}
     for part, count in uses.items():
         if count > 1:
@@ -526,8 +531,12 @@ def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]]
                 defs.append(tidy[part][0])
             else:
                 element(defs, "g", id=names[part]).extend(tidy[part])
-    return {track: [[node for part in drawing
-                     for node in ([element(None, "use", href=f"#{names[part]}")] if part in names
-                                  else tidy[part])]
-                     for drawing in track_drawings]
+
+    def node(part: int) -> list[etree._Element]:
+        if part in shown:
+            source, matrix = shown[part]
+            return [element(None, "use", href=f"#{names[source]}", transform=f"matrix({matrix})")]
+        return [element(None, "use", href=f"#{names[part]}")] if part in names else tidy[part]
+
+    return {track: [[child for part in drawing for child in node(part)] for drawing in track_drawings]
             for track, track_drawings in drawings.items()}

@@ -20,12 +20,16 @@ space, so they move with it). A stroke scales with the transform: half the wides
 the largest change of scale is added to the error. Gradients are in the shapes' bounding boxes
 (render/svg.py's face_defs) and move with them. A drawing holding what this does not read (a
 transform of its own, arcs, other shapes) is always written.
+
+A part of a drawing still written in full (its mouth, an eye: find_alike) is reused on its own the
+same way, its candidates found among all earlier parts of its skeleton by their shape once
+normalised by a least-squares affine, not only among the recent ones.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +50,11 @@ SHIFT_DECIMALS = 1
 # dozen points is about as good as on all of them, and all pairs of a track fit in one go); the
 # error is measured on them and, for a pair within the tolerance there, on all the points.
 FIT_POINTS = 24
+# A part reused on its own (find_alike: the mouth, whose mix changes in every drawing of the face
+# track) is compared with the ALIKE earlier parts of its skeleton nearest in shape, from all of
+# them; the nearness of ROWS parts to all earlier ones is computed at a time (ROWS x parts floats).
+ALIKE = 8
+ROWS = 512
 _DIAGONAL = np.sqrt(0.5)
 _ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1), (_DIAGONAL, _DIAGONAL), (_DIAGONAL, -_DIAGONAL),
                      (-_DIAGONAL, _DIAGONAL), (-_DIAGONAL, -_DIAGONAL)])  # eight points on a unit circle
@@ -56,18 +65,6 @@ _PAIRS = re.compile(r"[MLCSQTZ\d\s.,-]*")  # path data of absolute commands taki
 _STROKE = re.compile(r' stroke-width="([\d.]+)"')
 _LETTERS_TO_SPACES = str.maketrans({**{c: " " for c in "MLCSQTZHVAmlcsqtzhva,\x01"}})
 _NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skeleton
-
-
-class _Values(dict[str, float]):
-    """Number texts and their values, each text converted once (coordinates in tenths of a pixel
-    repeat: a few thousand texts for a million numbers)."""
-
-    def __missing__(self, text: str) -> float:
-        value = self[text] = float(text)
-        return value
-
-
-_VALUES = _Values()
 
 
 @dataclass(frozen=True)
@@ -91,29 +88,32 @@ class Reuse:
     error: float
 
 
-def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> np.ndarray | None:
-    """The linear map (2P, V) from the V geometry numbers of a part (attributes `names` with
-    `values`, in order; `rest` the text around them) to its P points, x and y interleaved: a path's
-    numbers in pairs (absolute commands of point pairs: face_parts' M, L, C, Z), eight points on
-    each circle or ellipse. None for a part with other path data, elements or a transform."""
+def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """How the V geometry numbers of a part (attributes `names` with `values`, in order; `rest` the
+    text around them) make its P points, x and y interleaved: a path's numbers in pairs (absolute
+    commands of point pairs: face_parts' M, L, C, Z), eight points on each circle or ellipse (a
+    centre plus a step times a radius). Returned as two columns (2P,) into the numbers and the
+    weight (2P,) of the second (point = numbers[first] + weight * numbers[second]; a path's
+    weight 0). None for a part with other path data, elements, a transform or a circle without its centre."""
     if not set(_TAG.findall(rest)) <= _READ or " transform=" in rest:
         return None
-    rows: list[np.ndarray] = []
+    firsts: list[int] = []
+    seconds: list[int] = []
+    weights: list[float] = []
+    unread: list[list[str]] = []
     numbers = [len(value.translate(_LETTERS_TO_SPACES).split()) for value in values]
-    width = sum(numbers)
     column = 0
     circle: dict[str, int] = {}
 
     def close() -> None:  # the circle or ellipse whose attributes `circle` holds (their columns)
+        if circle and not {"cx", "cy"} <= set(circle):
+            unread.append(sorted(circle))  # a centre at 0 by default: not read
         radii = (circle.get("r", circle.get("rx")), circle.get("r", circle.get("ry")))
         for unit in _ELLIPSE if circle else ():
-            for centre, radius, step in zip((circle.get("cx"), circle.get("cy")), radii, unit, strict=True):
-                row = np.zeros(width)
-                if centre is not None:
-                    row[centre] = 1
-                if radius is not None:
-                    row[radius] += step
-                rows.append(row)
+            for centre, radius, step in zip((circle.get("cx", 0), circle.get("cy", 0)), radii, unit, strict=True):
+                firsts.append(centre)
+                seconds.append(centre if radius is None else radius)
+                weights.append(0.0 if radius is None else float(step))
         circle.clear()
 
     for name, value, count in zip(names, values, numbers, strict=True):
@@ -121,35 +121,54 @@ def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> np.ndarra
             close()
             if not _PAIRS.fullmatch(value) or count % 2:
                 return None
-            rows.extend(np.eye(1, width, column + index).ravel() for index in range(count))
+            firsts.extend(range(column, column + count))
+            seconds.extend(range(column, column + count))
+            weights.extend([0.0] * count)
         else:
             if name in circle:
                 close()
             circle[name] = column
         column += count
     close()
-    return np.array(rows).reshape(-1, width) if rows else np.zeros((0, width))
+    return None if unread else (np.array(firsts, dtype=int), np.array(seconds, dtype=int), np.array(weights))
 
 
-def shape_of(texts: Sequence[str], layouts: dict[str, np.ndarray | None]) -> Shape | None:
-    """The Shape of a part as render/svg.py's face_parts drew it: `texts`, its element and the
-    definitions (clip paths) it refers to, coordinates in tenths of a pixel. None when it holds an
-    element or attribute this does not read (a transform, an arc, a rect, ...). `layouts` caches
-    _layout by skeleton."""
-    pieces = _GEOMETRY.split("".join(texts))
-    names, values = pieces[1::3], pieces[2::3]
-    joined_values = "\x01".join(values)
-    rest = "\x02".join(pieces[0::3])
-    skeleton = f"{rest}\x03{'|'.join(names)}\x03{joined_values.translate(_NUMBER_CHARACTERS)}"
-    if skeleton not in layouts:
-        layouts[skeleton] = _layout(names, values, rest)
-    layout = layouts[skeleton]
-    if layout is None:
-        return None
-    tokens = joined_values.translate(_LETTERS_TO_SPACES).split()
-    flat = np.fromiter(map(_VALUES.__getitem__, tokens), float, len(tokens))
-    widest = max(map(float, _STROKE.findall(rest)), default=0.0)
-    return Shape(skeleton, (layout @ flat).reshape(-1, 2), widest)
+def shapes_of(parts: Sequence[Sequence[str]],
+              layouts: dict[str, tuple[np.ndarray, ...] | None]) -> list[Shape | None]:
+    """The Shape of each of `parts` as render/svg.py's face_parts drew it (the texts of its element
+    and of the definitions, clip paths, it refers to; coordinates in tenths of a pixel). None for
+    a part holding an element or attribute this does not read (a transform, an arc, a rect, ...).
+    The numbers of all parts of one skeleton are read in one go and mapped to their points by
+    the skeleton's _layout; `layouts` caches _layout by
+    skeleton."""
+    members: dict[str, list[tuple[int, str]]] = {}  # by skeleton: (part's index, its numbers' text)
+    for index, texts in enumerate(parts):
+        pieces = _GEOMETRY.split("".join(texts))
+        names, values = pieces[1::3], pieces[2::3]
+        joined_values = "\x01".join(values)
+        rest = "\x02".join(pieces[0::3])
+        skeleton = f"{rest}\x03{'|'.join(names)}\x03{joined_values.translate(_NUMBER_CHARACTERS)}"
+        if skeleton not in layouts:
+            layouts[skeleton] = _layout(names, values, rest)
+        members.setdefault(skeleton, []).append((index, joined_values))
+    shapes: list[Shape | None] = [None] * len(parts)
+    for skeleton, group in members.items():
+        layout = layouts[skeleton]
+        if layout is None:
+            continue
+        firsts, seconds, weights = layout
+        text = " ".join(values for _, values in group).translate(_LETTERS_TO_SPACES)
+        numbers = np.array(text.split(), dtype=float).reshape(len(group), -1)
+        points = (numbers[:, firsts] + weights * numbers[:, seconds]).reshape(len(group), -1, 2)
+        widest = max(map(float, _STROKE.findall(skeleton.partition("\x03")[0])), default=0.0)
+        for (index, _), own in zip(group, points, strict=True):
+            shapes[index] = Shape(skeleton, own, widest)
+    return shapes
+
+
+def shape_of(texts: Sequence[str], layouts: dict[str, tuple[np.ndarray, ...] | None]) -> Shape | None:
+    """The Shape of one part (shapes_of)."""
+    return shapes_of([texts], layouts)[0]
 
 
 def joined(shapes: Sequence[Shape | None]) -> Shape | None:
@@ -231,29 +250,39 @@ def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.nd
     return np.concatenate(later), np.concatenate(earlier), np.concatenate(lags)
 
 
-def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
-         candidates: int = CANDIDATES) -> dict[int, Reuse]:
-    """For the drawings of one track (`shapes`, in order of first use), the ones that can be shown
-    as a transform of an earlier written drawing: drawing number -> Reuse. Each drawing is fitted
-    (all pairs at once, on FIT_POINTS points of each) to the last `candidates` drawings of its
-    skeleton before it; the nearest in time that is written (not itself reused) and within
-    `tolerance` px on all its points is taken."""
+def _samples(group: Sequence[Shape]) -> np.ndarray:
+    """FIT_POINTS points (F, 2) of each of `group`, spread over its points: (D, F, 2), single
+    precision (1e-4 px)."""
+    spread: dict[int, np.ndarray] = {}  # FIT_POINTS indices spread over N points, by N
+    for shape in group:
+        if len(shape.points) not in spread:
+            spread[len(shape.points)] = np.linspace(0, len(shape.points) - 1, FIT_POINTS).round().astype(int)
+    return np.stack([shape.points[spread[len(shape.points)]] for shape in group]).astype(np.float32)
+
+
+def _choose(shapes: Sequence[Shape | None],
+            pairs: Callable[[Sequence[Shape], np.ndarray, np.ndarray], tuple[np.ndarray, ...]],
+            tolerance: float) -> dict[int, Reuse]:
+    """The drawings of `shapes` (in order) shown as a transform of an earlier written one: `pairs`
+    (of the shapes with 3 points or more, their _samples and the samples' _inverses) gives the candidate pairs, the later's
+    and the earlier's index and a rank (lower: tried first). All pairs are fitted at once on
+    the samples; for each drawing the first candidate by rank that is written (not itself reused)
+    and within `tolerance` px on all its points is taken."""
     numbers = [number for number, shape in enumerate(shapes) if shape is not None and len(shape.points) >= 3]
     group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
-    later, earlier, lags = _pairs([shape.skeleton for shape in group], candidates)
+    if len(group) < 2:
+        return {}
+    samples = _samples(group)
+    inverses = _inverses(samples)
+    later, earlier, ranks = pairs(group, samples, inverses)
     if not len(later):
         return {}
-    spread: dict[int, np.ndarray] = {}  # FIT_POINTS indices spread over N points, by N
-    samples = np.stack([shape.points[spread.get(len(shape.points)) if len(shape.points) in spread else
-                                     spread.setdefault(len(shape.points), np.linspace(0, len(shape.points) - 1,
-                                                                                      FIT_POINTS).round().astype(int))]
-                        for shape in group]).astype(np.float32)  # (D, FIT_POINTS, 2); single precision: 1e-4 px
     strokes = np.array([shape.stroke for shape in group])
-    matrices, scales, sampled = fit(samples[earlier], _inverses(samples)[earlier], samples[later])
+    matrices, scales, sampled = fit(samples[earlier], inverses[earlier], samples[later])
     near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
     written = np.ones(len(group), dtype=bool)
     found: dict[int, Reuse] = {}
-    for pair in near[np.lexsort((lags[near], later[near]))].tolist():  # by drawing, the nearest candidate first
+    for pair in near[np.lexsort((ranks[near], later[near]))].tolist():  # by drawing, the first candidate first
         target, source = int(later[pair]), int(earlier[pair])
         if written[target] and written[source]:
             within = _error(group[source], matrices[pair], group[target], float(scales[pair]))
@@ -261,3 +290,63 @@ def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
                 found[numbers[target]] = Reuse(numbers[source], matrix_text(matrices[pair]), within)
                 written[target] = False
     return found
+
+
+def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
+         candidates: int = CANDIDATES) -> dict[int, Reuse]:
+    """For the drawings of one track (`shapes`, in order of first use), the ones that can be shown
+    as a transform of an earlier written drawing: drawing number -> Reuse. Each drawing is fitted
+    (all pairs at once, on FIT_POINTS points of each) to the last `candidates` drawings of its
+    skeleton before it; the nearest in time that is written (not itself reused) and within
+    `tolerance` px on all its points is taken."""
+    return _choose(shapes, lambda group, samples, inverses: _pairs([shape.skeleton for shape in group], candidates), tolerance)
+
+
+def _normalised(samples: np.ndarray, inverses: np.ndarray) -> np.ndarray:
+    """`samples` (M, F, 2; `inverses` their _inverses) each moved by the least-squares affine onto
+    the first: (M, 2F). Shapes
+    one affine apart become equal (the fit of T(X) onto R is the fit of X composed with T's
+    inverse), so near ones here are near an affine of each other."""
+    design = np.concatenate([samples, np.ones((*samples.shape[:2], 1), dtype=samples.dtype)], axis=2)
+    return (design @ (inverses @ samples[0])).reshape(len(samples), -1).astype(np.float32)
+
+
+def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, candidates: int) -> tuple[np.ndarray, ...]:
+    """Every pair of a shape of `group` (`samples` and `inverses` as _choose's) and one of the
+    `candidates` earlier shapes of its skeleton nearest to it once both are _normalised (at any
+    distance back in time): the later's and the earlier's index, and the rank of the earlier by
+    that nearness (0: the nearest)."""
+    groups: dict[str, list[int]] = {}
+    for index, shape in enumerate(group):
+        groups.setdefault(shape.skeleton, []).append(index)
+    later, earlier, ranks = [], [], []
+    for members in groups.values():
+        if len(members) < 2:
+            continue
+        indices = np.array(members)
+        flat = _normalised(samples[indices], inverses[indices])
+        norms = np.sum(flat ** 2, axis=1)
+        for start in range(1, len(members), ROWS):
+            rows = np.arange(start, min(start + ROWS, len(members)))
+            distances = norms[rows, None] + norms[None, :rows[-1]] - 2 * flat[rows] @ flat[:rows[-1]].T  # (R, J)
+            distances[np.arange(rows[-1])[None, :] >= rows[:, None]] = np.inf  # only earlier ones
+            take = min(candidates, rows[-1])
+            nearest = np.argpartition(distances, take - 1, axis=1)[:, :take]  # the nearest, unordered
+            nearest = np.take_along_axis(nearest, np.argsort(np.take_along_axis(distances, nearest, axis=1), axis=1), axis=1)
+            valid = nearest < rows[:, None]
+            later.append(indices[np.broadcast_to(rows[:, None], nearest.shape)[valid]])
+            earlier.append(indices[nearest[valid]])
+            ranks.append(np.broadcast_to(np.arange(take), nearest.shape)[valid])
+    if not later:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    return np.concatenate(later), np.concatenate(earlier), np.concatenate(ranks)
+
+
+def find_alike(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
+               candidates: int = ALIKE) -> dict[int, Reuse]:
+    """For parts (`shapes`, in order of first use: the mouths, eyes and face outlines of written drawings), the ones
+    that can be shown as a transform of an earlier written part: number -> Reuse. Candidates are
+    the `candidates` earlier parts of the same skeleton that are nearest once each is moved by a
+    least-squares affine onto the first (_alike: an index over all earlier parts, not only recent
+    ones); the nearest written one within `tolerance` px on all points is taken."""
+    return _choose(shapes, lambda group, samples, inverses: _alike(group, samples, inverses, candidates), tolerance)
