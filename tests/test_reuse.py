@@ -16,7 +16,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import load_face
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.animation import MOUTH_TRACK, animation_svg
+from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
 from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, find, find_alike, shape_of
 from cartoonface.render.svg import face_parts
@@ -146,8 +146,8 @@ def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_refe
                     assert node.get("data-shape") == exact_drawings[node.get("id")].get("data-shape")
     assert count > 0
     # parts reused on their own (a mouth, an eye) inside drawings written in full: transforms of a
-    # part in the document's <defs>, which is itself written (no chains)
-    shared = {node.get("id"): node for node in reused.find("s:defs", NS)}
+    # part in the shared parts' <defs>, which is itself written (no chains)
+    shared = {node.get("id"): node for node in reused.find(f"s:defs[@id='{PARTS_ID}']", NS)}
     alone = [node for track in reused.iterfind(".//s:g[@data-part]", NS) for drawing in track.iterfind("s:defs/s:g", NS)
              for node in drawing.iter(f"{S}use") if node.get("transform", "").startswith("matrix(")]
     assert alone, "some parts are reused on their own"

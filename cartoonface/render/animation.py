@@ -103,6 +103,7 @@ KEY_TIME_LEAD = 5
 KEY_TIME_MIN_LEAD = 0.01
 # The ids of the tracks' drawings: this letter and a number in base 36 (compact.short_id).
 FRAME_LETTER = "f"
+PARTS_ID = "cf-parts"  # the <defs> of the parts several drawings show (compact.share)
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
@@ -504,9 +505,14 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     reused, moved = _reused(tracks, writer, mapping, tolerance)
+    # the parts several drawings show get a <defs> of their own after the document's, which a page
+    # can leave undisplayed as it does the tracks' (render/pages.inline_svg)
+    parts = element(None, "defs", id=PARTS_ID)
     elements = share({name: [[] if number in reused[name] else drawing for number, drawing in enumerate(track.drawings)]
-                      for name, track in tracks.items()}, tidy, defs,
+                      for name, track in tracks.items()}, tidy, parts,
                      {number: (reuse.source, reuse.matrix) for number, reuse in moved.items()})
+    if len(parts):
+        defs.addnext(parts)
     classes = writer.classes()
     elements = {name: [merge_alike(drawing, classes, writer.extents) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)

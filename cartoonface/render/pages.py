@@ -25,6 +25,7 @@ from markupsafe import Markup
 from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
+from cartoonface.render.animation import PARTS_ID
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import page_copy
 from cartoonface.speech.audio_only import transcribed
@@ -56,6 +57,7 @@ TRACK_DEFS = re.compile(r'(<g data-part="[^"]*">)<defs>')
 DEFS_END = "</defs>"
 CLIP_PATH = re.compile(r"<clipPath\b[^>]*?(?:/>|>.*?</clipPath>)", re.S)
 HIDDEN_DEFS = '<defs style="display:none">'
+PARTS_DEFS = f'<defs id="{PARTS_ID}">'  # render/animation.py: the parts the tracks' drawings share
 
 
 @dataclass(frozen=True)
@@ -105,7 +107,8 @@ def inline_svg(svg: bytes) -> Markup:
     """The SVG document `svg` (UTF-8 bytes from lxml, so already escaped) as markup for an HTML page.
 
     The XML declaration is dropped. The part tracks' drawings (each `<g data-part>`'s `<defs>`,
-    shown only through the track's `<use>`) are put out of the rendering with
+    shown only through the track's `<use>`) and the parts they share (`<defs id="cf-parts">`) are
+    put out of the rendering with
     `style="display:none"`, so the browser builds no style or layout for the thousands it is not
     showing (the sprite-sheet way: a `<use>` still draws its clone); the clip paths inside them move
     first to the document's own `<defs>`, where they stay in effect (a clip path in an undisplayed
@@ -126,7 +129,7 @@ def inline_svg(svg: bytes) -> Markup:
         return ""
 
     tracks = CLIP_PATH.sub(moved, text[shared_end:])
-    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", tracks)
+    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", tracks).replace(PARTS_DEFS, f'<defs id="{PARTS_ID}" style="display:none">', 1)
     return Markup(text[:shared_end] + "".join(clips) + tracks)
 
 
