@@ -52,11 +52,12 @@ from cartoonface.video.drive import drive
 from cartoonface.video.track import track
 from cartoonface.workers import helper_pool, offloaded
 
-# Share of the whole job done when each stage starts (measured 2026-11-25 after the faster SVG
-# writer, on the sample story and on bench/generate.py's 190 s input, wall and CPU: drawing the
-# SVG now takes ~60 % of the time, the schedule's pitch track ~15 %; docs/web.md, "Progress").
-STAGES = (("decode", 0.0), ("segment", 0.01), ("align", 0.1), ("schedule", 0.26),
-          ("frames", 0.33), ("svg", 0.37), ("pages", 0.985))
+# Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
+# job's process, on the sample story and on bench/generate.py's 190 s input, after the analysis
+# helper process (workers.py) and the drawing in batches: the SVG takes ~70 % of the time, the
+# schedule's pitch track is computed meanwhile by the helper; docs/web.md, "Progress").
+STAGES = (("decode", 0.0), ("segment", 0.03), ("align", 0.15), ("schedule", 0.255),
+          ("frames", 0.26), ("svg", 0.28), ("pages", 0.97))
 # An edited TextGrid may end this much after the audio (Praat rounds its times).
 ALIGNMENT_SLACK = 0.05  # seconds
 MAX_TITLE = 200  # characters

@@ -123,13 +123,17 @@ MIN_BATCH = 32
 # each to draw; starting the process and sending the drawings back take ~0.1 s).
 POOL_STATES = 400
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
-# (compact.Writer.finish) ends, when the shared parts are found and when the tracks are
-# written; the rest makes the document's bytes (measured on a 4-minute recording:
-# docs/BENCHMARKS.md, "Web progress").
-DRAWN_SHARE = 0.55
-TIDIED_SHARE = 0.88
-SHARED_SHARE = 0.9
-TRACKED_SHARE = 0.96
+# (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
+# when the shared parts are found and when the tracks are written; the rest makes the document's
+# bytes (measured 2026-11-27, processor time, on the sample story and bench/generate.py's 190 s
+# input: docs/BENCHMARKS.md, "Web progress"). REUSE_STEPS: shares of the reuse step done when the
+# points are read and when the tracks' drawings are searched (the parts' search is the rest).
+DRAWN_SHARE = 0.4
+TIDIED_SHARE = 0.57
+REUSED_SHARE = 0.88
+SHARED_SHARE = 0.92
+REUSE_STEPS = (0.3, 0.6)
+TRACKED_SHARE = 0.97
 # The body's motion (animate/body.py) is written in steps of MOTION_STEP px (the torso's and
 # the neck's shift) and of 0.1 degree (the torso's lean, TORSO_DECIMALS): each change makes the
 # browser repaint the torso, so no finer than a viewer sees (a full breath, ~4 px, in ~9 steps).
@@ -221,8 +225,8 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
             "keyTimes": times, "dur": clock(total), "fill": "freeze"}
 
 
-def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int],
-            tolerance: float) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
+            progress: Callable[[float], None]) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
     """The drawings of each of `tracks` shown as a transform of an earlier drawing of their track
     within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing number; and
     the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings still written
@@ -230,7 +234,8 @@ def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int],
     nearly every face drawing, so most are written, but their parts repeat under other poses. A drawing's
     parts are tidy part numbers; `mapping` gives the tidy number of each of `writer`'s raw parts,
     the first of which is the part's geometry as drawn (the others differ by less than the
-    whole-pixel rounding)."""
+    whole-pixel rounding). `progress(fraction)` is told the share done (REUSE_STEPS) as the
+    points are read, each track searched and the parts searched."""
     if tolerance <= 0:
         return {name: {} for name in tracks}, {}
     first: dict[int, int] = {}
@@ -239,8 +244,12 @@ def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int],
     numbers = list(dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing))
     parts = dict(zip(numbers, shapes_of([(writer.raw[first[number]].element, *writer.raw[first[number]].definitions)
                                          for number in numbers], {}), strict=True))
-    drawings = {name: find([joined([parts[number] for number in drawing]) for drawing in track.drawings], tolerance)
-                for name, track in tracks.items()}
+    read, searched = REUSE_STEPS
+    progress(read)
+    drawings = {}
+    for done, (name, track) in enumerate(tracks.items(), 1):
+        drawings[name] = find([joined([parts[number] for number in drawing]) for drawing in track.drawings], tolerance)
+        progress(read + (searched - read) * done / len(tracks))
     written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
                if number not in drawings[name]]
     alone = list(dict.fromkeys(number for drawing in written for number in drawing
@@ -504,7 +513,9 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
-    reused, moved = _reused(tracks, writer, mapping, tolerance)
+    reused, moved = _reused(tracks, writer, mapping, tolerance,
+                            lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done))
+    report(REUSED_SHARE)
     # the parts several drawings show get a <defs> of their own after the document's, which a page
     # can leave undisplayed as it does the tracks' (render/pages.inline_svg)
     parts = element(None, "defs", id=PARTS_ID)
