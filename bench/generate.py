@@ -37,6 +37,7 @@ import soundfile
 
 from cartoonface.data import SAMPLE_FACES
 from cartoonface.pipeline import Options, Result, generate
+from cartoonface.render.animation import PARTS_ID
 
 ROOT = Path(__file__).resolve().parents[1]
 THCHS = ROOT.parent / "shared" / "bench" / "zh" / "thchs30_mfa_example"
@@ -141,15 +142,16 @@ def page_ready(index: Path) -> tuple[list[float], float]:
 
 
 def bytes_by_track(svg: bytes, minutes: float) -> str:
-    """Raw / gzipped KB per minute of the document's <defs> and of each part track
+    """Raw / gzipped KB per minute of the document's <defs>, of the shared parts' and of each part track
     (`<g data-part>`), with the track's number of drawings and of those reused (render/reuse.py:
     a `<use>` with a transform), as one line."""
     from lxml import etree
 
     root = etree.fromstring(svg)
     ns = "{http://www.w3.org/2000/svg}"
-    pieces = [("defs", root.find(f"{ns}defs"))] + [(g.get("data-part"), g) for g in root.iter(f"{ns}g")
-                                                   if g.get("data-part")]
+    parts = root.find(f"{ns}defs[@id='{PARTS_ID}']")  # the parts several drawings share (render/animation.py)
+    pieces = ([("defs", root.find(f"{ns}defs"))] + ([("shared parts", parts)] if parts is not None else [])
+              + [(g.get("data-part"), g) for g in root.iter(f"{ns}g") if g.get("data-part")])
     texts = []
     for name, element in pieces:
         data = etree.tostring(element)
