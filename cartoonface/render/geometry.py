@@ -49,7 +49,9 @@ from cartoonface.render.numbers import fill, number_texts, template_frame
 CHAIKIN_ROUNDS = 3
 
 class Posed(Protocol):
-    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace` (read-only)."""
+    """What `face_shapes` reads from a `cartoonface.face.pose.PosedFace` (`nose_side` an int) and
+    `all_face_shapes` from a `PosedFaces` (each array with a leading axis of S faces, `nose_side`
+    (S,)); read-only."""
 
     @property
     def xy(self) -> np.ndarray: ...
@@ -58,20 +60,7 @@ class Posed(Protocol):
     @property
     def front(self) -> np.ndarray: ...
     @property
-    def nose_side(self) -> int: ...
-
-
-class PosedStack(Protocol):
-    """What `all_face_shapes` reads from a `cartoonface.face.pose.PosedFaces` (read-only)."""
-
-    @property
-    def xy(self) -> np.ndarray: ...
-    @property
-    def hair(self) -> np.ndarray: ...
-    @property
-    def front(self) -> np.ndarray: ...
-    @property
-    def nose_side(self) -> np.ndarray: ...
+    def nose_side(self) -> int | np.ndarray: ...
 
 
 def arc(points: np.ndarray, before: np.ndarray | None = None, after: np.ndarray | None = None) -> np.ndarray:
@@ -291,7 +280,7 @@ class _Stacked:
         self.nose_side = np.array([int(posed.nose_side)])
 
 
-def all_face_shapes(posed: PosedStack) -> list[dict[str, str]]:
+def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
     """face_shapes of S posed faces at once (a `cartoonface.face.pose.PosedFaces`: `xy` (S, N, 2),
     `hair` (S, H, 2), `front` (S, F, 2), `nose_side` (S,)): the maps applied to all of them by
     stacked products (each slice the product of one face, so the same numbers), every number
@@ -299,7 +288,7 @@ def all_face_shapes(posed: PosedStack) -> list[dict[str, str]]:
     count = len(posed.xy)
     hair = np.asarray(posed.hair, dtype=float)
     names = LIFTED_NAMES + FRONT_NAMES
-    plans = {side: _plan(names, hair.shape[1], side) for side in {int(side) for side in posed.nose_side}}
+    plans = {side: _plan(names, hair.shape[1], side) for side in {int(side) for side in np.atleast_1d(posed.nose_side)}}
     plan = next(iter(plans.values()))
     written, size = plan.hair.shape[0], plan.hair.shape[0] + len(plan.matrix)
     coordinates = np.empty((count, size, 2))
