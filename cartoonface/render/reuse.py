@@ -47,9 +47,10 @@ CANDIDATES = 16
 LINEAR_DECIMALS = 4
 SHIFT_DECIMALS = 1
 # The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
-# dozen points is about as good as on all of them, and all pairs of a track fit in one go); the
+# dozen points is about as good as on all of them, and the pairs of a track fit in a few batches); the
 # error is measured on them and, for a pair within the tolerance there, on all the points.
 FIT_POINTS = 24
+FIT_PAIRS = 8192  # candidate pairs fitted together (_choose): ~3 KB of temporaries each
 # A part reused on its own (find_alike: the mouth, whose mix changes in every drawing of the face
 # track) is compared with the ALIKE earlier parts of its skeleton nearest in shape, from all of
 # them; the nearness of ROWS parts to all earlier ones is computed at a time (ROWS x parts floats).
@@ -278,7 +279,10 @@ def _choose(shapes: Sequence[Shape | None],
     if not len(later):
         return {}
     strokes = np.array([shape.stroke for shape in group])
-    matrices, scales, sampled = fit(samples[earlier], inverses[earlier], samples[later])
+    # fitted FIT_PAIRS pairs at a time: all at once, a 30-minute recording's temporaries took ~1 GB
+    fits = [fit(samples[earlier[start:start + FIT_PAIRS]], inverses[earlier[start:start + FIT_PAIRS]],
+                samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
+    matrices, scales, sampled = (np.concatenate(parts) for parts in zip(*fits, strict=True))
     near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
     written = np.ones(len(group), dtype=bool)
     found: dict[int, Reuse] = {}
