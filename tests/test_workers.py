@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -31,6 +32,11 @@ def _pid_and_square(x: float, wait: float = 0.0) -> tuple[int, float]:
     return os.getpid(), x * x
 
 
+def _signal_then_square(x: float, wait: float, flag: str) -> tuple[int, float]:
+    Path(flag).touch()  # it has begun in the helper: the caller can no longer take it over
+    return _pid_and_square(x, wait)
+
+
 def _dies_in_a_child(parent: int) -> int:
     if os.getpid() != parent:
         os._exit(1)  # the helper process is lost (killed, out of memory)
@@ -46,7 +52,7 @@ def test_shares_split_every_index_once_about_evenly(seed):
     assert abs(sum(costs[i] for i in first) - sum(costs[i] for i in second)) <= max(costs)
 
 
-def test_the_helper_is_forked_at_once_and_computes_the_same():
+def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):
     before = len(multiprocessing.active_children())
     with helper_pool(2) as pool:
         assert pool is not None
@@ -54,7 +60,11 @@ def test_the_helper_is_forked_at_once_and_computes_the_same():
         # a subprocess started now hands over its output: the helper holds none of its pipe
         out = subprocess.run([sys.executable, "-c", "print(7)"], stdout=subprocess.PIPE, timeout=60, check=True)
         assert out.stdout.strip() == b"7"
-        begun = offloaded(pool, _pid_and_square, 1.5, 0.5)  # busy for 0.5 s: the next ones wait
+        flag = tmp_path / "begun"
+        begun = offloaded(pool, _signal_then_square, 1.5, 1.0, str(flag))  # busy for 1 s: the next ones wait
+        deadline = time.monotonic() + 60
+        while not flag.exists() and time.monotonic() < deadline:  # a loaded machine may start it late
+            time.sleep(0.01)
         queued = [offloaded(pool, _pid_and_square, x) for x in range(6)]
         # not begun there (at most two are handed to the process ahead of time): done here, the same
         assert queued[-1]() == (os.getpid(), 25)
