@@ -37,7 +37,7 @@ from cartoonface.exports.cues import cues_name, cues_text, mouth_cues
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
 from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
-from cartoonface.render.animation import animation_svg, drawing_workers
+from cartoonface.render.animation import animation_svg
 from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.audio_only import AUDIO_ONLY_NOTE, transcribed
@@ -50,7 +50,7 @@ from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
 from cartoonface.video.drive import drive
 from cartoonface.video.track import track
-from cartoonface.workers import helper_pool, offloaded
+from cartoonface.workers import helper_pool, offloaded, processes
 
 # Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
 # job's process, on the sample story and on bench/generate.py's 190 s input, after the analysis
@@ -247,7 +247,7 @@ def generate(
     # the analysis (none for a web job: its CPU-time limit counts per process); forked first, it
     # holds none of ffmpeg's pipes. The page's compressed audio is made by ffmpeg on the other core
     # while the animation is drawn (the pool is left, waiting for ffmpeg, before its folder is removed).
-    with (helper_pool(drawing_workers()) as helper,
+    with (helper_pool(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
         if clip is not None:
@@ -302,7 +302,7 @@ def generate(
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                             wide=options.page == "announcer", title=options.title, body=body,
-                            progress=lambda done: report("svg", done), workers=drawing_workers())
+                            progress=lambda done: report("svg", done), workers=processes())
         report("pages")
         try:
             with atomic_directory(target) as folder:

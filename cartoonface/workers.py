@@ -1,7 +1,7 @@
 """A second process for work that can run beside the main one (the two cores of issue 16).
 
 `helper_pool(workers)` opens a forked one-process pool when `workers` is 2 or more (the caller
-decides, e.g. by render/animation.drawing_workers: no pool for a process with a CPU-time limit,
+decides, e.g. by `processes()`: no pool for a process with a CPU-time limit,
 whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)` there and
 returns a getter of its result that computes it here instead when the pool has not begun it, is
 None, could not start, or broke (no memory, a killed child); `shares(costs)` splits work in two.
@@ -11,6 +11,7 @@ The results are the same either way: the child is a fork of this process running
 from __future__ import annotations
 
 import multiprocessing
+import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -18,6 +19,19 @@ from contextlib import contextmanager
 from typing import TypeVar
 
 T = TypeVar("T")
+
+
+def processes() -> int:
+    """How many processes a job may work with (generate's analysis helper, animation_svg's second
+    drawing process): 2 on a machine with two cores or more that can fork, unless this process has
+    a CPU-time limit (a web job's, web/worker.py: the limit counts per process, so the job's work
+    stays in it) or is a daemon (which may not start processes)."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 1  # the pools fork (no pickling of the face and its caches)
+    import resource  # POSIX only, like fork
+
+    limited = resource.getrlimit(resource.RLIMIT_CPU)[0] != resource.RLIM_INFINITY
+    return 1 if limited or multiprocessing.current_process().daemon or (os.cpu_count() or 1) < 2 else 2
 
 
 @contextmanager
@@ -31,7 +45,11 @@ def helper_pool(workers: int) -> Iterator[Executor | None]:
     if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
         yield None
         return
-    pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"))
+    try:
+        pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"))
+    except (OSError, RuntimeError):  # no memory, no semaphore for the pool's queues
+        yield None
+        return
     try:
         pool.submit(int)  # forks the process now
     except (BrokenProcessPool, OSError, RuntimeError):  # fork or thread start failed

@@ -152,22 +152,23 @@ def test_no_second_process_under_a_cpu_limit():
     """A process with a CPU-time limit (a web job) draws alone: the limit counts per process."""
     import resource
 
-    from cartoonface.render.animation import drawing_workers
+    from cartoonface.workers import processes
 
     soft, hard = resource.getrlimit(resource.RLIMIT_CPU)
     if soft != resource.RLIM_INFINITY:
         pytest.skip("this test process already has a CPU limit")
     resource.setrlimit(resource.RLIMIT_CPU, (10 ** 6, hard))
     try:
-        assert drawing_workers() == 1
+        assert processes() == 1
     finally:
         resource.setrlimit(resource.RLIMIT_CPU, (soft, hard))
-    assert drawing_workers() in (1, 2)
+    assert processes() in (1, 2)
 
 
 def test_a_pool_that_cannot_start_falls_back_to_one_process(face, monkeypatch):
     """When the second process cannot be started (no memory, no thread) the states are drawn here."""
     import cartoonface.render.animation as animation
+    import cartoonface.workers as workers
 
     class NoFork:
         def __init__(self, *args, **named):
@@ -175,7 +176,7 @@ def test_a_pool_that_cannot_start_falls_back_to_one_process(face, monkeypatch):
 
     states = talking_about(animation.POOL_STATES + 10)
     expected = animation_svg(face, states, FPS)
-    monkeypatch.setattr(animation, "ProcessPoolExecutor", NoFork)
+    monkeypatch.setattr(workers, "ProcessPoolExecutor", NoFork)
     assert animation_svg(face, states, FPS, workers=2) == expected
 
 

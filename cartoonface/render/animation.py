@@ -49,12 +49,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import multiprocessing
-import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
 from itertools import count
 
 import numpy as np
@@ -73,6 +69,7 @@ from cartoonface.render.reuse import TOLERANCE, Reuse, find, find_alike, joined,
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
+from cartoonface.workers import helper_pool, offloaded
 
 # The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
@@ -119,7 +116,7 @@ ROLL_DECIMALS = 2
 BATCH = 256
 BATCHES = 8
 MIN_BATCH = 32
-# animation_svg draws in two processes (drawing_workers) from this many distinct states (~1 ms
+# animation_svg draws in two processes (workers.processes) from this many distinct states (~1 ms
 # each to draw; starting the process and sending the drawings back take ~0.1 s).
 POOL_STATES = 400
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
@@ -418,19 +415,6 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
     return drawings
 
 
-def drawing_workers() -> int:
-    """How many processes animation_svg may draw with: 2 on a machine with two cores or more that
-    can fork, unless this process has a CPU-time limit (a web job's, web/worker.py: the limit
-    counts per process, so the job's work stays in it) or is a daemon (which may not start
-    processes)."""
-    if "fork" not in multiprocessing.get_all_start_methods():
-        return 1  # the pool forks (no pickling of the face and its caches)
-    import resource  # POSIX only, like fork
-
-    limited = resource.getrlimit(resource.RLIMIT_CPU)[0] != resource.RLIM_INFINITY
-    return 1 if limited or multiprocessing.current_process().daemon or (os.cpu_count() or 1) < 2 else 2
-
-
 def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
                     progress: Callable[[float], None] | None = None) -> tuple[list[tuple[DrawingKey, tuple[Part, ...]]], Compacted]:
     """_draw of `states`, and the path data of the drawings compacted (render/pathdata.py's
@@ -443,23 +427,17 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
               progress: Callable[[float], None]) -> tuple[list[tuple[DrawingKey, tuple[Part, ...]]], Compacted | None]:
     """_draw of `states`, in order; with `workers` 2 and at least POOL_STATES states the second
-    half is drawn by a forked process meanwhile, and each process compacts its half's path data
-    (_draw_compacted; then returned, pathdata.merged, else None). When that process cannot be
-    started or fails (no memory, no thread, a broken pool) its half is drawn here."""
+    half is drawn by a forked helper (workers.helper_pool) meanwhile, and each process compacts its
+    half's path data (_draw_compacted; then returned, pathdata.merged, else None). When the helper
+    cannot be started, has not begun or fails, its half is drawn here (workers.offloaded)."""
     if workers < 2 or len(states) < POOL_STATES:
         return _draw(face, states, progress), None
     half = len(states) // 2
-    try:
-        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
-            other = pool.submit(_draw_compacted, face, states[half:])
-            first, own = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
-            try:
-                second, theirs = other.result()
-                return first + second, merged(own, theirs)
-            except (BrokenProcessPool, OSError, MemoryError):
-                return first + _draw(face, states[half:], lambda done: progress((1 + done) / 2)), None
-    except (BrokenProcessPool, OSError, RuntimeError):  # fork / thread start failed
-        return _draw(face, states, progress), None
+    with helper_pool(workers) as pool:
+        other = offloaded(pool, _draw_compacted, face, states[half:])
+        first, own = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
+        second, theirs = other()
+    return first + second, merged(own, theirs)
 
 
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
@@ -478,7 +456,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     the mouth track's drawings carry `data-shape`, the dominant basic mouth shape they show.
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
     drawn (every BATCH distinct states) and tidied, and 1.0 at the end.
-    `workers`: processes to draw with (drawing_workers(); 1: this one alone), same bytes.
+    `workers`: processes to draw with (workers.processes(); 1: this one alone), same bytes.
     `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
     shown as that (render/reuse.py); 0: every distinct drawing written in full.
     """
