@@ -232,7 +232,7 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     poses. A drawing's parts are tidy part numbers; `mapping` gives the tidy number of each of
     `writer`'s raw parts, the first of which is the part's geometry as drawn (the others differ by
     less than the whole-pixel rounding). A part belongs to one track, so the tracks are searched
-    apart: with `workers` 2, about half of them (by drawings) by a child forked now
+    apart: with `workers` 2, about half of them (by distinct parts) by a child forked now
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts."""
@@ -242,7 +242,10 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     for raw, tidy in enumerate(mapping):
         first.setdefault(tidy, raw)
     names = list(tracks)
-    here, there = shares([len(track.drawings) for track in tracks.values()]) if workers >= 2 else (range(len(names)), [])
+    # split by the parts to read and fit; the child takes the side with the largest track (the face's, its
+    # mouths the most), as this process makes the tidy drawings meanwhile
+    there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()])
+                   if workers >= 2 else ([], range(len(names))))
     theirs = forked(workers, _search, {names[index]: tracks[names[index]] for index in there}, writer, first, tolerance)
 
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
