@@ -117,7 +117,8 @@ BATCH = 256
 BATCHES = 8
 MIN_BATCH = 32
 # animation_svg draws in two processes (workers.processes) from this many distinct states (~1 ms
-# each to draw; starting the process and sending the drawings back take ~0.1 s).
+# each to draw; starting the process and sending the drawings back take ~0.1 s), and searches the
+# reused drawings in two (_reuse) from this many distinct drawings of all tracks.
 POOL_STATES = 400
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
@@ -232,7 +233,7 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     poses. A drawing's parts are tidy part numbers; `mapping` gives the tidy number of each of
     `writer`'s raw parts, the first of which is the part's geometry as drawn (the others differ by
     less than the whole-pixel rounding). A part belongs to one track, so the tracks are searched
-    apart: with `workers` 2, about half of them (by distinct parts) by a child forked now
+    apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts) by a child forked now
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts."""
@@ -245,8 +246,10 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     # split by the parts to read and fit; the child takes the side with the largest track (the face's, its
     # mouths the most), as this process makes the tidy drawings meanwhile
     there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()])
-                   if workers >= 2 else ([], range(len(names))))
-    theirs = forked(workers, _search, {names[index]: tracks[names[index]] for index in there}, writer, first, tolerance)
+                   if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
+                   else ([], range(len(names))))
+    theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
+                    tolerance)
 
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
         drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress)
