@@ -4,7 +4,9 @@
 decides, e.g. by `processes()`: no pool for a process with a CPU-time limit,
 whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)` there and
 returns a getter of its result that computes it here instead when the pool has not begun it, is
-None, could not start, or broke (no memory, a killed child); `shares(costs)` splits work in two.
+None, could not start, or broke (no memory, a killed child); `forked(workers, fn, *args)` runs
+`fn(*args)` in a child forked there and then, which inherits the arguments instead of receiving
+them pickled (work on a large state built in this process); `shares(costs)` splits work in two.
 The results are the same either way: the child is a fork of this process running the same code.
 """
 
@@ -16,6 +18,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
+from multiprocessing.connection import Connection
 from typing import TypeVar
 
 T = TypeVar("T")
@@ -84,6 +87,48 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Cal
         return fn(*args)
 
     return result
+
+
+def forked(workers: int, fn: Callable[..., T], *args: object) -> Callable[[], T]:
+    """fn(*args) begun in a child process forked now when `workers` is 2 or more: the child holds
+    `args` as they are here (nothing is pickled but the result, sent back through a pipe). Returns
+    a function giving the result, waiting for the child; computed in this process instead when
+    `workers` < 2 or fork is missing, or the child could not start or did not send a result (no
+    memory, killed, `fn` raised: the exception is then raised here by computing it again). A child
+    whose result is never asked for waits on its pipe (daemonic: it ends with this process)."""
+    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        return lambda: fn(*args)
+    context = multiprocessing.get_context("fork")
+    try:
+        receiver, sender = context.Pipe(duplex=False)
+        child = context.Process(target=_send, args=(sender, fn, args), daemon=True)
+        child.start()
+    except (OSError, RuntimeError):  # no memory, no process or pipe left
+        return lambda: fn(*args)
+    sender.close()  # the child's end: its exit without a result then reads as EOF here
+
+    def result() -> T:
+        try:
+            value: T = receiver.recv()
+        except (EOFError, OSError):
+            value = fn(*args)
+        finally:
+            receiver.close()
+            child.join()
+        return value
+
+    return result
+
+
+def _send(sender: Connection, fn: Callable[..., object], args: tuple[object, ...]) -> None:
+    """In a forked child: send fn(*args) through `sender` (nothing when it raises: forked's parent
+    then computes it itself)."""
+    try:
+        value = fn(*args)
+    except BaseException:  # the parent computes it again and raises it there
+        os._exit(1)
+    sender.send(value)
+    sender.close()
 
 
 def shares(costs: Sequence[float]) -> tuple[list[int], list[int]]:

@@ -128,7 +128,8 @@ def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
     alone = Writer(track_of)
     expected = [b"".join(etree.tostring(node) for node in alone._tidy_part((part.element, *part.definitions), compact))
                 for part in raw]
-    mapping, tidy = writer.finish()
+    mapping = writer.finish()
+    tidy = writer.drawings()
     assert len(set(expected)) == len(tidy) > 20
     # the same drawings, numbered alike, before finish renames their ids and classes
     renamed = [b"".join(etree.tostring(node) for node in tidy[number]) for number in mapping]

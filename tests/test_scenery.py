@@ -13,7 +13,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
-from cartoonface.render.scenery import CLOTHES, NECK, _points, _short_tenths, chin_shadow, figure_of
+from cartoonface.render.scenery import CLOTHES, NECK, _points, _short_tenths, chin_shadows, figure_of
 from cartoonface.render.svg import face_svg
 from tests.conftest import ROOT
 from tests.shapes import NUMBER, polygon
@@ -136,8 +136,8 @@ def test_the_cut_shadow_writes_its_numbers_as_the_scenery_does():
 def test_the_shadow_beyond_a_side_is_the_polygon_and_within_the_ellipse(face):
     figure = figure_of(face, (0.0, 0.0, float(face.width), float(face.height)))
     chin = face.point("2.1")
-    inside = chin_shadow(figure, chin, float(chin[0]), ' class="s"')
-    outside = chin_shadow(figure, chin + [figure.face_width, 0], float(chin[0]), ' class="s"')
+    chins = np.array([chin, chin + [figure.face_width, 0]], dtype=float)
+    inside, outside = chin_shadows(figure, chins, np.full(2, float(chin[0])), ' class="s"')
     assert inside.startswith("<ellipse") and outside.startswith("<path")
     for text in (inside, outside):
         node = etree.fromstring(text)

@@ -20,7 +20,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.workers import helper_pool, offloaded, shares
+from cartoonface.workers import forked, helper_pool, offloaded, shares
 from tests.conftest import ROOT
 from tests.synthetic import synthetic_talk
 
@@ -79,6 +79,29 @@ def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):
 def test_a_lost_helper_is_done_here():
     with helper_pool(2) as pool:
         assert offloaded(pool, _dies_in_a_child, os.getpid())() == os.getpid()
+
+
+def _pid_and_call(fn) -> tuple[int, object]:
+    return os.getpid(), fn()
+
+
+def _fails(parent: int) -> int:
+    raise ValueError(f"failed in {'the parent' if os.getpid() == parent else 'a child'}")
+
+
+def test_forked_work_runs_in_a_child_holding_the_arguments_as_they_are():
+    lines = [f"line {n}" for n in range(1000)]
+    getter = forked(2, _pid_and_call, lambda: len(lines))  # a closure: it could not be pickled
+    lines.append("added after the fork")  # the child's copy was taken at the fork
+    pid, count = getter()
+    assert pid != os.getpid() and count == 1000
+    assert forked(1, _pid_and_call, lambda: len(lines))() == (os.getpid(), 1001)
+
+
+def test_forked_work_whose_child_is_lost_or_fails_is_done_here():
+    assert forked(2, _dies_in_a_child, os.getpid())() == os.getpid()
+    with pytest.raises(ValueError, match="the parent"):  # the exception is the parent's own, with its traceback
+        forked(2, _fails, os.getpid())()
 
 
 def test_analyse_with_a_helper_gives_the_one_process_alignment():

@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import parselmouth
 
 # Praat's pitch analysis settings (our choice): 20 ms steps (a syllable of
 # 150-300 ms gets 7-15 frames; a peak's time is then known to 10 ms, well inside
@@ -38,6 +37,8 @@ def pitch_track(samples: np.ndarray, rate: int) -> tuple[np.ndarray, np.ndarray]
 
     Returns (times (m,) seconds, f0 (m,) Hz with NaN where unvoiced).
     """
+    import parselmouth  # here (0.1 s): generate's helper process computes the track, and imports it there
+
     sound = parselmouth.Sound(np.asarray(samples, dtype=np.float64), sampling_frequency=float(rate))
     pitch = sound.to_pitch(time_step=TIME_STEP, pitch_floor=PITCH_FLOOR, pitch_ceiling=PITCH_CEILING)
     f0 = np.array(pitch.selected_array["frequency"], dtype=float)

@@ -69,7 +69,7 @@ from cartoonface.render.reuse import TOLERANCE, Reuse, find, find_alike, joined,
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
-from cartoonface.workers import helper_pool, offloaded
+from cartoonface.workers import forked, helper_pool, offloaded, shares
 
 # The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
@@ -82,7 +82,7 @@ TRACK_OF = {"hair": "hair", "ear-l": "ears", "ear-r": "ears", "chin-shadow": "fa
             "nose": "features", "brow-l": "features", "brow-r": "features", "eye-l": "eyes", "eye-r": "eyes",
             "mouth": "face"}
 MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
-# The parts reused on their own (_reused), by how render/svg.py's face_parts begins them: those
+# The parts reused on their own (_reuse), by how render/svg.py's face_parts begins them: those
 # that pay (docs/BENCHMARKS.md, "Mouths reused"; the chin's shadow, an ellipse, is as short as a <use>).
 ALONE = ('<g class="mouth"', '<g class="eye-', '<path class="face"')
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
@@ -117,7 +117,8 @@ BATCH = 256
 BATCHES = 8
 MIN_BATCH = 32
 # animation_svg draws in two processes (workers.processes) from this many distinct states (~1 ms
-# each to draw; starting the process and sending the drawings back take ~0.1 s).
+# each to draw; starting the process and sending the drawings back take ~0.1 s), and searches the
+# reused drawings in two (_reuse) from this many distinct drawings of all tracks.
 POOL_STATES = 400
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
@@ -222,31 +223,55 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
             "keyTimes": times, "dur": clock(total), "fill": "freeze"}
 
 
-def _reused(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
-            progress: Callable[[float], None]) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
-    """The drawings of each of `tracks` shown as a transform of an earlier drawing of their track
-    within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing number; and
-    the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings still written
-    shown as a transform of an earlier written part (reuse.find_alike): the mouth mix changes in
-    nearly every face drawing, so most are written, but their parts repeat under other poses. A drawing's
-    parts are tidy part numbers; `mapping` gives the tidy number of each of `writer`'s raw parts,
-    the first of which is the part's geometry as drawn (the others differ by less than the
-    whole-pixel rounding). `progress(fraction)` is told the share done (REUSE_STEPS) as the
-    points are read, each track searched and the parts searched."""
+def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
+           progress: Callable[[float], None], workers: int = 1) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
+    """A getter of the drawings of each of `tracks` shown as a transform of an earlier drawing of
+    their track within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing
+    number; and of the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings
+    still written shown as a transform of an earlier written part (reuse.find_alike): the mouth mix
+    changes in nearly every face drawing, so most are written, but their parts repeat under other
+    poses. A drawing's parts are tidy part numbers; `mapping` gives the tidy number of each of
+    `writer`'s raw parts, the first of which is the part's geometry as drawn (the others differ by
+    less than the whole-pixel rounding). A part belongs to one track, so the tracks are searched
+    apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts) by a child forked now
+    (workers.forked; the same result), the rest when the getter is called, which then waits for
+    the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
+    the points, searched each of its tracks and its parts."""
     if tolerance <= 0:
-        return {name: {} for name in tracks}, {}
+        return lambda: ({name: {} for name in tracks}, {})
     first: dict[int, int] = {}
     for raw, tidy in enumerate(mapping):
         first.setdefault(tidy, raw)
+    names = list(tracks)
+    # split by the parts to read and fit; the child takes the side with the largest track (the face's, its
+    # mouths the most), as this process makes the tidy drawings meanwhile
+    there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()])
+                   if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
+                   else ([], range(len(names))))
+    theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
+                    tolerance)
+
+    def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+        drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress)
+        other_drawings, other_moved = theirs()
+        return {name: {**drawings, **other_drawings}[name] for name in names}, {**moved, **other_moved}
+
+    return result
+
+
+def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], tolerance: float,
+            progress: Callable[[float], None] | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+    """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number)."""
+    report = progress or (lambda fraction: None)
     numbers = list(dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing))
     parts = dict(zip(numbers, shapes_of([(writer.raw[first[number]].element, *writer.raw[first[number]].definitions)
                                          for number in numbers], {}), strict=True))
     read, searched = REUSE_STEPS
-    progress(read)
+    report(read)
     drawings = {}
     for done, (name, track) in enumerate(tracks.items(), 1):
         drawings[name] = find([joined([parts[number] for number in drawing]) for drawing in track.drawings], tolerance)
-        progress(read + (searched - read) * done / len(tracks))
+        report(read + (searched - read) * done / len(tracks))
     written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
                if number not in drawings[name]]
     alone = list(dict.fromkeys(number for drawing in written for number in drawing
@@ -487,12 +512,15 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     drawn: dict[DrawingKey, tuple[int, ...]] = {}
     raw = [drawn.get(key) or drawn.setdefault(key, writer.collect(parts)) for key, parts in drawings]
     frames = [(distinct[number], raw[number]) for number in shown]
-    mapping, tidy = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
+    mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
+    tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
+    # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
+    reuse = _reuse(tracks, writer, mapping, tolerance,
+                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers)
+    tidy = writer.drawings()
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
-    tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
-    reused, moved = _reused(tracks, writer, mapping, tolerance,
-                            lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done))
+    reused, moved = reuse()
     report(REUSED_SHARE)
     # the parts several drawings show get a <defs> of their own after the document's, which a page
     # can leave undisplayed as it does the tracks' (render/pages.inline_svg)

@@ -115,6 +115,8 @@ class Writer:
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
         self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
+        self._templates: dict[str, _Template] = {}  # by skeleton, and the distinct tidy drawings'
+        self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
@@ -130,14 +132,12 @@ class Writer:
         return tuple(numbers)
 
     def finish(self, progress: Callable[[float], None] | None = None,
-               done: Compacted | None = None) -> tuple[list[int], list[list[etree._Element]]]:
-        """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing,
-        and the tidy drawings (each a list of elements). `progress(fraction)`, when given, is
-        told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. A definition that
-        several tidy drawings hold alike (an eye's clip path under different gazes) is taken out
-        of them into `self.definitions` (ids "v0", "v1", ...: for the document's `<defs>`), which
-        they refer to. `done`: path data compacted already (pathdata.compacted of the drawing
-        processes' parts, pathdata.merged), which may hold more than the parts collected."""
+               done: Compacted | None = None) -> list[int]:
+        """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing
+        (`drawings()` then makes them). `progress(fraction)`, when given, is
+        told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. `done`: path data
+        compacted already (pathdata.compacted of the drawing processes' parts, pathdata.merged),
+        which may hold more than the parts collected."""
         done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
         compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
@@ -158,6 +158,15 @@ class Writer:
                 number = tidy_ids[text] = len(distinct)
                 distinct.append((skeleton, values))
             mapping.append(number)
+        self._templates, self._distinct = templates, distinct
+        return mapping
+
+    def drawings(self) -> list[list[etree._Element]]:
+        """The distinct tidy drawings of finish (each a list of elements), in their numbers' order.
+        A definition that several of them hold alike (an eye's clip path under different gazes) is
+        taken out of them into `self.definitions` (ids "v0", "v1", ...: for the document's
+        `<defs>`), which they refer to; the style classes are named by use (_short_classes)."""
+        templates, distinct = self._templates, self._distinct
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
         # the local definitions' ids made the drawing's own: "k" and its number
         texts, lost, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
@@ -166,9 +175,8 @@ class Writer:
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        tidy = [[next(nodes) for _ in range(templates[skeleton].count - hoisted)]
+        return [[next(nodes) for _ in range(templates[skeleton].count - hoisted)]
                 for (skeleton, _), hoisted in zip(distinct, lost, strict=True)]
-        return mapping, tidy
 
     def _short_classes(self, templates: dict[str, _Template],
                        uses: Counter[str]) -> dict[str, tuple[tuple[str, bool], ...]]:

@@ -42,7 +42,7 @@ import numpy as np
 import scipy.sparse
 
 from cartoonface.face.lift import FRONT_NAMES, LIFTED_NAMES
-from cartoonface.render.numbers import fill, number_texts, template_frame
+from cartoonface.render.numbers import fill, rounded_tenths, template_frame, tenths_texts
 
 # Eyebrows and hair: rounds of corner cutting. Three rounds turn each polygon edge into
 # eight short pieces, which read as a smooth outline at the sizes a face is drawn.
@@ -178,14 +178,15 @@ NOSE_SIDE_OTHER = 1
 class _Plan:
     """A compiled drawing: `hair` (8 H, H) sparse maps the H hair points to the hair's
     coordinates, written first; `matrix` (K, N) maps the N posed points (xy) to the K
-    coordinates of the other parts, written next; `template` (numbers.template_frame) takes
-    (8 H + K) * 2 number strings into every part's path data, parts separated by "|"; `names`
-    lists the parts in that order."""
+    coordinates of the other parts, written next; `names` lists the parts in that order, and
+    `frames` (numbers.template_frame) and `slots` give each its path data's template and the
+    range [start, end) of the (8 H + K) * 2 numbers it takes."""
 
     hair: scipy.sparse.csr_array
     matrix: np.ndarray
-    template: tuple[str, ...]
     names: tuple[str, ...]
+    frames: tuple[tuple[str, ...], ...]
+    slots: tuple[tuple[int, int], ...]
 
 
 def _move(rows: list[np.ndarray], start: np.ndarray, pieces: np.ndarray) -> str:
@@ -255,7 +256,9 @@ def _plan(names: tuple[str, ...], hair_count: int, nose_side: int) -> _Plan:
             outline = np.concatenate([chaikin(a)[:-1] for a in arcs])
             texts.append(_polygon(rows, outline))
         part_names.append(name)
-    return _Plan(hair, np.array(rows), template_frame("|".join(texts)), tuple(part_names))
+    ends = np.cumsum([text.count("%s") for text in texts]).tolist()
+    return _Plan(hair, np.array(rows), tuple(part_names), tuple(template_frame(text) for text in texts),
+                 tuple(zip([0, *ends[:-1]], ends, strict=True)))
 
 
 def face_shapes(posed: Posed) -> dict[str, str]:
@@ -283,8 +286,10 @@ class _Stacked:
 def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
     """face_shapes of S posed faces at once (a `cartoonface.face.pose.PosedFaces`: `xy` (S, N, 2),
     `hair` (S, H, 2), `front` (S, F, 2), `nose_side` (S,)): the maps applied to all of them by
-    stacked products (each slice the product of one face, so the same numbers), every number
-    written by one number_texts, each face's path data one template fill."""
+    stacked products (each slice the product of one face, so the same numbers). A part whose
+    numbers, in tenths, are those of another face of the stack (the hair, the ears, the nose
+    under one pose with another mouth) is written once and its text shared: the distinct
+    rows of each part written by one numbers.tenths_texts and a template fill each."""
     count = len(posed.xy)
     hair = np.asarray(posed.hair, dtype=float)
     names = LIFTED_NAMES + FRONT_NAMES
@@ -298,15 +303,21 @@ def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
     # each axis of each face's points as a column (S, 2, N, 1): matrix-vector products, as
     # face_shapes made them one face at a time (4x faster than one product with (N, 2))
     columns = np.ascontiguousarray(np.concatenate([posed.xy, posed.front], axis=1).transpose(0, 2, 1))[..., None]
-    sides = np.asarray(posed.nose_side)
+    sides = np.asarray(posed.nose_side).reshape(-1)
     for side, side_plan in plans.items():
         chosen = np.flatnonzero(sides == side)
         coordinates[chosen, written:] = (side_plan.matrix @ columns[chosen])[..., 0].transpose(0, 2, 1)
-    texts = number_texts(coordinates)
-    numbers = 2 * size
-    shapes = []
-    for index, side in enumerate(sides.tolist()):
-        side_plan = plans[side]
-        text = fill(side_plan.template, texts[index * numbers:(index + 1) * numbers])
-        shapes.append(dict(zip(side_plan.names, text.replace(" -", "-").split("|"))))
+    tenths = rounded_tenths(coordinates).reshape(count, -1)
+    shapes: list[dict[str, str]] = [{} for _ in range(count)]
+    for side, side_plan in plans.items():
+        chosen = np.flatnonzero(sides == side)
+        for name, frame, (start, end) in zip(side_plan.names, side_plan.frames, side_plan.slots, strict=True):
+            block = np.ascontiguousarray(tenths[chosen, start:end])
+            rows, first, inverse = np.unique(block.view(np.dtype((np.void, block.strides[0]))).ravel(),
+                                             return_index=True, return_inverse=True)
+            texts = tenths_texts(block[first])
+            width = end - start
+            paths = [fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(rows))]
+            for index, row in zip(chosen.tolist(), inverse.ravel().tolist(), strict=True):
+                shapes[index][name] = paths[row]
     return shapes

@@ -38,7 +38,17 @@ def _tenths_text(tenths: int) -> str:
 def number_texts(values: np.ndarray) -> tuple[str, ...]:
     """Takes any float array (pixels); returns its values, flattened, as SVG number text
     rounded to 0.1 px with the fewest characters."""
-    tenths = np.rint(np.asarray(values, dtype=float).ravel() * TENTHS).astype(np.int64)
+    return tenths_texts(rounded_tenths(values))
+
+
+def rounded_tenths(values: np.ndarray) -> np.ndarray:
+    """Any float array (pixels) in whole tenths of a pixel, as number_texts rounds them (int64, same shape)."""
+    return np.rint(np.asarray(values, dtype=float) * TENTHS).astype(np.int64)
+
+
+def tenths_texts(tenths: np.ndarray) -> tuple[str, ...]:
+    """number_texts of values given in whole tenths (rounded_tenths' integers), flattened."""
+    tenths = np.asarray(tenths).ravel()
     table, offset = _number_table()
     if tenths.size and (tenths.min() < -offset or tenths.max() >= offset):
         return tuple(_tenths_text(int(v)) for v in tenths)

@@ -28,13 +28,13 @@ normalised by a least-squares affine, not only among the recent ones.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from cartoonface.render.numbers import decimal_text
 
 # Largest distance (px) between a point of the earlier drawing as drawn, moved by the matrix as
 # written, and the same point of the drawing it stands for (0.35 / 0.5 / 0.7 measured:
@@ -209,12 +209,27 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple
     return matrices, _scale_change(matrices[:, :, :2]), np.max(_distances(sources, matrices, targets), axis=1)
 
 
-def _error(source: Shape, matrix: np.ndarray, target: Shape, scale: float) -> float:
-    """The largest distance (px) of `source`'s points mapped by `matrix` (2, 3) from `target`'s
-    plus half the widest stroke times `scale`, the matrix's largest change of scale: within it,
-    every edge of the transformed drawing lies near the target's."""
-    moved = source.points @ matrix[:, :2].T + matrix[:, 2]
-    return float(np.sqrt(np.max(np.sum((moved - target.points) ** 2, axis=1))) + scale * max(source.stroke, target.stroke) / 2)
+def _errors(group: Sequence[Shape], sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
+            scales: np.ndarray) -> np.ndarray:
+    """For pairs of shapes of `group` (indices `sources`, `targets` (M,), of one point count each:
+    one skeleton), the largest distance (px) of the source's points mapped by `matrices` (M, 2, 3)
+    from the target's, plus half the wider stroke times `scales` (M,), the matrix's largest change
+    of scale: within it, every edge of the transformed drawing lies near the target's. (M,) px;
+    the pairs of each point count computed together, FIT_PAIRS at a time."""
+    counts = np.array([len(shape.points) for shape in group])
+    largest = np.empty(len(sources))
+    for count in np.unique(counts[targets]).tolist():
+        members = np.flatnonzero(counts == count)
+        points = np.stack([group[member].points for member in members.tolist()])  # (G, count, 2)
+        position = np.zeros(len(group), dtype=int)
+        position[members] = np.arange(len(members))
+        chosen = np.flatnonzero(counts[targets] == count)
+        for start in range(0, len(chosen), FIT_PAIRS):
+            pairs = chosen[start:start + FIT_PAIRS]
+            largest[pairs] = np.max(_distances(points[position[sources[pairs]]], matrices[pairs],
+                                               points[position[targets[pairs]]]), axis=1)
+    strokes = np.array([shape.stroke for shape in group])
+    return largest + scales * np.maximum(strokes[sources], strokes[targets]) / 2
 
 
 def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -225,11 +240,22 @@ def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -
 
 
 def matrix_text(matrix: np.ndarray) -> str:
-    """`matrix` (2, 3) as the numbers of SVG's matrix(a b c d e f), short: "1 .0012 -.0012 1 .3 -1.2"."""
+    """`matrix` (2, 3), rounded as fit rounds it, as the numbers of SVG's matrix(a b c d e f), short:
+    "1 .0012 -.0012 1 .3 -1.2"."""
     (a, c, e), (b, d, f) = matrix.tolist()
-    texts = [*(decimal_text(v, LINEAR_DECIMALS) for v in (a, b, c, d)), *(decimal_text(v, SHIFT_DECIMALS) for v in (e, f))]
-    return " ".join("0" if text == "-0" else text.replace("0.", ".", 1) if text[:2] in ("0.", "-0") else text
-                    for text in texts)
+    return " ".join([*(_fixed(round(v * 10 ** LINEAR_DECIMALS), LINEAR_DECIMALS) for v in (a, b, c, d)),
+                     *(_fixed(round(v * 10 ** SHIFT_DECIMALS), SHIFT_DECIMALS) for v in (e, f))])
+
+
+@functools.lru_cache(maxsize=4096)
+def _fixed(units: int, decimals: int) -> str:
+    """`units` / 10 ** `decimals` written short: no trailing zeros, no leading zero, no "-0"
+    (12500, 4 -> "1.25"; -12, 4 -> "-.0012"; 0 -> "0"). The matrices' numbers repeat (near 1 and 0)."""
+    whole, fraction = divmod(abs(units), 10 ** decimals)
+    sign = "-" if units < 0 else ""
+    if not fraction:
+        return f"{sign}{whole}" if whole else "0"
+    return f"{sign}{whole or ''}.{fraction:0{decimals}d}".rstrip("0")
 
 
 def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -284,15 +310,15 @@ def _choose(shapes: Sequence[Shape | None],
                 samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
     matrices, scales, sampled = (np.concatenate(parts) for parts in zip(*fits, strict=True))
     near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
+    near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
+    errors = _errors(group, earlier[near], matrices[near], later[near], scales[near]).tolist()
     written = np.ones(len(group), dtype=bool)
     found: dict[int, Reuse] = {}
-    for pair in near[np.lexsort((ranks[near], later[near]))].tolist():  # by drawing, the first candidate first
+    for pair, within in zip(near.tolist(), errors, strict=True):
         target, source = int(later[pair]), int(earlier[pair])
-        if written[target] and written[source]:
-            within = _error(group[source], matrices[pair], group[target], float(scales[pair]))
-            if within <= tolerance:
-                found[numbers[target]] = Reuse(numbers[source], matrix_text(matrices[pair]), within)
-                written[target] = False
+        if written[target] and written[source] and within <= tolerance:
+            found[numbers[target]] = Reuse(numbers[source], matrix_text(matrices[pair]), within)
+            written[target] = False
     return found
 
 
@@ -333,7 +359,8 @@ def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, ca
         for start in range(1, len(members), ROWS):
             rows = np.arange(start, min(start + ROWS, len(members)))
             distances = norms[rows, None] + norms[None, :rows[-1]] - 2 * flat[rows] @ flat[:rows[-1]].T  # (R, J)
-            distances[np.arange(rows[-1])[None, :] >= rows[:, None]] = np.inf  # only earlier ones
+            inside = distances[:, start:]  # the block's own columns: only the earlier ones count
+            inside[np.arange(start, rows[-1])[None, :] >= rows[:, None]] = np.inf
             take = min(candidates, rows[-1])
             nearest = np.argpartition(distances, take - 1, axis=1)[:, :take]  # the nearest, unordered
             nearest = np.take_along_axis(nearest, np.argsort(np.take_along_axis(distances, nearest, axis=1), axis=1), axis=1)

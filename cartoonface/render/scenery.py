@@ -397,8 +397,9 @@ def lean(figure: Figure, origin: np.ndarray, roll: float) -> float:
     return math.degrees(math.atan((rolled_x - figure.chin_x) / (rolled_y - neck_pivot(figure))))
 
 
-def neck_middle(figure: Figure, degrees: float, height: float) -> float:
-    """The x (pixels) of the middle of the neck leaned by `degrees` (lean) at `height` pixels."""
+def neck_middle(figure: Figure, degrees: float, height: float | np.ndarray) -> float | np.ndarray:
+    """The x (pixels) of the middle of the neck leaned by `degrees` (lean) at `height` pixels
+    (a float, or an array of heights: an array of the same shape)."""
     return figure.chin_x + math.tan(math.radians(degrees)) * (height - neck_pivot(figure))
 
 
@@ -422,27 +423,32 @@ def torso_shift(figure: Figure, turn: np.ndarray, breath: np.ndarray) -> tuple[n
     return dx, dy, NECK_BREATH * dy
 
 
-def chin_shadow(figure: Figure, chin: np.ndarray, middle: float, paint: str = "") -> str:
-    """The jaw's shadow on the neck for a posed chin 2.1 at `chin` (2,) pixels, as the text of
-    one SVG element (no namespace declaration) with the attribute text `paint` (' fill="..."',
+def chin_shadows(figure: Figure, chins: np.ndarray, middles: np.ndarray, paint: str = "") -> list[str]:
+    """The jaw's shadow on the neck for each posed chin 2.1 of `chins` (S, 2) pixels, the
+    text of one SVG element (no namespace declaration) with the attribute text `paint` (' fill="..."',
     class, opacity) after its outline's: an ellipse centred on the chin, SHADOW_WIDTH of the
     neck wide and JAW_SHADOW fw high (the face drawn over it hides its top half). Where it would
-    pass a side of the neck (whose middle at the chin's height is `middle`, neck_middle), a
+    pass a side of the neck (whose middle at the chin's height is in `middles` (S,), neck_middle), a
     polygon of SHADOW_POINTS corners cut at that side instead; corner SHADOW_POINTS // 4 is its
     lowest point, right under the chin while the chin is over the neck. Numbers are written as
-    `_num` writes them, the polygon's in one %-format (the hot path of an animation)."""
+    `_num` writes them, the polygon's in one %-format (the hot path of an animation); the corners of all
+    cut ones are computed together."""
     half = figure.face_width * NECK
-    left, right = middle - half, middle + half
-    cx, cy = float(chin[0]), float(chin[1])
+    lefts, rights = middles - half, middles + half
     rx, ry = half * SHADOW_WIDTH, figure.face_width * JAW_SHADOW
-    if left <= cx - rx and cx + rx <= right:
-        return f'<ellipse cx="{_num(cx)}" cy="{_num(cy)}" rx="{_num(rx)}" ry="{_num(ry)}"{paint}/>'
-    cx = float(np.clip(cx, left, right))  # a chin beyond a side of the neck: on that side
+    inside = ((lefts <= chins[:, 0] - rx) & (chins[:, 0] + rx <= rights)).tolist()
+    cx = np.clip(chins[:, 0], lefts, rights)  # a chin beyond a side of the neck: on that side
     # clamping x cuts an upright ellipse exactly at the sides: beyond a side it is no taller than there
-    corners = np.empty((SHADOW_POINTS, 2))
-    corners[:, 0] = np.clip(cx + rx * _SHADOW_COS, left, right)
-    corners[:, 1] = cy + ry * _SHADOW_SIN
-    return f'<path d="{_short_tenths(_SHADOW_TEMPLATE % tuple(corners.ravel().tolist()))}"{paint}/>'
+    corners = np.empty((len(chins), SHADOW_POINTS, 2))
+    corners[:, :, 0] = np.clip(cx[:, None] + rx * _SHADOW_COS, lefts[:, None], rights[:, None])
+    corners[:, :, 1] = chins[:, 1, None] + ry * _SHADOW_SIN
+    shadows = []
+    for (x, y), whole, row in zip(chins.tolist(), inside, corners.reshape(len(chins), -1).tolist(), strict=True):
+        if whole:
+            shadows.append(f'<ellipse cx="{_num(x)}" cy="{_num(y)}" rx="{_num(rx)}" ry="{_num(ry)}"{paint}/>')
+        else:
+            shadows.append(f'<path d="{_short_tenths(_SHADOW_TEMPLATE % tuple(row))}"{paint}/>')
+    return shadows
 
 
 Point = tuple[float, float | None]

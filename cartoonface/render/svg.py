@@ -38,7 +38,7 @@ from cartoonface.render.geometry import all_face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import all_mouth_outlines, all_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
-from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadow, clothes_layer,
+from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
 
 
@@ -214,10 +214,9 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths = all_mouth_texts(all_mouth_outlines(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d))
+    shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
     drawings = []
-    for index, (part_shapes, mouth) in enumerate(zip(shapes, mouths, strict=True)):
-        chin = chins[index]
-        shadow = chin_shadow(figure, chin, neck_middle(figure, neck_lean, float(chin[1])), _CHIN_SHADOW)
+    for index, (part_shapes, mouth, shadow) in enumerate(zip(shapes, mouths, shadows, strict=True)):
         # the cheeks' and the eyes' numbers (CHEEK_COUNT, then EYE_COUNT per eye)
         state_texts = texts[index * per_state:(index + 1) * per_state]
         drawings.append(_parts(part_shapes, shadow, state_texts, _mouth(mouth, uid, style), uid, style))
