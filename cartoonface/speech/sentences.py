@@ -21,10 +21,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from cartoonface.errors import OptionError
 from cartoonface.speech.audio import MIN_RECORDED, Audio, digital_silence
+from cartoonface.speech.dsp import butter_highpass, find_peaks, resample_poly, sos_filter
 
 # thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
 C1 = 0.95
@@ -113,8 +113,8 @@ def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None) ->
 def frame_power(audio: Audio) -> np.ndarray:
     """Mean square of each 10 ms frame of the 80 Hz high-passed audio, smoothed over 30 ms; shape (frames,)."""
     hop = max(1, round(audio.rate * HOP))
-    sos = signal.butter(HIGH_PASS_ORDER, HIGH_PASS_HZ, "highpass", fs=audio.rate, output="sos")
-    filtered = signal.sosfilt(sos, audio.samples).astype(np.float32)
+    sos = butter_highpass(HIGH_PASS_ORDER, HIGH_PASS_HZ, audio.rate)
+    filtered = sos_filter(sos, audio.samples).astype(np.float32)
     count = max(1, len(filtered) // hop)
     padded = np.zeros(count * hop, dtype=np.float32)
     usable = min(len(filtered), count * hop)
@@ -255,7 +255,7 @@ def _voiced_frames(audio: Audio, groups: list[tuple[int, int]]) -> list[np.ndarr
     PITCH_RANGE_HZ.
     """
     factor = max(1, audio.rate // VOICING_RATE)
-    low = signal.resample_poly(audio.samples, 1, factor).astype(np.float32) if factor > 1 else audio.samples
+    low = resample_poly(audio.samples, 1, factor).astype(np.float32) if factor > 1 else audio.samples
     rate = audio.rate / factor
     window = round(VOICING_WINDOW * rate)
     hop = rate * HOP
@@ -295,7 +295,7 @@ def dips(audio: Audio, span: Span, margin: float = DIP_MARGIN) -> tuple[tuple[fl
     level = 10 * np.log10(frame_power(part) + POWER_EPSILON)
     level = np.convolve(level, np.ones(DIP_SMOOTH_FRAMES) / DIP_SMOOTH_FRAMES, mode="same")
     edge = round(margin / HOP)
-    minima, _ = signal.find_peaks(-level[edge:-edge], distance=round(DIP_DISTANCE / HOP), prominence=DIP_PROMINENCE_DB)
+    minima = find_peaks(-level[edge:-edge], distance=round(DIP_DISTANCE / HOP), prominence=DIP_PROMINENCE_DB)
     found = []
     for index in minima + edge:
         near = level <= level[index] + PLATEAU_DB

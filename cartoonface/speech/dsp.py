@@ -1,0 +1,189 @@
+"""The few filters of scipy.signal and scipy.fft that the speech analysis uses, in numpy.
+
+Importing scipy.signal costs ~0.6 s of every `cartoonface generate` (it imports scipy.stats,
+scipy.interpolate, ...) and scipy.fft ~0.15 s, for five functions. These give scipy's numbers
+within float rounding (tests/test_dsp.py compares them on real speech):
+
+- `butter_highpass` + `sos_filter`: scipy.signal.butter(order, cutoff, "highpass", fs=rate,
+  output="sos") and scipy.signal.sosfilt (zero initial state);
+- `resample_poly`: scipy.signal.resample_poly with its defaults (Kaiser window, beta 5; zeros
+  outside the signal);
+- `find_peaks`: scipy.signal.find_peaks with `distance` and `prominence` only;
+- `dct_matrix`: scipy.fft.dct(type=2, norm="ortho") as a matrix (x @ dct_matrix(n)).
+"""
+
+from __future__ import annotations
+
+from math import gcd
+
+import numpy as np
+
+# The IIR filter runs as the FIR of its impulse response, cut where the response's envelope
+# (the largest pole radius to the power n) has fallen below DECAY: far below float64 rounding.
+DECAY = 1e-20
+# FFT length of the overlap-add blocks of `sos_filter` (at least 4x the impulse response):
+# 2**14 was the fastest of 2**13..2**16 on 190 s at 16 kHz, and a whole-signal FFT was 5x slower.
+BLOCK = 1 << 14
+# resample_poly's default FIR: a windowed sinc of 2 * HALF_LENGTH * max(up, down) + 1 taps,
+# Kaiser window with this beta (scipy.signal.resample_poly, window=("kaiser", 5.0)).
+HALF_LENGTH = 10
+KAISER_BETA = 5.0
+
+
+def butter_highpass(order: int, cutoff: float, rate: float) -> np.ndarray:
+    """Second-order sections (sections, 6) [b0, b1, b2, 1, a1, a2] of a digital Butterworth
+    high-pass of `order` with its -3 dB point at `cutoff` Hz for samples at `rate` Hz.
+
+    The analog prototype's poles lie evenly on the left half of the unit circle; the cutoff is
+    pre-warped, the low-pass turned into a high-pass (s -> w / s: the zeros at s = 0) and mapped
+    by the bilinear transform (zeros at z = 1); each conjugate pair of poles is one section, a
+    real pole (odd order) a first-order one; the gain sits in the first section, as scipy's."""
+    k = np.arange(1, order + 1)
+    prototype = np.exp(1j * np.pi * (2 * k + order - 1) / (2 * order))
+    warped = 2 * rate * np.tan(np.pi * cutoff / rate)
+    analog = warped / prototype
+    poles = (2 * rate + analog) / (2 * rate - analog)
+    gain = float(np.real((2 * rate) ** order / np.prod(2 * rate - analog)))
+    sections = [[1.0, -2.0, 1.0, 1.0, -2 * pole.real, abs(pole) ** 2] for pole in poles[: order // 2]]
+    if order % 2:
+        sections.append([1.0, -1.0, 0.0, 1.0, -poles[order // 2].real, 0.0])
+    sos = np.array(sections)
+    sos[0, :3] *= gain
+    return sos
+
+
+def sos_filter(sos: np.ndarray, samples: np.ndarray) -> np.ndarray:
+    """`samples` (n,) through the stable IIR sections `sos` (sections, 6) from a zero state:
+    (n,) float64, as scipy.signal.sosfilt.
+
+    numpy has no recursive filter, and a loop in Python would take seconds; the response is
+    applied in the frequency domain instead, block by block (overlap-add) with blocks longer
+    than the impulse response's tail, so no block's output wraps around."""
+    samples = np.asarray(samples, dtype=np.float64)
+    radius = max(float(np.abs(np.roots(section[3:])).max(initial=0.0)) for section in sos)
+    tail = int(np.ceil(np.log(DECAY) / np.log(radius))) if radius > 0 else 3 * len(sos)
+    size = min(max(BLOCK, _power_of_two(4 * tail)), max(_power_of_two(len(samples) + tail), _power_of_two(2 * tail)))
+    hop = size - tail
+    count = max(1, -(-len(samples) // hop))
+    padded = np.zeros(count * hop)
+    padded[: len(samples)] = samples
+    delay = np.exp(-2j * np.pi * np.fft.rfftfreq(size))  # z ** -1 on the FFT's frequencies
+    response = np.ones(len(delay), dtype=complex)
+    for section in sos:
+        response *= np.polyval(section[2::-1], delay) / np.polyval(section[5:2:-1], delay)
+    blocks = np.fft.irfft(np.fft.rfft(padded.reshape(count, hop), size, axis=1) * response, size, axis=1)
+    out = blocks[:, :hop].copy()
+    out[1:, :tail] += blocks[:-1, hop:]
+    return out.ravel()[: len(samples)]
+
+
+def _power_of_two(n: int) -> int:
+    """The smallest power of two >= n (n >= 1)."""
+    return 1 << (int(n) - 1).bit_length()
+
+
+def lowpass_fir(taps: int, cutoff: float) -> np.ndarray:
+    """(taps,) linear-phase low-pass FIR: a sinc cut at `cutoff` (share of the Nyquist frequency),
+    Kaiser window (KAISER_BETA), gain 1 at 0 Hz; scipy.signal.firwin(taps, cutoff, window=("kaiser", 5.0))."""
+    m = np.arange(taps) - (taps - 1) / 2
+    h = cutoff * np.sinc(cutoff * m) * np.kaiser(taps, KAISER_BETA)
+    return h / h.sum()
+
+
+def resample_poly(samples: np.ndarray, up: int, down: int) -> np.ndarray:
+    """(n,) samples at rate r -> (ceil(n * up / down),) at r * up / down, as scipy.signal.resample_poly
+    with its defaults: up-sampled by `up` (zeros between samples), low-passed by `lowpass_fir`
+    (scaled by `up`) centred on each output, down-sampled by `down`. Float input keeps its dtype
+    (the sums run in float64); other input gives float64.
+
+    Polyphase: output m sits at t = m * down of the up-sampled signal; only the filter taps
+    t - up * i, i.e. those of phase t mod up, meet samples. The outputs of one phase are every
+    up-th one, and their samples advance by `down`: one strided matrix-vector product each."""
+    samples = np.asarray(samples)
+    dtype = samples.dtype if samples.dtype.kind == "f" else np.dtype(np.float64)
+    g = gcd(int(up), int(down))
+    up, down = int(up) // g, int(down) // g
+    if up == down == 1:
+        return samples.astype(dtype, copy=True)
+    half = HALF_LENGTH * max(up, down)
+    h = lowpass_fir(2 * half + 1, 1.0 / max(up, down)) * up
+    taps = -(-len(h) // up)  # taps per phase
+    h = np.concatenate((h, np.zeros(taps * up - len(h))))
+    n_out = -(-len(samples) * up // down)
+    # x[j] with zeros beyond the signal, shifted by `taps` so the earliest tap has index >= 0
+    padded = np.zeros(len(samples) + 2 * taps + 2)
+    padded[taps : taps + len(samples)] = samples
+    windows = np.lib.stride_tricks.sliding_window_view(padded, taps)
+    out = np.empty(n_out)
+    for first in range(min(up, n_out)):
+        t = first * down + half  # position of output `first` in the up-sampled, filtered signal
+        phase, base = t % up, t // up
+        # output first + up * i = sum_k h[phase + up * k] * x[base + down * i - k]
+        coefficients = h[phase::up][::-1]
+        start = base + 1  # windows[base + 1] = x[base - taps + 1 : base + 1]
+        rows = windows[start : start + down * len(range(first, n_out, up)) : down]
+        out[first::up] = rows @ coefficients
+    return out.astype(dtype, copy=False)
+
+
+def find_peaks(x: np.ndarray, distance: int = 1, prominence: float = 0.0) -> np.ndarray:
+    """Indices (k,) of the peaks of `x` (n,), in order, as scipy.signal.find_peaks(x, distance=,
+    prominence=)[0]: local maxima (a flat top's middle, rounded down; not at either end), of which
+    the highest are kept first and those nearer than `distance` samples to a kept one dropped; then
+    those whose prominence (height above the higher of the lowest points on either side before a
+    higher sample or the end) is below `prominence`."""
+    x = np.asarray(x, dtype=np.float64)
+    peaks = _local_maxima(x)
+    if distance > 1 and len(peaks) > 1:
+        peaks = peaks[_apart(peaks, x[peaks], int(np.ceil(distance)))]
+    return np.array([p for p in peaks if _prominence(x, int(p)) >= prominence], dtype=np.intp)
+
+
+def _local_maxima(x: np.ndarray) -> np.ndarray:
+    """Indices of the samples (or middles of flat runs) higher than both neighbours' runs, in order;
+    runs at either end of `x` do not count."""
+    if len(x) < 3:
+        return np.zeros(0, dtype=np.intp)
+    starts = np.flatnonzero(np.concatenate(([True], x[1:] != x[:-1])))
+    ends = np.append(starts[1:], len(x)) - 1
+    values = x[starts]
+    inner = np.arange(1, len(starts) - 1)
+    top = inner[(values[inner - 1] < values[inner]) & (values[inner + 1] < values[inner])]
+    return (starts[top] + ends[top]) // 2
+
+
+def _apart(peaks: np.ndarray, heights: np.ndarray, distance: int) -> np.ndarray:
+    """Boolean mask (k,) of the peaks kept: from the highest down (ties in np.argsort's order, as
+    scipy), each peak still kept drops its neighbours closer than `distance`."""
+    keep = np.ones(len(peaks), dtype=bool)
+    for j in np.argsort(heights)[::-1]:
+        if not keep[j]:
+            continue
+        k = j - 1
+        while k >= 0 and peaks[j] - peaks[k] < distance:
+            keep[k] = False
+            k -= 1
+        k = j + 1
+        while k < len(peaks) and peaks[k] - peaks[j] < distance:
+            keep[k] = False
+            k += 1
+    return keep
+
+
+def _prominence(x: np.ndarray, peak: int) -> float:
+    """x[peak] minus the higher of the minima of x on either side up to a higher sample (or the end)."""
+    higher = np.flatnonzero(x > x[peak])
+    cut = np.searchsorted(higher, peak)
+    left = higher[cut - 1] + 1 if cut > 0 else 0
+    right = higher[cut] if cut < len(higher) else len(x)
+    return float(x[peak] - max(x[left : peak + 1].min(), x[peak:right].min()))
+
+
+def dct_matrix(n: int, keep: int | None = None) -> np.ndarray:
+    """(n, keep) matrix D with x @ D = scipy.fft.dct(x, type=2, norm="ortho")[..., :keep] for x (..., n):
+    D[i, k] = sqrt(2 / n) cos(pi k (2 i + 1) / (2 n)), the k = 0 column scaled by 1 / sqrt(2)."""
+    k = np.arange(n if keep is None else keep)
+    i = np.arange(n)[:, None]
+    matrix = np.sqrt(2.0 / n) * np.cos(np.pi * k * (2 * i + 1) / (2 * n))
+    matrix[:, 0] /= np.sqrt(2.0)
+    return matrix
