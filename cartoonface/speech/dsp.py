@@ -14,6 +14,7 @@ within float rounding (tests/test_dsp.py compares them on real speech):
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from math import gcd
 
 import numpy as np
@@ -54,27 +55,37 @@ def butter_highpass(order: int, cutoff: float, rate: float) -> np.ndarray:
 
 def sos_filter(sos: np.ndarray, samples: np.ndarray) -> np.ndarray:
     """`samples` (n,) through the stable IIR sections `sos` (sections, 6) from a zero state:
-    (n,) float64, as scipy.signal.sosfilt.
+    (n,) float64, as scipy.signal.sosfilt."""
+    return sos_filter_each(sos, [samples])[0]
 
-    numpy has no recursive filter, and a loop in Python would take seconds; the response is
-    applied in the frequency domain instead, block by block (overlap-add) with blocks longer
+
+def sos_filter_each(sos: np.ndarray, pieces: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """Each of `pieces` ((n_i,) samples) through `sos` from a zero state, as `sos_filter` on each,
+    in one pass: the pieces are joined with zeros between them as long as the impulse response,
+    so each piece's response has died out (below DECAY) before the next begins.
+
+    numpy has no recursive filter, and a loop in Python would take seconds; the filter's response
+    is applied in the frequency domain instead, block by block (overlap-add), the blocks longer
     than the impulse response's tail, so no block's output wraps around."""
-    samples = np.asarray(samples, dtype=np.float64)
     radius = max(float(np.abs(np.roots(section[3:])).max(initial=0.0)) for section in sos)
     tail = int(np.ceil(np.log(DECAY) / np.log(radius))) if radius > 0 else 3 * len(sos)
-    size = min(max(BLOCK, _power_of_two(4 * tail)), max(_power_of_two(len(samples) + tail), _power_of_two(2 * tail)))
+    starts = np.cumsum([0] + [len(piece) + tail for piece in pieces])
+    length = int(starts[-1]) - tail
+    size = min(max(BLOCK, _power_of_two(4 * tail)), max(_power_of_two(length + tail), _power_of_two(2 * tail)))
     hop = size - tail
-    count = max(1, -(-len(samples) // hop))
-    padded = np.zeros(count * hop)
-    padded[: len(samples)] = samples
+    count = max(1, -(-length // hop))
+    joined = np.zeros(count * hop)
+    for start, piece in zip(starts, pieces):
+        joined[start : start + len(piece)] = piece
     delay = np.exp(-2j * np.pi * np.fft.rfftfreq(size))  # z ** -1 on the FFT's frequencies
     response = np.ones(len(delay), dtype=complex)
     for section in sos:
         response *= np.polyval(section[2::-1], delay) / np.polyval(section[5:2:-1], delay)
-    blocks = np.fft.irfft(np.fft.rfft(padded.reshape(count, hop), size, axis=1) * response, size, axis=1)
+    blocks = np.fft.irfft(np.fft.rfft(joined.reshape(count, hop), size, axis=1) * response, size, axis=1)
     out = blocks[:, :hop].copy()
     out[1:, :tail] += blocks[:-1, hop:]
-    return out.ravel()[: len(samples)]
+    flat = out.ravel()
+    return [flat[start : start + len(piece)] for start, piece in zip(starts, pieces)]
 
 
 def _power_of_two(n: int) -> int:
