@@ -25,10 +25,12 @@ DECAY = 1e-20
 # FFT length of the overlap-add blocks of `sos_filter` (at least 4x the impulse response):
 # 2**14 was the fastest of 2**13..2**16 on 190 s at 16 kHz, and a whole-signal FFT was 5x slower.
 BLOCK = 1 << 14
+GROUP = 64  # blocks filtered at a time (64 x 2**14 x 16 bytes: 16 MB of spectra)
 # resample_poly's default FIR: a windowed sinc of 2 * HALF_LENGTH * max(up, down) + 1 taps,
 # Kaiser window with this beta (scipy.signal.resample_poly, window=("kaiser", 5.0)).
 HALF_LENGTH = 10
 KAISER_BETA = 5.0
+CHUNK = 1 << 18  # outputs of resample_poly computed at a time (the samples they read: a few MB)
 
 
 def butter_highpass(order: int, cutoff: float, rate: float) -> np.ndarray:
@@ -59,33 +61,43 @@ def sos_filter(sos: np.ndarray, samples: np.ndarray) -> np.ndarray:
     return sos_filter_each(sos, [samples])[0]
 
 
-def sos_filter_each(sos: np.ndarray, pieces: Sequence[np.ndarray]) -> list[np.ndarray]:
+def sos_filter_each(sos: np.ndarray, pieces: Sequence[np.ndarray], dtype: type = np.float64) -> list[np.ndarray]:
     """Each of `pieces` ((n_i,) samples) through `sos` from a zero state, as `sos_filter` on each,
-    in one pass: the pieces are joined with zeros between them as long as the impulse response,
-    so each piece's response has died out (below DECAY) before the next begins.
+    in one pass, given as `dtype` (the sums run in float64): the pieces are joined with zeros
+    between them as long as the impulse response, so each piece's response has died out (below
+    DECAY) before the next begins.
 
     numpy has no recursive filter, and a loop in Python would take seconds; the filter's response
     is applied in the frequency domain instead, block by block (overlap-add), the blocks longer
-    than the impulse response's tail, so no block's output wraps around."""
+    than the impulse response's tail, so no block's output wraps around; GROUP blocks at a time,
+    so the temporary spectra stay small on long recordings."""
     radius = max(float(np.abs(np.roots(section[3:])).max(initial=0.0)) for section in sos)
     tail = int(np.ceil(np.log(DECAY) / np.log(radius))) if radius > 0 else 3 * len(sos)
     starts = np.cumsum([0] + [len(piece) + tail for piece in pieces])
     length = int(starts[-1]) - tail
     size = min(max(BLOCK, _power_of_two(4 * tail)), max(_power_of_two(length + tail), _power_of_two(2 * tail)))
     hop = size - tail
-    count = max(1, -(-length // hop))
-    joined = np.zeros(count * hop)
+    joined = np.zeros(max(length, 0), dtype=np.result_type(np.float32, *pieces))
     for start, piece in zip(starts, pieces):
         joined[start : start + len(piece)] = piece
     delay = np.exp(-2j * np.pi * np.fft.rfftfreq(size))  # z ** -1 on the FFT's frequencies
     response = np.ones(len(delay), dtype=complex)
     for section in sos:
         response *= np.polyval(section[2::-1], delay) / np.polyval(section[5:2:-1], delay)
-    blocks = np.fft.irfft(np.fft.rfft(joined.reshape(count, hop), size, axis=1) * response, size, axis=1)
-    out = blocks[:, :hop].copy()
-    out[1:, :tail] += blocks[:-1, hop:]
-    flat = out.ravel()
-    return [flat[start : start + len(piece)] for start, piece in zip(starts, pieces)]
+    out: np.ndarray = np.empty(len(joined), dtype=dtype)
+    carry = np.zeros(tail)  # the last block's output beyond its hop, added to the next block's start
+    for first in range(0, len(joined), GROUP * hop):
+        chunk = joined[first : first + GROUP * hop]
+        count = -(-len(chunk) // hop)
+        padded = np.zeros(count * hop)
+        padded[: len(chunk)] = chunk
+        blocks = np.fft.irfft(np.fft.rfft(padded.reshape(count, hop), size, axis=1) * response, size, axis=1)
+        body = blocks[:, :hop].copy()
+        body[1:, :tail] += blocks[:-1, hop:]
+        body[0, :tail] += carry
+        carry = blocks[-1, hop:]
+        out[first : first + len(chunk)] = body.ravel()[: len(chunk)]
+    return [out[start : start + len(piece)] for start, piece in zip(starts, pieces)]
 
 
 def _power_of_two(n: int) -> int:
@@ -107,9 +119,11 @@ def resample_poly(samples: np.ndarray, up: int, down: int) -> np.ndarray:
     (scaled by `up`) centred on each output, down-sampled by `down`. Float input keeps its dtype
     (the sums run in float64); other input gives float64.
 
-    Polyphase: output m sits at t = m * down of the up-sampled signal; only the filter taps
-    t - up * i, i.e. those of phase t mod up, meet samples. The outputs of one phase are every
-    up-th one, and their samples advance by `down`: one strided matrix-vector product each."""
+    Polyphase: output m sits at t = m * down + half (half: the filter's centre) of the up-sampled
+    signal, where only the filter taps t - up * i, those of phase t mod up, meet samples: output
+    m = sum_k h[t mod up + up * k] * x[t // up - k]. The outputs of one phase are every up-th one,
+    and their samples advance by `down`: one strided matrix-vector product per phase, over CHUNK
+    outputs at a time (the samples they read copied as float64)."""
     samples = np.asarray(samples)
     dtype = samples.dtype if samples.dtype.kind == "f" else np.dtype(np.float64)
     g = gcd(int(up), int(down))
@@ -121,20 +135,21 @@ def resample_poly(samples: np.ndarray, up: int, down: int) -> np.ndarray:
     taps = -(-len(h) // up)  # taps per phase
     h = np.concatenate((h, np.zeros(taps * up - len(h))))
     n_out = -(-len(samples) * up // down)
-    # x[j] with zeros beyond the signal, shifted by `taps` so the earliest tap has index >= 0
-    padded = np.zeros(len(samples) + 2 * taps + 2)
-    padded[taps : taps + len(samples)] = samples
-    windows = np.lib.stride_tricks.sliding_window_view(padded, taps)
-    out = np.empty(n_out)
-    for first in range(min(up, n_out)):
-        t = first * down + half  # position of output `first` in the up-sampled, filtered signal
-        phase, base = t % up, t // up
-        # output first + up * i = sum_k h[phase + up * k] * x[base + down * i - k]
-        coefficients = h[phase::up][::-1]
-        start = base + 1  # windows[base + 1] = x[base - taps + 1 : base + 1]
-        rows = windows[start : start + down * len(range(first, n_out, up)) : down]
-        out[first::up] = rows @ coefficients
-    return out.astype(dtype, copy=False)
+    out = np.empty(n_out, dtype=dtype)
+    step = up * max(1, CHUNK // up)  # outputs per chunk: whole periods of the phases
+    for begin in range(0, n_out, step):
+        end = min(begin + step, n_out)
+        # the samples outputs begin..end-1 read, zeros beyond the signal
+        low, high = (begin * down + half) // up - taps + 1, ((end - 1) * down + half) // up + 1
+        segment = np.zeros(high - low)
+        inside = slice(max(low, 0), min(high, len(samples)))
+        segment[inside.start - low : inside.stop - low] = samples[inside]
+        windows = np.lib.stride_tricks.sliding_window_view(segment, taps)  # windows[s] = x[low + s:][:taps]
+        for first in range(begin, min(begin + up, end)):
+            t = first * down + half
+            rows = windows[t // up - taps + 1 - low :: down][: len(range(first, end, up))]
+            out[first:end:up] = rows @ h[t % up :: up][::-1]
+    return out
 
 
 def find_peaks(x: np.ndarray, distance: int = 1, prominence: float = 0.0) -> np.ndarray:

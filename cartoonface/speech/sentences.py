@@ -118,7 +118,7 @@ def frame_power(audio: Audio) -> np.ndarray:
 def _high_passed(rate: int, pieces: list[np.ndarray]) -> list[np.ndarray]:
     """Each of `pieces` ((n_i,) samples at `rate` Hz) high-passed at HIGH_PASS_HZ from a zero state, float32."""
     sos = butter_highpass(HIGH_PASS_ORDER, HIGH_PASS_HZ, rate)
-    return [filtered.astype(np.float32) for filtered in sos_filter_each(sos, pieces)]
+    return sos_filter_each(sos, pieces, np.float32)
 
 
 def _frame_power(filtered: np.ndarray, rate: int) -> np.ndarray:
