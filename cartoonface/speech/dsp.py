@@ -4,8 +4,8 @@ Importing scipy.signal costs ~0.6 s of every `cartoonface generate` (it imports 
 scipy.interpolate, ...) and scipy.fft ~0.15 s, for five functions. These give scipy's numbers
 within float rounding (tests/test_dsp.py compares them on real speech):
 
-- `butter_highpass` + `sos_filter`: scipy.signal.butter(order, cutoff, "highpass", fs=rate,
-  output="sos") and scipy.signal.sosfilt (zero initial state);
+- `butter_highpass` + `sos_filter_each`: scipy.signal.butter(order, cutoff, "highpass", fs=rate,
+  output="sos") and scipy.signal.sosfilt (zero initial state) on each of several signals;
 - `resample_poly`: scipy.signal.resample_poly with its defaults (Kaiser window, beta 5; zeros
   outside the signal);
 - `find_peaks`: scipy.signal.find_peaks with `distance` and `prominence` only;
@@ -22,7 +22,7 @@ import numpy as np
 # The IIR filter runs as the FIR of its impulse response, cut where the response's envelope
 # (the largest pole radius to the power n) has fallen below DECAY: far below float64 rounding.
 DECAY = 1e-20
-# FFT length of the overlap-add blocks of `sos_filter` (at least 4x the impulse response):
+# FFT length of the overlap-add blocks of `sos_filter_each` (at least 4x the impulse response):
 # 2**14 was the fastest of 2**13..2**16 on 190 s at 16 kHz, and a whole-signal FFT was 5x slower.
 BLOCK = 1 << 14
 GROUP = 64  # blocks filtered at a time (64 x 2**14 x 16 bytes: 16 MB of spectra)
@@ -55,15 +55,10 @@ def butter_highpass(order: int, cutoff: float, rate: float) -> np.ndarray:
     return sos
 
 
-def sos_filter(sos: np.ndarray, samples: np.ndarray) -> np.ndarray:
-    """`samples` (n,) through the stable IIR sections `sos` (sections, 6) from a zero state:
-    (n,) float64, as scipy.signal.sosfilt."""
-    return sos_filter_each(sos, [samples])[0]
-
-
 def sos_filter_each(sos: np.ndarray, pieces: Sequence[np.ndarray], dtype: type = np.float64) -> list[np.ndarray]:
-    """Each of `pieces` ((n_i,) samples) through `sos` from a zero state, as `sos_filter` on each,
-    in one pass, given as `dtype` (the sums run in float64): the pieces are joined with zeros
+    """Each of `pieces` ((n_i,) samples) through the stable IIR sections `sos` (sections, 6) from a
+    zero state, as scipy.signal.sosfilt on each, in one pass, given as `dtype` (the sums run in
+    float64): the pieces are joined with zeros
     between them as long as the impulse response, so each piece's response has died out (below
     DECAY) before the next begins.
 
