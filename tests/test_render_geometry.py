@@ -109,8 +109,8 @@ def test_closed_chaikin_operator_is_the_corner_cutting(rng: np.random.Generator,
     operator = chaikin_closed_operator(count, rounds)
     np.testing.assert_allclose(operator @ points, chaikin(points, rounds, closed=True), rtol=0, atol=1e-12)
     # banded: each cut point mixes at most three neighbouring points, so the size is linear in count
-    assert np.diff(operator.indptr).max() <= 3
-    assert operator.nnz <= 3 * len(operator @ points)
+    assert operator.columns.shape == operator.weights.shape
+    assert operator.columns.shape[1] <= 3
 
 
 @pytest.mark.parametrize("value", [0.0, 3.0, -3.0, 0.04, 0.26, -0.5, 12.349, -1234.56, 9999.9, -4000.25])

@@ -25,9 +25,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.dsp import find_peaks
 from cartoonface.speech.align import MIN_PAUSE
 from cartoonface.speech.features import HOP, frames, smooth
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -121,7 +121,7 @@ def _syllables(low: np.ndarray, energy: np.ndarray, part: Span) -> list[tuple[fl
     if last - first < 3:
         return []
     band = low[first:last]
-    peaks, _ = find_peaks(band, prominence=NUCLEUS_PROMINENCE_DB, distance=max(1, round(MIN_SYLLABLE / HOP)))
+    peaks = find_peaks(band, prominence=NUCLEUS_PROMINENCE_DB, distance=max(1, round(MIN_SYLLABLE / HOP)))
     peaks = peaks[band[peaks] >= band.max() - NUCLEUS_RANGE_DB]
     if peaks.size == 0:
         peaks = np.array([int(np.argmax(band))])

@@ -23,10 +23,10 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
-from scipy import signal
 
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.audio import Audio
+from cartoonface.speech.dsp import resample_poly
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts
@@ -457,5 +457,5 @@ def _pcm(audio: Audio, span: Span) -> bytes:
     """The samples of `span` resampled to RATE as 16-bit little-endian PCM bytes."""
     part = audio.samples[int(span.start * audio.rate) : int(np.ceil(span.end * audio.rate))]
     if audio.rate != RATE:
-        part = signal.resample_poly(part, RATE, audio.rate)
+        part = resample_poly(part, RATE, audio.rate)
     return (np.clip(part, -1.0, 1.0) * PCM_SCALE).astype("<i2").tobytes()

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from math import gcd
 
 import numpy as np
-from scipy.fft import dct, rfft
-from scipy.signal import resample_poly
+
+from cartoonface.speech.dsp import dct_matrix, resample_poly
 
 RATE = 16000
 HOP = 0.010          # seconds between frames
@@ -72,6 +72,7 @@ def mel_filters() -> np.ndarray:
 
 
 _BANK = mel_filters()
+_DCT = dct_matrix(MELS, CEPSTRA)
 
 
 def power_spectrum(samples: np.ndarray) -> np.ndarray:
@@ -85,7 +86,7 @@ def power_spectrum(samples: np.ndarray) -> np.ndarray:
     hop = int(RATE * HOP)
     count = 1 + (x.size - WINDOW) // hop
     index = np.arange(WINDOW)[None, :] + hop * np.arange(count)[:, None]
-    return np.abs(rfft(x[index] * np.hanning(WINDOW), n=NFFT, axis=1)) ** 2
+    return np.abs(np.fft.rfft(x[index] * np.hanning(WINDOW), n=NFFT, axis=1)) ** 2
 
 
 def band_db(power: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -103,7 +104,7 @@ def frames(samples: np.ndarray, rate: int) -> Frames:
     logmel = np.log(np.einsum("tf,fm->tm", power, _BANK) + MEL_FLOOR)
     return Frames(
         logmel=logmel,
-        mfcc=dct(logmel, type=2, norm="ortho", axis=1)[:, :CEPSTRA],
+        mfcc=np.einsum("tm,mc->tc", logmel, _DCT),  # the orthonormal DCT-II's first CEPSTRA
         energy=band_db(power, 0.0, RATE / 2),
         low=band_db(power, *LOW_BAND),
         mid=band_db(power, *MID_BAND),

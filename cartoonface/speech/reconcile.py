@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cartoonface.speech.audio import Audio
-from cartoonface.speech.sentences import Span, dips
+from cartoonface.speech.sentences import Span, all_dips
 
 # Reconciling costs (ours, tuned on synthetic recordings in tests/test_alignment.py; held-out
 # checks on real recordings in tests/test_reconcile.py):
@@ -67,8 +67,8 @@ def reconcile(audio: Audio, parts: tuple[Span, ...], counts: list[int]) -> tuple
 def _cuts(audio: Audio, parts: tuple[Span, ...], sentences: int) -> list[_Cut]:
     """Every candidate cut in time order, between a "start" and an "end" cut."""
     cuts = [_Cut(parts[0].start, parts[0].start, 0.0, "start", 0)]
-    for index, part in enumerate(parts):
-        found = sorted(dips(audio, part), key=lambda dip: -dip[1])
+    for index, (part, part_dips) in enumerate(zip(parts, all_dips(audio, parts), strict=True)):
+        found = sorted(part_dips, key=lambda dip: -dip[1])
         keep = max(MIN_DIPS, math.ceil(part.duration * DIPS_PER_SECOND))
         for time, plateau in sorted(found[:keep]):
             cuts.append(_Cut(time, time, DIP_COST * DIP_PLATEAU / (DIP_PLATEAU + plateau), "dip", index))

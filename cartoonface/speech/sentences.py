@@ -21,10 +21,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from cartoonface.errors import OptionError
 from cartoonface.speech.audio import MIN_RECORDED, Audio, digital_silence
+from cartoonface.speech.dsp import butter_highpass, find_peaks, resample_poly, sos_filter_each
 
 # thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
 C1 = 0.95
@@ -112,9 +112,18 @@ def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None) ->
 
 def frame_power(audio: Audio) -> np.ndarray:
     """Mean square of each 10 ms frame of the 80 Hz high-passed audio, smoothed over 30 ms; shape (frames,)."""
-    hop = max(1, round(audio.rate * HOP))
-    sos = signal.butter(HIGH_PASS_ORDER, HIGH_PASS_HZ, "highpass", fs=audio.rate, output="sos")
-    filtered = signal.sosfilt(sos, audio.samples).astype(np.float32)
+    return _frame_power(_high_passed(audio.rate, [audio.samples])[0], audio.rate)
+
+
+def _high_passed(rate: int, pieces: list[np.ndarray]) -> list[np.ndarray]:
+    """Each of `pieces` ((n_i,) samples at `rate` Hz) high-passed at HIGH_PASS_HZ from a zero state, float32."""
+    sos = butter_highpass(HIGH_PASS_ORDER, HIGH_PASS_HZ, rate)
+    return sos_filter_each(sos, pieces, np.float32)
+
+
+def _frame_power(filtered: np.ndarray, rate: int) -> np.ndarray:
+    """(n,) high-passed float32 samples at `rate` Hz -> frame_power's (frames,) smoothed mean squares."""
+    hop = max(1, round(rate * HOP))
     count = max(1, len(filtered) // hop)
     padded = np.zeros(count * hop, dtype=np.float32)
     usable = min(len(filtered), count * hop)
@@ -255,12 +264,13 @@ def _voiced_frames(audio: Audio, groups: list[tuple[int, int]]) -> list[np.ndarr
     PITCH_RANGE_HZ.
     """
     factor = max(1, audio.rate // VOICING_RATE)
-    low = signal.resample_poly(audio.samples, 1, factor).astype(np.float32) if factor > 1 else audio.samples
+    low = resample_poly(audio.samples, 1, factor).astype(np.float32) if factor > 1 else audio.samples
     rate = audio.rate / factor
     window = round(VOICING_WINDOW * rate)
     hop = rate * HOP
     lag_lo, lag_hi = int(rate / PITCH_RANGE_HZ[1]), int(np.ceil(rate / PITCH_RANGE_HZ[0]))
-    nfft = 1 << int(np.ceil(np.log2(2 * window)))
+    # the circular autocorrelation equals the linear one up to lag_hi when nfft >= window + lag_hi
+    nfft = 1 << int(window + lag_hi - 1).bit_length()
     padded = np.concatenate((low, np.zeros(window, dtype=np.float32)))
     frames_of = [np.arange(first, last, VOICING_STEP) for first, last in groups]
     every = np.concatenate(frames_of)
@@ -272,7 +282,7 @@ def _voiced_frames(audio: Audio, groups: list[tuple[int, int]]) -> list[np.ndarr
         block = padded[idx]
         block = block - block.mean(axis=1, keepdims=True)
         spectrum = np.fft.rfft(block * np.hanning(window), n=nfft, axis=1)
-        acf = np.fft.irfft(np.abs(spectrum) ** 2, n=nfft, axis=1)
+        acf = np.fft.irfft(spectrum.real ** 2 + spectrum.imag ** 2, n=nfft, axis=1)  # no square root
         energy = np.maximum(acf[:, 0], 1e-12)
         peak = np.max(acf[:, lag_lo : lag_hi + 1] * correction, axis=1) / energy
         result[chunk : chunk + VOICING_CHUNK] = peak > VOICING_R
@@ -288,14 +298,23 @@ def dips(audio: Audio, span: Span, margin: float = DIP_MARGIN) -> tuple[tuple[fl
     within PLATEAU_DB of the minimum, so a real pause scores longer than a dip
     between two syllables.
     """
-    first = int(span.start * audio.rate)
-    part = Audio(audio.samples[first : int(span.end * audio.rate)], audio.rate, audio.source)
-    if part.duration < 2 * margin + HOP:
-        return ()
-    level = 10 * np.log10(frame_power(part) + POWER_EPSILON)
+    return all_dips(audio, (span,), margin)[0]
+
+
+def all_dips(audio: Audio, spans: tuple[Span, ...], margin: float = DIP_MARGIN) -> list[tuple[tuple[float, float], ...]]:
+    """`dips` of each of `spans`, each part high-passed on its own (from a zero state) but all in one pass."""
+    cuts = [(int(span.start * audio.rate), int(span.end * audio.rate)) for span in spans]
+    filtered = _high_passed(audio.rate, [audio.samples[first:last] for first, last in cuts])
+    return [_dips(_frame_power(part, audio.rate), span, margin) if len(part) / audio.rate >= 2 * margin + HOP else ()
+            for part, span in zip(filtered, spans, strict=True)]
+
+
+def _dips(power: np.ndarray, span: Span, margin: float) -> tuple[tuple[float, float], ...]:
+    """`dips` of the part `span` from its frame_power (frames,)."""
+    level = 10 * np.log10(power + POWER_EPSILON)
     level = np.convolve(level, np.ones(DIP_SMOOTH_FRAMES) / DIP_SMOOTH_FRAMES, mode="same")
     edge = round(margin / HOP)
-    minima, _ = signal.find_peaks(-level[edge:-edge], distance=round(DIP_DISTANCE / HOP), prominence=DIP_PROMINENCE_DB)
+    minima = find_peaks(-level[edge:-edge], distance=round(DIP_DISTANCE / HOP), prominence=DIP_PROMINENCE_DB)
     found = []
     for index in minima + edge:
         near = level <= level[index] + PLATEAU_DB

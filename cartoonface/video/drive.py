@@ -30,7 +30,6 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
 
 from cartoonface.face.model import FaceModel
 from cartoonface.face.mouth import MOUTH_SHAPES, MouthShape, Term
@@ -74,6 +73,9 @@ def low_pass(values: np.ndarray, fps: float, cutoff: float) -> np.ndarray:
     data = np.asarray(values, dtype=float)
     if cutoff >= 0.5 * fps or len(data) < 2:
         return data.copy()
+    # imported here: scipy.signal costs ~0.6 s of start-up, and only a video-driven job needs it
+    from scipy.signal import butter, sosfiltfilt
+
     sos = butter(FILTER_ORDER, cutoff, fs=fps, output="sos")
     pad = min(3 * (2 * len(sos) + 1), len(data) - 1)
     return sosfiltfilt(sos, data, axis=0, padlen=pad)
