@@ -3,6 +3,7 @@ key time of every track, the drawing the written animation shows, under the same
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -59,10 +60,13 @@ def shown(track: etree._Element) -> list[tuple[str, str | None, np.ndarray]]:
     animate = use.find(f"{S}animate")
     moves = use.findall(f"{S}animateTransform")
     rows = []
-    for index, value in enumerate(animate.get("values").split(";")):
+    times = [float(time) for time in animate.get("keyTimes").split(";")]
+    for time, value in zip(times, animate.get("values").split(";"), strict=True):
         matrix = np.eye(3)
         for move in moves:
-            matrix = matrix @ step_matrix(move.get("type"), move.get("values").split(";")[index])
+            # discrete: the value of the last key time at or before `time`
+            at = bisect.bisect_right([float(t) for t in move.get("keyTimes").split(";")], time) - 1
+            matrix = matrix @ step_matrix(move.get("type"), move.get("values").split(";")[at])
         drawing = defs[value[1:]]
         shape = drawing.get("data-shape")
         if drawing.tag == f"{S}use":

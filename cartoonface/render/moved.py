@@ -7,7 +7,8 @@ costs a clone of its source (~6.5 us per cloned element against ~2 us for an ele
 the page's first style update; docs/BENCHMARKS.md "Page style work"). In the page, `moved_tracks`
 drops those drawings: the track's shown `<use>` points at the source instead and takes the matrix
 from four discrete `<animateTransform additive="sum">` (translate, rotate, skewX, scale: any affine
-map with a positive determinant, composed in document order) on the same key times as its `href`.
+map with a positive determinant, composed in document order) on the key times of its `href` where
+their value changes.
 A reused mouth whose basic shape (`data-shape`) differs from its source's is kept as written, so the
 drawing the page shows still names the shape it shows.
 """
@@ -21,7 +22,7 @@ import re
 REUSED = re.compile(r'<use id="(f\w+)" href="#(f\w+)" transform="matrix\(([^)]*)\)"(?: data-shape="([^"]*)")?/>')
 SHAPED = re.compile(r'<g id="(f\w+)" data-shape="([^"]*)"')
 SHOWN = re.compile(r'</defs><use href="#(\w+)"><animate attributeName="href" calcMode="discrete" '
-                   r'values="([^"]*)"( keyTimes="[^"]*" dur="[^"]*" fill="freeze")/></use>')
+                   r'values="([^"]*)" keyTimes="([^"]*)"( dur="[^"]*" fill="freeze")/></use>')
 KINDS = ("translate", "rotate", "skewX", "scale")
 IDENTITY = ("0", "0", "0", "1")
 DECIMALS = 6  # degrees and scales: 1e-6 of a degree or of the scale moves a point 400 px out by < 0.01 px
@@ -44,6 +45,16 @@ def affine_steps(matrix: str) -> tuple[str, str, str, str]:
             f"{_number(scale_x)},{_number(scale_y)}")
 
 
+def _changes(kind: str, values: list[str], times: list[str], timing: str) -> str:
+    """A discrete additive `<animateTransform>` of `kind` holding `values` from `times` (key times,
+    the first 0), each value written only where it changes (most runs show a drawing as written:
+    identity)."""
+    kept = [index for index, value in enumerate(values) if index == 0 or value != values[index - 1]]
+    return (f'<animateTransform attributeName="transform" type="{kind}" calcMode="discrete" additive="sum" '
+            f'values="{";".join(values[index] for index in kept)}" '
+            f'keyTimes="{";".join(times[index] for index in kept)}"{timing}/>')
+
+
 def moved_tracks(text: str) -> str:
     """The tracks of an animation document `text` (as render/animation.py writes it) with their
     reused drawings shown by moving their source (module docstring); anything else as written."""
@@ -58,15 +69,14 @@ def moved_tracks(text: str) -> str:
         return ""
 
     def shown(found: re.Match[str]) -> str:
-        first, values, timing = found.groups()
+        first, values, times, timing = found.groups()
         steps = [moves.get(value[1:], (value[1:], IDENTITY)) for value in values.split(";")]
         if all(step == IDENTITY for _, step in steps):
             return found.group(0)
-        transforms = "".join(
-            f'<animateTransform attributeName="transform" type="{kind}" calcMode="discrete" additive="sum" '
-            f'values="{";".join(step[index] for _, step in steps)}"{timing}/>' for index, kind in enumerate(KINDS))
         href = ";".join(f"#{source}" for source, _ in steps)
+        transforms = "".join(_changes(kind, [step[index] for _, step in steps], times.split(";"), timing)
+                             for index, kind in enumerate(KINDS))
         return (f'</defs><use href="#{moves.get(first, (first,))[0]}"><animate attributeName="href" '
-                f'calcMode="discrete" values="{href}"{timing}/>{transforms}</use>')
+                f'calcMode="discrete" values="{href}" keyTimes="{times}"{timing}/>{transforms}</use>')
 
     return SHOWN.sub(shown, REUSED.sub(dropped, text))
