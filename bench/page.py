@@ -311,6 +311,24 @@ def element_kinds(svg_file: Path) -> Counter[str]:
     return Counter(etree.QName(node).localname for node in root.iter() if isinstance(node.tag, str))
 
 
+def instantiated(svg: etree._Element) -> tuple[int, int]:
+    """The elements of `svg` and the clones Chromium makes for its `<use>`s: every `<use>` in the
+    document, displayed or not, holds a clone of its target, whose own `<use>`s hold clones in turn."""
+    ids = {node.get("id"): node for node in svg.iter() if isinstance(node.tag, str) and node.get("id")}
+    nodes = [node for node in svg.iter() if isinstance(node.tag, str)]  # keeps the proxies (and id()s) alive
+    sizes: dict[int, int] = {}
+
+    def size(node: etree._Element) -> int:
+        """Elements of `node`'s subtree with the clones of the `<use>`s in it."""
+        if id(node) not in sizes:
+            target = ids.get((node.get("href") or "")[1:]) if node.tag == f"{SVG_NS}use" else None
+            sizes[id(node)] = (1 + sum(size(child) for child in node if isinstance(child.tag, str))
+                               + (size(target) if target is not None else 0))
+        return sizes[id(node)]
+
+    return len(nodes), size(svg) - len(nodes)
+
+
 def compare(pairs: list[tuple[Path, Path]]) -> None:
     """For each (before, after) pair of page folders of one recording: the elements per kind per
     minute of their animation.svg, and page ready, parse, style and playback of their index.html,
@@ -328,6 +346,9 @@ def compare(pairs: list[tuple[Path, Path]]) -> None:
               f"{sum(kinds[0].values()):,} -> {sum(kinds[1].values()):,})")
         for kind, _ in kinds[0].most_common(8):
             print(f"| {kind} | {kinds[0][kind] / minutes:,.0f} | {kinds[1][kind] / minutes:,.0f} |")
+        built = [instantiated(_svg_of((folder / "index.html").read_text(encoding="utf-8"))) for folder in (before, after)]
+        print("the pages' inline SVG: elements + clones of <use> targets: "
+              + " -> ".join(f"{own:,} + {clones:,} = {own + clones:,}" for own, clones in built))
     loads: dict[Path, list[dict[str, float]]] = {folder: [] for pair in pairs for folder in pair}
     with sync_playwright() as play:
         browser = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
