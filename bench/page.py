@@ -17,11 +17,16 @@ Figures, each the median of RUNS loads from file:// with the variants interleave
   drawing of each track dropped, with `<set>` runs instead of one discrete `<animate href>`, with
   presentation attributes instead of CSS classes, without clip paths, with the path data doubled.
   The difference to the page as made, divided by the elements (or KB) changed, is their cost;
-- playback: main-thread task time per second of the free-running SVG (CDP TaskDuration).
+- playback: main-thread task time per second of the free-running SVG (CDP TaskDuration);
+- with `--compare`, also the renderer main thread's CPU time (thread time of a trace, which a loaded
+  machine stretches far less than wall time): to ready, of its style updates (UpdateLayoutTree: the
+  style and the shadow trees of every `<use>`, docs/BENCHMARKS.md "Page style work"), and per second
+  of playing.
 """
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import statistics
@@ -45,6 +50,7 @@ SPLIT = """() => { const n = performance.getEntriesByType('navigation')[0];
     return {ready: window.__cfReady, read: n.responseEnd, parse: n.domInteractive - n.responseEnd,
             load: n.loadEventStart - n.domInteractive, paint: paint ? paint.startTime : NaN}; }"""
 COUNTERS = ("RecalcStyleDuration", "LayoutDuration", "ScriptDuration", "TaskDuration")
+TRACE_CATEGORIES = ["devtools.timeline", "blink", "toplevel"]
 SVG_SPAN = re.compile(r"<svg\b.*</svg>", re.S)
 
 
@@ -219,6 +225,48 @@ def playback_cost(browser, index: Path) -> float:
     return cost
 
 
+def _main_thread(trace: Path) -> list[dict]:
+    """The complete events of the renderer's main thread in the Chromium trace file `trace`."""
+    events = json.loads(trace.read_text(encoding="utf-8"))
+    events = events["traceEvents"] if isinstance(events, dict) else events
+    main = {(e["pid"], e["tid"]) for e in events
+            if e.get("name") == "thread_name" and e["args"].get("name") == "CrRendererMain"}
+    return [e for e in events if (e["pid"], e["tid"]) in main and e.get("ph") == "X"]
+
+
+def thread_ms(events: list[dict], name: str | None = None) -> float:
+    """Thread (CPU) time in ms of the events called `name`, or of the outermost events (None)."""
+    if name is not None:
+        return sum(e.get("tdur", 0) for e in events if e["name"] == name) / 1000
+    total, end = 0, -1
+    for event in sorted(events, key=lambda e: (e["ts"], -e.get("dur", 0))):
+        if event["ts"] >= end:
+            total, end = total + event.get("tdur", 0), event["ts"] + event.get("dur", 0)
+    return total / 1000
+
+
+def cpu_once(browser, index: Path, trace: Path) -> dict[str, float]:
+    """Open `index` in a fresh page under a trace: the main thread's CPU ms to ready and of its style
+    updates, then of playing (the SVG on its own, no audio) per second."""
+    page = browser.new_page(viewport=VIEWPORT)
+    page.add_init_script(READY_PROBE)
+    browser.start_tracing(page=page, path=str(trace), categories=TRACE_CATEGORIES)
+    page.goto(index.as_uri(), wait_until="load")
+    page.wait_for_function("window.__cfReady !== undefined")
+    browser.stop_tracing()
+    events = _main_thread(trace)
+    figures = {"cpu": thread_ms(events), "style cpu": thread_ms(events, "UpdateLayoutTree")}
+    page.evaluate("() => { const audio = document.getElementById('cf-audio'); if (audio) audio.pause(); }")
+    page.wait_for_timeout(300)
+    browser.start_tracing(page=page, path=str(trace), categories=TRACE_CATEGORIES)
+    page.evaluate("document.getElementById('cf-face') && document.getElementById('cf-face').unpauseAnimations()")
+    page.wait_for_timeout(PLAY_SECONDS * 1000)
+    browser.stop_tracing()
+    figures["playing cpu"] = thread_ms(_main_thread(trace)) / PLAY_SECONDS
+    page.close()
+    return figures
+
+
 def measure(folder: Path, work: Path) -> None:
     """Write the variants of `folder`'s index.html beside copies of its files under `work`, load each
     RUNS times (interleaved) and print one table row per variant."""
@@ -263,10 +311,29 @@ def element_kinds(svg_file: Path) -> Counter[str]:
     return Counter(etree.QName(node).localname for node in root.iter() if isinstance(node.tag, str))
 
 
+def instantiated(svg: etree._Element) -> tuple[int, int]:
+    """The elements of `svg` and the clones Chromium makes for its `<use>`s: every `<use>` in the
+    document, displayed or not, holds a clone of its target, whose own `<use>`s hold clones in turn."""
+    ids = {node.get("id"): node for node in svg.iter() if isinstance(node.tag, str) and node.get("id")}
+    nodes = [node for node in svg.iter() if isinstance(node.tag, str)]  # keeps the proxies (and id()s) alive
+    sizes: dict[int, int] = {}
+
+    def size(node: etree._Element) -> int:
+        """Elements of `node`'s subtree with the clones of the `<use>`s in it."""
+        if id(node) not in sizes:
+            target = ids.get((node.get("href") or "")[1:]) if node.tag == f"{SVG_NS}use" else None
+            sizes[id(node)] = (1 + sum(size(child) for child in node if isinstance(child.tag, str))
+                               + (size(target) if target is not None else 0))
+        return sizes[id(node)]
+
+    return len(nodes), size(svg) - len(nodes)
+
+
 def compare(pairs: list[tuple[Path, Path]]) -> None:
     """For each (before, after) pair of page folders of one recording: the elements per kind per
     minute of their animation.svg, and page ready, parse, style and playback of their index.html,
-    loaded RUNS times interleaved (medians, ms)."""
+    loaded RUNS times interleaved (medians, ms), then their main thread's CPU (cpu_once, RUNS times
+    interleaved)."""
     from playwright.sync_api import sync_playwright
 
     for before, after in pairs:
@@ -279,6 +346,9 @@ def compare(pairs: list[tuple[Path, Path]]) -> None:
               f"{sum(kinds[0].values()):,} -> {sum(kinds[1].values()):,})")
         for kind, _ in kinds[0].most_common(8):
             print(f"| {kind} | {kinds[0][kind] / minutes:,.0f} | {kinds[1][kind] / minutes:,.0f} |")
+        built = [instantiated(_svg_of((folder / "index.html").read_text(encoding="utf-8"))) for folder in (before, after)]
+        print("the pages' inline SVG: elements + clones of <use> targets: "
+              + " -> ".join(f"{own:,} + {clones:,} = {own + clones:,}" for own, clones in built))
     loads: dict[Path, list[dict[str, float]]] = {folder: [] for pair in pairs for folder in pair}
     with sync_playwright() as play:
         browser = play.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=CHROMIUM_ARGS)
@@ -287,11 +357,18 @@ def compare(pairs: list[tuple[Path, Path]]) -> None:
                 loads[folder].append(load_once(browser, folder / "index.html"))
         playing = {folder: statistics.median(playback_cost(browser, folder / "index.html") for _ in range(3))
                    for folder in loads}
+        cpus: dict[Path, list[dict[str, float]]] = {folder: [] for folder in loads}
+        with tempfile.TemporaryDirectory(prefix="cartoonface-trace-") as tmp:
+            for _ in range(RUNS):
+                for folder in loads:
+                    cpus[folder].append(cpu_once(browser, folder / "index.html", Path(tmp) / "trace.json"))
         browser.close()
     for folder, runs in loads.items():
         med = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+        cpu = {key: statistics.median(r[key] for r in cpus[folder]) for key in cpus[folder][0]}
         print(f"{folder}: ready {med['ready']:.0f} parse {med['parse']:.0f} style {med['RecalcStyleDuration']:.0f} "
-              f"layout {med['LayoutDuration']:.0f} playing {playing[folder]:.0f} ms/s")
+              f"layout {med['LayoutDuration']:.0f} playing {playing[folder]:.0f} ms/s; main thread CPU: to ready "
+              f"{cpu['cpu']:.0f} style {cpu['style cpu']:.0f} playing {cpu['playing cpu']:.0f} ms/s")
 
 
 def main(folders: list[Path] | None = None) -> None:

@@ -26,6 +26,7 @@ from cartoonface import __version__
 from cartoonface.errors import OptionError
 from cartoonface.files import write_bytes_atomic
 from cartoonface.render.animation import PARTS_ID
+from cartoonface.render.moved import moved_tracks
 from cartoonface.speech.records import Alignment
 from cartoonface.speech.audio import page_copy
 from cartoonface.speech.audio_only import transcribed
@@ -113,7 +114,9 @@ def inline_svg(svg: bytes) -> Markup:
     showing (the sprite-sheet way: a `<use>` still draws its clone); the clip paths inside them move
     first to the document's own `<defs>`, where they stay in effect (a clip path in an undisplayed
     subtree clips nothing). Same drawing, page ready in about half the time (docs/BENCHMARKS.md,
-    "Page load in Chromium"). A document without a `<defs>` before its first track is kept as written.
+    "Page load in Chromium"). The tracks' reused drawings are shown by moving their source
+    (render/moved.py: Chromium clones every `<use>`'s target at load, shown or not). A document
+    without a `<defs>` before its first track is kept as written.
     """
     text = svg.decode("utf-8")
     if text.startswith("<?xml"):
@@ -128,7 +131,7 @@ def inline_svg(svg: bytes) -> Markup:
         clips.append(clip.group(0))
         return ""
 
-    tracks = CLIP_PATH.sub(moved, text[shared_end:])
+    tracks = CLIP_PATH.sub(moved, moved_tracks(text[shared_end:]))
     tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", tracks).replace(PARTS_DEFS, f'<defs id="{PARTS_ID}" style="display:none">', 1)
     return Markup(text[:shared_end] + "".join(clips) + tracks)
 
