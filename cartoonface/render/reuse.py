@@ -56,7 +56,7 @@ SHIFT_DECIMALS = 1
 # middle of the points' spread and rounded. Most reused parts are then a whole-pixel shift or the
 # earlier one itself ("1 0 0 1 0 0", IDENTITY), which gzip finds again: docs/BENCHMARKS.md, "Gzipped
 # weight".
-FORMS = ((0, 0), (0, 1), (2, 0), (2, 1), (3, 0), (3, 1), (LINEAR_DECIMALS, SHIFT_DECIMALS))
+FORMS = tuple((linear, shift) for linear in (0, 2, 3, LINEAR_DECIMALS) for shift in (0, SHIFT_DECIMALS))
 IDENTITY = "1 0 0 1 0 0"
 SHORTEN_POINTS = 1 << 18  # points of the pairs _shortened stacks at a time (~4 MB an array)
 # The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
@@ -279,7 +279,10 @@ def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndar
     the target's points less the source's transformed, rounded to its decimals; the fitted matrix
     where none is (its e and f were fitted on the mean, not the middle). Pairs of one number of
     points are checked together, SHORTEN_POINTS points at a time."""
-    forms: list[tuple[np.ndarray, float]] = [(matrix, error) for _, _, matrix, error in chosen]
+    if not chosen:
+        return []
+    matrices = np.stack([matrix for _, _, matrix, _ in chosen])  # (P, 2, 3), replaced by the forms that fit
+    errors = np.array([error for _, _, _, error in chosen])
     by_size: dict[int, list[int]] = {}
     for index, (target, _, _, _) in enumerate(chosen):
         by_size.setdefault(len(shapes[target].points), []).append(index)
@@ -289,23 +292,28 @@ def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndar
             rows = np.array(members[start:start + step])
             sources = np.stack([shapes[chosen[row][1]].points for row in rows])  # (M, N, 2)
             targets = np.stack([shapes[chosen[row][0]].points for row in rows])
-            fitted = np.stack([chosen[row][2][:, :2] for row in rows])  # (M, 2, 2)
+            fitted = matrices[rows, :, :2]  # (M, 2, 2)
             strokes = np.array([max(shapes[chosen[row][0]].stroke, shapes[chosen[row][1]].stroke) for row in rows]) / 2
-            for linear_decimals, shift_decimals in FORMS:  # each on the pairs no earlier form fits
-                linear = np.round(fitted, linear_decimals)
-                a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
-                residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
-                                               b * sources[..., 0] + d * sources[..., 1]], axis=2)
-                shift = np.round((residual.max(axis=1) + residual.min(axis=1)) / 2, shift_decimals)  # (M, 2)
-                errors = (np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1))
-                          + _scale_change(linear) * strokes)
-                fits = errors <= tolerance
-                for at in np.flatnonzero(fits).tolist():
-                    forms[rows[at]] = (np.concatenate([linear[at], shift[at, :, None]], axis=1), float(errors[at]))
-                rows, sources, targets, fitted, strokes = (values[~fits] for values in (rows, sources, targets, fitted, strokes))
+            for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
                 if not len(rows):
                     break
-    return [(matrix_text(matrix), error) for matrix, error in forms]
+                if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
+                    linear = np.round(fitted, linear_decimals)
+                    a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
+                    residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
+                                                   b * sources[..., 0] + d * sources[..., 1]], axis=2)
+                    middle = (residual.max(axis=1) + residual.min(axis=1)) / 2  # (M, 2)
+                    scale = _scale_change(linear) * strokes
+                shift = np.round(middle, shift_decimals)
+                within = np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1)) + scale
+                fits = within <= tolerance
+                matrices[rows[fits]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
+                errors[rows[fits]] = within[fits]
+                rows, sources, targets, fitted, strokes, linear, residual, middle, scale = (
+                    values[~fits] for values in (rows, sources, targets, fitted, strokes, linear, residual, middle, scale))
+    texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
+    return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
+            for matrix, error in zip(matrices, errors.tolist(), strict=True)]
 
 
 def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
