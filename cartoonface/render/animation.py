@@ -26,6 +26,9 @@ animation about three times as fast: docs/BENCHMARKS.md, "Frames by one <use>"):
   not drawn into the parts but is a rotation of the hair and face layers (one
   discrete `<animateTransform>` each, and a skew of the neck about the collar),
   so a sideways lean redraws nothing;
+- a drawing (or a part of one) within the tolerance of a transform of an earlier one is a `<use>`
+  of it with the transform (render/reuse.py); one shown unmoved is that drawing (_aliased): its
+  frames show the earlier one;
 - the part drawings are written by the compactor of render/compact.py:
   coordinates are whole pixels in relative path commands (render/pathdata.py);
 - a part shown in several drawings of its track (the face outline under
@@ -65,7 +68,7 @@ from cartoonface.render.compact import Writer, bare, merge_alike, part_paths, sh
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.pathdata import Compacted, compacted, merged
-from cartoonface.render.reuse import TOLERANCE, Reuse, find, find_alike, joined, shapes_of
+from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
@@ -85,6 +88,11 @@ MOUTH_TRACK = TRACK_OF["mouth"]  # its frames carry data-shape
 # The parts reused on their own (_reuse), by how render/svg.py's face_parts begins them: those
 # that pay (docs/BENCHMARKS.md, "Mouths reused"; the chin's shadow, an ellipse, is as short as a <use>).
 ALONE = ('<g class="mouth"', '<g class="eye-', '<path class="face"')
+# ... and those searched the same way but taken only unmoved (reuse.IDENTITY: then the earlier part
+# itself, which makes more drawings equal, _aliased): the hair and fringe, a few hundred long
+# outlines (-1.7 KB a minute gzipped; every other part too: no more gained, ~0.2 s more search on
+# the 3-minute bench book: docs/BENCHMARKS.md, "Gzipped weight").
+UNMOVED = ('<path class="hair"', '<path class="fringe"')
 HAIR_TRACKS = ("hair",)  # drawn in the hair layer, behind the clothes; every other track in the face layer
 # Discrete animations (the tracks' drawings, the head's roll, the body) last a power of ten of
 # milliseconds, the first at or above the frames' end (the last value is frozen after that), so that a
@@ -228,7 +236,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     """A getter of the drawings of each of `tracks` shown as a transform of an earlier drawing of
     their track within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing
     number; and of the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings
-    still written shown as a transform of an earlier written part (reuse.find_alike): the mouth mix
+    still written shown as a transform of an earlier written part (reuse.find_alike), of the UNMOVED
+    parts only those shown as such a part unmoved (reuse.IDENTITY): the mouth mix
     changes in nearly every face drawing, so most are written, but their parts repeat under other
     poses. A drawing's parts are tidy part numbers; `mapping` gives the tidy number of each of
     `writer`'s raw parts, the first of which is the part's geometry as drawn (the others differ by
@@ -275,10 +284,41 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
     written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
                if number not in drawings[name]]
     alone = list(dict.fromkeys(number for drawing in written for number in drawing
-                               if writer.raw[first[number]].element.startswith(ALONE)))
+                               if writer.raw[first[number]].element.startswith(ALONE + UNMOVED)))
     found = find_alike([parts[number] for number in alone], tolerance)
     return drawings, {alone[number]: Reuse(alone[reuse.source], reuse.matrix, reuse.error)
-                      for number, reuse in found.items()}
+                      for number, reuse in found.items()
+                      if reuse.matrix == IDENTITY or writer.raw[first[alone[number]]].element.startswith(ALONE)}
+
+
+def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
+             moved: dict[int, Reuse]) -> tuple[dict[str, _Track], dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+    """`tracks`, the drawings `reused` and the parts `moved` (_reuse's) without the transforms that
+    are the IDENTITY (render/reuse.py writes a matrix as short as the tolerance allows, and many
+    are): a part shown as its source unmoved is that part in its drawing; a drawing shown as its
+    source unmoved, or made equal to an earlier written drawing by that, is no longer shown: its
+    frames show that drawing (in the mouth track only where both show one mouth shape), as do the
+    drawings reused from it. The drawings no frame shows stay in their place in `drawings`."""
+    parts = {number: reuse.source for number, reuse in moved.items() if reuse.matrix == IDENTITY}
+    new_tracks, new_reused = {}, {}
+    for name, track in tracks.items():
+        own = reused[name]
+        drawings = [drawing if number in own else [parts.get(part, part) for part in drawing]
+                    for number, drawing in enumerate(track.drawings)]
+        alias: dict[int, int] = {}
+        firsts: dict[tuple[object, ...], int] = {}
+        for number, drawing in enumerate(drawings):
+            if number not in own:
+                key = (*drawing, track.shapes[number] if track.shapes else "")
+                alias[number] = firsts.setdefault(key, number)
+        for number, reuse in own.items():
+            source = alias[reuse.source]
+            alias[number] = (source if reuse.matrix == IDENTITY and (not track.shapes or track.shapes[number] == track.shapes[source])
+                             else number)
+        new_tracks[name] = _Track(drawings, [alias[key] for key in track.keys], track.shapes)
+        new_reused[name] = {number: dataclasses.replace(reuse, source=alias[reuse.source])
+                            for number, reuse in own.items() if alias[number] == number}
+    return new_tracks, new_reused, {number: reuse for number, reuse in moved.items() if number not in parts}
 
 
 def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
@@ -291,15 +331,17 @@ def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._
     `<g>` around it (one element fewer for the browser to build). The mouth track's drawings are
     `<g>`s carrying `data-shape`."""
     holder = element(parent, "g", data_part=track)
-    if len(drawings) == 1:
-        holder.extend(drawings[0])
+    if len(set(keys)) == 1:
+        holder.extend(drawings[keys[0]])
         return
     store = element(holder, "defs")
-    ids = [next(names) for _ in drawings]
-    for number, (name, drawing) in enumerate(zip(ids, drawings, strict=True)):
+    ids = {number: next(names) for number in sorted(set(keys))}  # drawings no frame shows (_aliased) left out
+    for number, name in ids.items():
+        drawing = drawings[number]
         if number in reused:
-            shown = element(store, "use", id=name, href=f"#{ids[reused[number].source]}",
-                            transform=f"matrix({reused[number].matrix})")
+            shown = element(store, "use", id=name, href=f"#{ids[reused[number].source]}")
+            if reused[number].matrix != IDENTITY:
+                shown.set("transform", f"matrix({reused[number].matrix})")
             if track == MOUTH_TRACK:
                 shown.set("data-shape", shapes[number])
             continue
@@ -521,11 +563,14 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
     reused, moved = reuse()
+    tracks, reused, moved = _aliased(tracks, reused, moved)
     report(REUSED_SHARE)
     # the parts several drawings show get a <defs> of their own after the document's, which a page
     # can leave undisplayed as it does the tracks' (render/pages.inline_svg)
     parts = element(None, "defs", id=PARTS_ID)
-    elements = share({name: [[] if number in reused[name] else drawing for number, drawing in enumerate(track.drawings)]
+    visible = {name: set(track.keys) for name, track in tracks.items()}
+    elements = share({name: [[] if number in reused[name] or number not in visible[name] else drawing
+                             for number, drawing in enumerate(track.drawings)]
                       for name, track in tracks.items()}, tidy, parts,
                      {number: (reuse.source, reuse.matrix) for number, reuse in moved.items()})
     if len(parts):

@@ -64,6 +64,8 @@ _ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "z": 0
 # merge_alike joins paths whose extents (with their control points) lie at least this many pixels
 # apart beyond half their stroke width: antialiasing reaches 1 px.
 MERGE_GAP = 1.0
+_START = re.compile(r"^[Mm][^A-Za-z]*")  # path data's first move (_kind)
+_MOVE = re.compile(rb' d="[Mm][^A-Za-z"]*')  # path data's first move in a definition's text (_hoist)
 _PATH_DATA = re.compile(r' d="([^"]*)"')
 _CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's text (Writer._short_classes)
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
@@ -339,8 +341,14 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int]
     for its `<use>`s)."""
     keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
     counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
-    names: dict[bytes, str] = {}
-    shared: list[etree._Element] = []
+    # named and written alike outlines side by side (their path data after its first move), for gzip
+    order = sorted((content for content, count in counts.items() if count > 1), key=lambda content: _MOVE.sub(b"", content))
+    names = {key: short_id("v", number) for number, key in enumerate(order)}
+    shared = [etree.fromstring(key) for key in order]
+    for copy, content in zip(shared, order, strict=True):
+        copy.set("id", names[content])
+        if len(copy) == 1:
+            copy[0].set("id", names[content] + "_")
     texts: list[str] = []
     lost: list[int] = []
     for pieces, drawing in zip(drawings, keys, strict=True):
@@ -350,17 +358,9 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int]
             if key is None or counts[key] < 2:
                 kept.append(text)
                 continue
-            name = names.get(key)
-            if name is None:
-                name = names[key] = short_id("v", len(names))
-                copy = etree.fromstring(key)
-                copy.set("id", name)
-                if len(copy) == 1:
-                    copy[0].set("id", name + "_")
-                shared.append(copy)
             own = _OWN_ID.match(text)
             assert own is not None, text
-            local[own.group(1)] = name
+            local[own.group(1)] = names[key]
         joined = "".join(kept)
         for old, new in local.items():  # references by url() and a clip path's path's <use>
             joined = joined.replace(f'="url(#{old})"', f'="url(#{new})"').replace(f' href="#{old}_"', f' href="#{new}_"')
@@ -517,6 +517,15 @@ def bare(elements: Sequence[etree._Element]) -> bool:
     return len(elements) == 1 and elements[0].tag not in DEFINITIONS and elements[0].get("id") is None
 
 
+def _kind(elements: Sequence[etree._Element]) -> tuple[str, str, int, int, str]:
+    """The order of the parts share puts into `<defs>`: parts of one kind (their first element's tag and
+    class, how many elements) together, alike outlines side by side (the first path data's commands and
+    numbers after its starting point): gzip finds their repeats within its window (32 KB)."""
+    first = elements[0]
+    path = next((node.get("d", "") for node in first.iter(f"{{{SVG}}}path")), "")
+    return first.tag, first.get("class", ""), len(elements), len(first), _START.sub("", path, count=1)
+
+
 def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
           defs: etree._Element, moved: Mapping[int, tuple[int, str]] | None = None) -> dict[str, list[list[etree._Element]]]:
     """The elements of every drawing of `drawings` (lists of tidy part numbers by group, as
@@ -531,14 +540,13 @@ def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]]
     uses = Counter(shown[part][0] if part in shown else part
                    for track in drawings.values() for drawing in track for part in drawing)
     names: dict[int, str] = {}
-    for part, count in uses.items():
-        if count > 1:
-            names[part] = short_id("g", len(names))
-            if bare(tidy[part]):
-                tidy[part][0].set("id", names[part])
-                defs.append(tidy[part][0])
-            else:
-                element(defs, "g", id=names[part]).extend(tidy[part])
+    for part in sorted((part for part, count in uses.items() if count > 1), key=lambda part: _kind(tidy[part])):
+        names[part] = short_id("g", len(names))
+        if bare(tidy[part]):
+            tidy[part][0].set("id", names[part])
+            defs.append(tidy[part][0])
+        else:
+            element(defs, "g", id=names[part]).extend(tidy[part])
 
     def node(part: int) -> list[etree._Element]:
         if part in shown:

@@ -24,6 +24,11 @@ transform of its own, arcs, other shapes) is always written.
 A part of a drawing still written in full (its mouth, an eye: find_alike) is reused on its own the
 same way, its candidates found among all earlier parts of its skeleton by their shape once
 normalised by a least-squares affine, not only among the recent ones.
+
+The matrix found is written as short as the tolerance allows (_shortened, FORMS): a..d and e, f with
+fewer decimals where every point stays within it, so most are a whole-pixel shift or the earlier
+drawing itself unmoved (IDENTITY, which render/animation.py writes as that drawing): texts that gzip
+finds again.
 """
 
 from __future__ import annotations
@@ -43,9 +48,17 @@ TOLERANCE = 0.5
 # A drawing is compared with the last CANDIDATES drawings of its skeleton before it, the nearest in
 # time first (pose changes slowly), and shown as a transform of the first written one that fits.
 CANDIDATES = 16
-# The matrix as written: a..d to 4 decimals (1e-4 of 400 px is 0.04 px), e and f to 1 (0.05 px).
+# The matrix as fitted: a..d to 4 decimals (1e-4 of 400 px is 0.04 px), e and f to 1 (0.05 px).
 LINEAR_DECIMALS = 4
 SHIFT_DECIMALS = 1
+# ... and as written (_shortened): the first of FORMS (decimals of a..d, of e and f; the shortest texts
+# first) that keeps every point within the tolerance, a..d the fitted ones rounded, e and f put in the
+# middle of the points' spread and rounded. Most reused parts are then a whole-pixel shift or the
+# earlier one itself ("1 0 0 1 0 0", IDENTITY), which gzip finds again: docs/BENCHMARKS.md, "Gzipped
+# weight".
+FORMS = tuple((linear, shift) for linear in (0, 2, 3, LINEAR_DECIMALS) for shift in (0, SHIFT_DECIMALS))
+IDENTITY = "1 0 0 1 0 0"
+SHORTEN_POINTS = 1 << 18  # points of the pairs _shortened stacks at a time (~4 MB an array)
 # The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
 # dozen points is about as good as on all of them, and the pairs of a track fit in a few batches); the
 # error is measured on them and, for a pair within the tolerance there, on all the points.
@@ -258,6 +271,51 @@ def _fixed(units: int, decimals: int) -> str:
     return f"{sign}{whole or ''}.{fraction:0{decimals}d}".rstrip("0")
 
 
+def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndarray, float]],
+               tolerance: float) -> list[tuple[str, float]]:
+    """The matrix text and error (px, as _error's) of each of `chosen` (a target's and a source's
+    index into `shapes`, their fitted matrix (2, 3) and its error) in the first of FORMS within
+    `tolerance`: a..d the fitted ones rounded to its decimals, e and f the middle of the spread of
+    the target's points less the source's transformed, rounded to its decimals; the fitted matrix
+    where none is (its e and f were fitted on the mean, not the middle). Pairs of one number of
+    points are checked together, SHORTEN_POINTS points at a time."""
+    if not chosen:
+        return []
+    matrices = np.stack([matrix for _, _, matrix, _ in chosen])  # (P, 2, 3), replaced by the forms that fit
+    errors = np.array([error for _, _, _, error in chosen])
+    by_size: dict[int, list[int]] = {}
+    for index, (target, _, _, _) in enumerate(chosen):
+        by_size.setdefault(len(shapes[target].points), []).append(index)
+    for size, members in by_size.items():
+        step = max(1, SHORTEN_POINTS // size)
+        for start in range(0, len(members), step):
+            rows = np.array(members[start:start + step])
+            sources = np.stack([shapes[chosen[row][1]].points for row in rows])  # (M, N, 2)
+            targets = np.stack([shapes[chosen[row][0]].points for row in rows])
+            fitted = matrices[rows, :, :2]  # (M, 2, 2)
+            strokes = np.array([max(shapes[chosen[row][0]].stroke, shapes[chosen[row][1]].stroke) for row in rows]) / 2
+            for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
+                if not len(rows):
+                    break
+                if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
+                    linear = np.round(fitted, linear_decimals)
+                    a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
+                    residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
+                                                   b * sources[..., 0] + d * sources[..., 1]], axis=2)
+                    middle = (residual.max(axis=1) + residual.min(axis=1)) / 2  # (M, 2)
+                    scale = _scale_change(linear) * strokes
+                shift = np.round(middle, shift_decimals)
+                within = np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1)) + scale
+                fits = within <= tolerance
+                matrices[rows[fits]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
+                errors[rows[fits]] = within[fits]
+                rows, sources, targets, fitted, strokes, linear, residual, middle, scale = (
+                    values[~fits] for values in (rows, sources, targets, fitted, strokes, linear, residual, middle, scale))
+    texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
+    return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
+            for matrix, error in zip(matrices, errors.tolist(), strict=True)]
+
+
 def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every pair of a drawing and one of the last `candidates` drawings of its skeleton before it
     (`skeletons` in order): the later's and the earlier's index, and how many drawings of the
@@ -313,13 +371,14 @@ def _choose(shapes: Sequence[Shape | None],
     near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
     errors = _errors(group, earlier[near], matrices[near], later[near], scales[near]).tolist()
     written = np.ones(len(group), dtype=bool)
-    found: dict[int, Reuse] = {}
+    chosen: list[tuple[int, int, np.ndarray, float]] = []
     for pair, within in zip(near.tolist(), errors, strict=True):
         target, source = int(later[pair]), int(earlier[pair])
         if written[target] and written[source] and within <= tolerance:
-            found[numbers[target]] = Reuse(numbers[source], matrix_text(matrices[pair]), within)
+            chosen.append((target, source, matrices[pair], within))
             written[target] = False
-    return found
+    return {numbers[target]: Reuse(numbers[source], text, error)
+            for (target, source, _, _), (text, error) in zip(chosen, _shortened(group, chosen, tolerance), strict=True)}
 
 
 def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
