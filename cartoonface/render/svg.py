@@ -36,7 +36,7 @@ from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
 from cartoonface.render.geometry import all_face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import all_mouth_outlines, all_mouth_texts
+from cartoonface.render.mouth import drawn_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
@@ -213,7 +213,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
-    mouths = all_mouth_texts(all_mouth_outlines(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d))
+    mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
     drawings = []
     for index, (part_shapes, mouth, shadow) in enumerate(zip(shapes, mouths, shadows, strict=True)):
