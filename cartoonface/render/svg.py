@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from lxml import etree
@@ -215,34 +216,58 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
+    made: dict[tuple[str, ...], Part] = {}
     drawings = []
     for index, (part_shapes, mouth, shadow) in enumerate(zip(shapes, mouths, shadows, strict=True)):
         # the cheeks' and the eyes' numbers (CHEEK_COUNT, then EYE_COUNT per eye)
         state_texts = texts[index * per_state:(index + 1) * per_state]
-        drawings.append(_parts(part_shapes, shadow, state_texts, _mouth(mouth, uid, style), uid, style))
+        drawings.append(_parts(_part_keys(part_shapes, shadow, state_texts), made, uid, style)
+                        + (_mouth(mouth, uid, style),))
     return drawings
 
 
-def _parts(shapes: dict[str, str], shadow: str, texts: tuple[str, ...], mouth: Part, uid: str,
+# The parts drawn as one path of geometry's face_shapes: their class, by the face_shapes name,
+# and their style (_styles).
+_PATHS = {"hair": ("hair", "hair"), "ear-l": ("ear_l", "skin"), "ear-r": ("ear_r", "skin"), "face": ("face", "skin"),
+          "fringe": ("fringe", "fringe"), "nose": ("nose", "nose"), "brow-l": ("brow_l", "brow"),
+          "brow-r": ("brow_r", "brow")}
+
+
+def _part_keys(shapes: dict[str, str], shadow: str, texts: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
+    """The parts of one state but the mouth, in face_parts' order, each as its key: its class and
+    the texts it is drawn from (_part draws it), from the state's path data `shapes` (geometry's
+    face_shapes), the chin's `shadow` and the number `texts` of the cheeks and the eyes."""
+    paths = {name: (name, shapes[shape]) for name, (shape, _) in _PATHS.items()}
+    return (paths["hair"], paths["ear-l"], paths["ear-r"], ("chin-shadow", shadow), paths["face"], paths["fringe"],
+            ("cheeks", *texts[:_CHEEK_COUNT]), paths["nose"], paths["brow-l"], paths["brow-r"],
+            ("eye-l", shapes["eye_l"], shapes["lid_l"], *texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT]),
+            ("eye-r", shapes["eye_r"], shapes["lid_r"], *texts[_CHEEK_COUNT + _EYE_COUNT:]))
+
+
+def _parts(keys: tuple[tuple[str, ...], ...], made: dict[tuple[str, ...], Part], uid: str,
            style: dict[str, str]) -> tuple[Part, ...]:
-    """face_parts' parts of one state from its path data `shapes` (geometry's face_shapes), the
-    chin's `shadow`, the number `texts` of the cheeks and the eyes and the `mouth`."""
-    eyes = [_eye(shapes, "l", texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT], uid, style),
-            _eye(shapes, "r", texts[_CHEEK_COUNT + _EYE_COUNT:], uid, style)]
-    return (
-        Part("hair", f'<path class="hair" d="{shapes["hair"]}"{style["hair"]}/>'),
-        *(Part(f"ear-{side}", f'<path class="ear-{side}" d="{shapes[f"ear_{side}"]}"{style["skin"]}/>')
-          for side in "lr"),
-        Part("chin-shadow", shadow),
-        Part("face", f'<path class="face" d="{shapes["face"]}"{style["skin"]}/>'),
-        Part("fringe", f'<path class="fringe" d="{shapes["fringe"]}"{style["fringe"]}/>'),
-        Part("cheeks", _cheeks(texts[:_CHEEK_COUNT], style)),
-        Part("nose", f'<path class="nose" d="{shapes["nose"]}"{style["nose"]}/>'),
-        *(Part(f"brow-{side}", f'<path class="brow-{side}" d="{shapes[f"brow_{side}"]}"{style["brow"]}/>')
-          for side in "lr"),
-        *eyes,
-        mouth,
-    )
+    """The parts of `keys` (_part_keys), each drawn once per batch: `made` holds those drawn so
+    far by key (a part drawn again is the same object: its text written once, and equal parts of
+    the batch are one object for render/animation.py's pickles and dictionaries)."""
+    parts = []
+    for key in keys:
+        part = made.get(key)
+        if part is None:
+            part = made[key] = _part(key, uid, style)
+        parts.append(part)
+    return tuple(parts)
+
+
+def _part(key: tuple[str, ...], uid: str, style: dict[str, str]) -> Part:
+    """The part of `key` (_part_keys: its class, then its texts)."""
+    name, *texts = key
+    if name in _PATHS:
+        return Part(name, f'<path class="{name}" d="{texts[0]}"{style[_PATHS[name][1]]}/>')
+    if name == "chin-shadow":
+        return Part(name, texts[0])
+    if name == "cheeks":
+        return Part(name, _cheeks(texts, style))
+    return _eye(name[-1], texts[0], texts[1], texts[2:], uid, style)
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> etree._Element:
@@ -274,7 +299,7 @@ def _cheek_numbers(points: list[list[float]], d: float) -> list[float]:
     return numbers
 
 
-def _cheeks(texts: tuple[str, ...], style: dict[str, str]) -> str:
+def _cheeks(texts: Sequence[str], style: dict[str, str]) -> str:
     """The text of the cheeks' `<g class="cheeks">` from the number `texts` of _cheek_numbers."""
     ellipses = "".join(f'<ellipse cx="{cx}" cy="{cy}" rx="{rx}"{style["cheek_ry"]}/>'
                        for cx, cy, rx in (texts[:3], texts[3:6]))
@@ -302,10 +327,10 @@ def _eye_numbers(eyeball: tuple[float, float, float]) -> list[float]:
     return [x, y, r, PUPIL * r, x - GLINT_LEFT * r, y - GLINT_UP * r, GLINT * r]
 
 
-def _eye(shapes: dict[str, str], side: str, texts: tuple[str, ...], uid: str, style: dict[str, str]) -> Part:
+def _eye(side: str, outline: str, lid: str, texts: Sequence[str], uid: str, style: dict[str, str]) -> Part:
     """Eye `side`: white, clipped iris + pupil + the lid's shadow + highlight, outline, upper
-    lid; its clip path the eye outline. `texts`: the numbers of _eye_numbers as text."""
-    outline, lid = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
+    lid; its clip path the eye `outline` (path data, as the `lid`'s). `texts`: the numbers of
+    _eye_numbers as text."""
     clip_id = f"cf-eye-{side}-{uid}"
     cx, cy, r, pupil, glint_x, glint_y, glint = texts
     text = (f'<g class="eye-{side}"><path d="{outline}"{style["white"]}/><g clip-path="url(#{clip_id})">'
