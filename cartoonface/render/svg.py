@@ -204,13 +204,9 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     style = _style_texts(face)
     shapes = all_face_shapes(posed)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
-    rows = posed.xy[:, _ROWS].tolist()
-    pupils, (r0, r1) = posed.pupils.tolist(), posed.iris_r.tolist()
-    numbers = []
-    for points, eyes in zip(rows, pupils, strict=True):
-        left, right = _eyeballs(eyes, (r0, r1), points)
-        numbers += _cheek_numbers(points, face.fapu.d) + _eye_numbers(left) + _eye_numbers(right)
-    texts = number_texts(np.array(numbers))
+    points = posed.xy[:, _ROWS]
+    eyes = _eyeballs(posed.pupils, posed.iris_r, points)
+    texts = number_texts(np.concatenate([_cheek_numbers(points, face.fapu.d), _eye_numbers(eyes)], axis=1))
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
@@ -286,17 +282,21 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     return group
 
 
-def _cheek_numbers(points: list[list[float]], d: float) -> list[float]:
+def _hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """math.hypot of each pair of `x`, `y` (same shape; np.hypot may differ in the last bit)."""
+    return np.array(list(map(math.hypot, x.ravel().tolist(), y.ravel().tolist())), dtype=float).reshape(np.shape(x))
+
+
+def _cheek_numbers(points: np.ndarray, d: float) -> np.ndarray:
     """Blush under each eye, between the eye's lower lid and the mouth corner on its side: the
-    centre x, y and the horizontal radius of the left's ellipse and the right's (6 pixels).
-    `points`: the posed rows _ROWS as [x, y] lists; `d` the FAPU d in pixels."""
-    numbers = []
-    for first, mouth_corner in ((0, points[8]), (4, points[9])):
-        (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
-        width = math.hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
-        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - CHEEK_LIFT * d
-        numbers += [CHEEK_OUTER * ox + CHEEK_INNER * ix, cy, CHEEK[0] * d * min(width, CHEEK_STRETCH)]
-    return numbers
+    centre x, y and the horizontal radius of the left's ellipse and the right's, (S, 6) pixels.
+    `points`: (S, 10, 2) the posed rows _ROWS of S states; `d` the FAPU d in pixels."""
+    eyes = points[:, :8].reshape(-1, 2, 4, 2)  # (S, eye, outline point, xy)
+    (ox, oy), (ix, iy), lower_y = eyes[:, :, 0].transpose(2, 0, 1), eyes[:, :, 2].transpose(2, 0, 1), eyes[:, :, 3, 1]
+    width = _hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
+    cy = 0.5 * lower_y + 0.5 * points[:, 8:, 1] - CHEEK_LIFT * d
+    return np.stack([CHEEK_OUTER * ox + CHEEK_INNER * ix, cy, CHEEK[0] * d * np.minimum(width, CHEEK_STRETCH)],
+                    axis=2).reshape(-1, 6)
 
 
 def _cheeks(texts: Sequence[str], style: dict[str, str]) -> str:
@@ -306,25 +306,24 @@ def _cheeks(texts: Sequence[str], style: dict[str, str]) -> str:
     return f'<g class="cheeks" fill="url(#cf-cheek)">{ellipses}</g>'
 
 
-def _eyeballs(pupils: list[list[float]], radii: tuple[float, float],
-             points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
-    """(x, y, iris radius) for the eye drawn "l" and "r", each pupil of `pupils` (PosedFace.pupils
-    as lists, iris radii `radii`) paired with the eye whose outline centre (from `points`, the
-    rows _ROWS) is nearest: PosedFace has its own order."""
-    (x0, y0), (x1, y1) = pupils
-    cx = sum(p[0] for p in points[:4]) / 4
-    cy = sum(p[1] for p in points[:4]) / 4
-    r0, r1 = radii
-    if math.hypot(x0 - cx, y0 - cy) <= math.hypot(x1 - cx, y1 - cy):
-        return (x0, y0, r0), (x1, y1, r1)
-    return (x1, y1, r1), (x0, y0, r0)
+def _eyeballs(pupils: np.ndarray, radii: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(S, 2, 3): (x, y, iris radius) for the eye drawn "l" and "r" of S states, each pupil of
+    `pupils` (S, 2, 2: PosedFaces.pupils, iris radii `radii` (2,)) paired with the eye whose
+    outline centre (from `points` (S, 10, 2), the rows _ROWS) is nearest: PosedFace has its own order."""
+    left = points[:, :4]
+    cx = (left[:, 0, 0] + left[:, 1, 0] + left[:, 2, 0] + left[:, 3, 0]) / 4
+    cy = (left[:, 0, 1] + left[:, 1, 1] + left[:, 2, 1] + left[:, 3, 1]) / 4
+    near = _hypot(pupils[:, :, 0] - cx[:, None], pupils[:, :, 1] - cy[:, None])
+    eyeballs = np.concatenate([pupils, np.broadcast_to(np.asarray(radii, dtype=float)[:, None], pupils[..., :1].shape)],
+                              axis=2)
+    return np.where((near[:, 0] <= near[:, 1])[:, None, None], eyeballs, eyeballs[:, ::-1])
 
 
-def _eye_numbers(eyeball: tuple[float, float, float]) -> list[float]:
-    """The eyeball's (x, y, iris radius) pixels and what _eye draws of it: pupil radius, the
-    highlight's centre x, y and radius (7 pixels)."""
-    x, y, r = eyeball
-    return [x, y, r, PUPIL * r, x - GLINT_LEFT * r, y - GLINT_UP * r, GLINT * r]
+def _eye_numbers(eyeballs: np.ndarray) -> np.ndarray:
+    """The eyeballs' (S, 2, 3) (x, y, iris radius) pixels and what _eye draws of them: pupil radius,
+    the highlight's centre x, y and radius; (S, 14) pixels, 7 an eye."""
+    x, y, r = eyeballs.transpose(2, 0, 1)
+    return np.stack([x, y, r, PUPIL * r, x - GLINT_LEFT * r, y - GLINT_UP * r, GLINT * r], axis=2).reshape(-1, 14)
 
 
 def _eye(side: str, outline: str, lid: str, texts: Sequence[str], uid: str, style: dict[str, str]) -> Part:
