@@ -164,6 +164,12 @@ def all_mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> list[
     return outlines
 
 
+def hypots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """math.hypot of each pair of `x`, `y` (arrays of one shape, pixels; that shape): as the
+    drawing of one state at a time computed them (np.hypot may differ in the last bit)."""
+    return np.array(list(map(math.hypot, x.ravel().tolist(), y.ravel().tolist())), dtype=float).reshape(np.shape(x))
+
+
 def _drawn(points: np.ndarray, shown: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:
     """S mouths (`points` (S, 8, 2) image pixels of MOUTH_POINTS, `shown` (S, 4) the SHOWN
     amounts, `d` the FAPU d) in image pixels: (S, 46, 2) the rows of MouthOutlines.rows, then
@@ -172,8 +178,7 @@ def _drawn(points: np.ndarray, shown: np.ndarray, d: float) -> tuple[np.ndarray,
     the image by one stacked product (each slice the product of one mouth)."""
     points, shown = np.asarray(points, dtype=float), np.asarray(shown, dtype=float)
     (lx, ly), (rx, ry) = points[:, 0].T, points[:, 1].T
-    # math.hypot per mouth, as it was drawn one at a time (np.hypot may differ in the last bit)
-    width = np.maximum(np.array(list(map(math.hypot, (rx - lx).tolist(), (ry - ly).tolist())), dtype=float), 1e-9)
+    width = np.maximum(hypots(rx - lx, ry - ly), 1e-9)
     ex, ey = (rx - lx) / width, (ry - ly) / width  # x along the mouth; y = (-ey, ex), down the face
     ox, oy = (lx + rx) / 2, (ly + ry) / 2
     # the other points in the frame, (S, 6) x and y

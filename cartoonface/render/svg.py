@@ -23,7 +23,6 @@ render/sheet.py, render/diagram.py and render/png.py.
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -37,7 +36,7 @@ from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
 from cartoonface.render.geometry import all_face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import drawn_mouth_texts
+from cartoonface.render.mouth import drawn_mouth_texts, hypots
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
@@ -198,9 +197,10 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
 
 def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0) -> list[tuple[Part, ...]]:
     """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
-    of them by geometry's all_face_shapes, the cheeks' and eyes' numbers written by one
-    number_texts; per state the templates filled (and the mouth and the chin's shadow drawn).
-    Written as text: the hot path of render/animation.py."""
+    of them by geometry's all_face_shapes, the cheeks' and eyes' numbers of all of them as arrays
+    written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; per state the
+    templates filled, each part but the mouth once per batch (_parts). Written as text: the hot
+    path of render/animation.py."""
     style = _style_texts(face)
     shapes = all_face_shapes(posed)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
@@ -282,18 +282,13 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     return group
 
 
-def _hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """math.hypot of each pair of `x`, `y` (same shape; np.hypot may differ in the last bit)."""
-    return np.array(list(map(math.hypot, x.ravel().tolist(), y.ravel().tolist())), dtype=float).reshape(np.shape(x))
-
-
 def _cheek_numbers(points: np.ndarray, d: float) -> np.ndarray:
     """Blush under each eye, between the eye's lower lid and the mouth corner on its side: the
     centre x, y and the horizontal radius of the left's ellipse and the right's, (S, 6) pixels.
     `points`: (S, 10, 2) the posed rows _ROWS of S states; `d` the FAPU d in pixels."""
     eyes = points[:, :8].reshape(-1, 2, 4, 2)  # (S, eye, outline point, xy)
     (ox, oy), (ix, iy), lower_y = eyes[:, :, 0].transpose(2, 0, 1), eyes[:, :, 2].transpose(2, 0, 1), eyes[:, :, 3, 1]
-    width = _hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
+    width = hypots(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
     cy = 0.5 * lower_y + 0.5 * points[:, 8:, 1] - CHEEK_LIFT * d
     return np.stack([CHEEK_OUTER * ox + CHEEK_INNER * ix, cy, CHEEK[0] * d * np.minimum(width, CHEEK_STRETCH)],
                     axis=2).reshape(-1, 6)
@@ -313,7 +308,7 @@ def _eyeballs(pupils: np.ndarray, radii: np.ndarray, points: np.ndarray) -> np.n
     left = points[:, :4]
     cx = (left[:, 0, 0] + left[:, 1, 0] + left[:, 2, 0] + left[:, 3, 0]) / 4
     cy = (left[:, 0, 1] + left[:, 1, 1] + left[:, 2, 1] + left[:, 3, 1]) / 4
-    near = _hypot(pupils[:, :, 0] - cx[:, None], pupils[:, :, 1] - cy[:, None])
+    near = hypots(pupils[:, :, 0] - cx[:, None], pupils[:, :, 1] - cy[:, None])
     eyeballs = np.concatenate([pupils, np.broadcast_to(np.asarray(radii, dtype=float)[:, None], pupils[..., :1].shape)],
                               axis=2)
     return np.where((near[:, 0] <= near[:, 1])[:, None, None], eyeballs, eyeballs[:, ::-1])
