@@ -16,7 +16,8 @@ from cartoonface.face.pose import PosedFaces, pose_face, pose_faces, rig, unroll
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import _extent
 from cartoonface.render.geometry import all_face_shapes, face_shapes
-from cartoonface.render.mouth import ROWS, all_mouth_outlines, all_mouth_texts, mouth_outlines, mouth_texts
+from cartoonface.render.mouth import (ROWS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts, mouth_outlines,
+                                      mouth_texts)
 from cartoonface.render.pathdata import _alike_rows, compact_extents, compacted, merged
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.conftest import ROOT
@@ -86,13 +87,15 @@ def test_unrolled_in_a_batch_as_alone_and_unrolled_faces_untouched(face):
 
 def test_shapes_mouths_and_parts_in_a_batch_as_alone(face):
     lifted = lift(face)
-    states = random_states(12, 3)
+    states = random_states(12, 3) + [FaceState(pose=Pose(2, -6, 0)).with_mouth(symbol) for symbol in MOUTH_SYMBOLS]
     posed = pose_faces(lifted, states)
     assert {int(side) for side in posed.nose_side} == {-1, 1}  # both nose plans in one batch
     shapes = all_face_shapes(posed)
     shown = np.array([posed[index].mouth @ shown_parts() for index in range(len(states))])
     outlines = all_mouth_outlines(posed.xy[:, ROWS], shown, face.fapu.d)
+    assert {o.tongue[3] == 0 for o in outlines} == {True, False}  # shut and open mouths built together
     texts = all_mouth_texts(outlines)
+    assert drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d) == texts
     parts = all_face_parts(face, posed, "u")
     for index in range(len(states)):
         alone = posed[index]

@@ -12,7 +12,7 @@ import pytest
 from cartoonface.errors import OptionError
 from cartoonface.face.lift import FRONT_NAMES, LIFTED_INDEX, lift
 from cartoonface.face.model import POINT_NAMES, load_face
-from cartoonface.face.pose import pose_face, rotate, rotation_matrix
+from cartoonface.face.pose import pose_face, rotate, rotation_matrices, rotation_matrix
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.geometry import inside
 from tests.mirror import SWAP, mirrored
@@ -75,6 +75,20 @@ def test_rotation_order_is_turn_then_tilt_then_roll():
     one_at_a_time = rotate(rotate(rotate(p, Pose(turn=-9)), Pose(tilt=12)), Pose(roll=5))
     assert np.allclose(rotate(p, pose), one_at_a_time)
     assert not np.allclose(rotate(rotate(rotate(p, Pose(roll=5)), Pose(tilt=12)), Pose(turn=-9)), one_at_a_time)
+
+
+def test_rotations_of_many_poses_are_each_pose_s_alone():
+    # each slice as the pose's rotation alone, to the last bit, whatever the other poses and their order
+    rng = np.random.default_rng(5)
+    poses = [Pose(*angles) for angles in rng.uniform(-15, 15, (40, 3)).tolist()] + [Pose(), Pose(3, 0, 0)]
+    together = rotation_matrices(poses)
+    backwards = rotation_matrices(poses[::-1])
+    assert together.shape == (len(poses), 3, 3)
+    for index, pose in enumerate(poses):
+        alone = rotation_matrix(pose)
+        assert np.array_equal(together[index], alone) and np.array_equal(backwards[-1 - index], alone)
+        assert np.allclose(alone @ alone.T, np.eye(3))
+    assert rotation_matrices([]).shape == (0, 3, 3)
 
 
 def test_sign_conventions(face):

@@ -79,16 +79,24 @@ def rotation_matrix(pose: Pose) -> np.ndarray:
     First about Y by turn (beta), then about X by tilt (alpha), then about Z by
     roll (gamma); positive angles counter-clockwise. The thesis's
     z2 = y1 sin(a) - z1 cos(a) is a sign slip (it would mirror depth); we use
-    z2 = y1 sin(a) + z1 cos(a), which projects to the same image.
+    z2 = y1 sin(a) + z1 cos(a), which projects to the same image. rotation_matrices of the one pose.
     """
-    a, b, g = (math.radians(v) for v in (pose.tilt, pose.turn, pose.roll))
-    ca, sa, cb, sb, cg, sg = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g)
+    return rotation_matrices([pose])[0]
+
+
+def rotation_matrices(poses: Sequence[Pose]) -> np.ndarray:
+    """(S, 3, 3): rotation_matrix of each of `poses`, its sines and cosines by `math` (as one pose's
+    were), the products multiplied out over all S at once (the same numbers)."""
+    a, b, g = (np.array([math.radians(getattr(pose, name)) for pose in poses], dtype=float)
+               for name in ("tilt", "turn", "roll"))
+    ca, sa, cb, sb, cg, sg = (np.array(list(map(function, angle.tolist())), dtype=float)
+                              for angle in (a, b, g) for function in (math.cos, math.sin))
     # Rz(g) @ Rx(a) @ Ry(b), multiplied out
-    return np.array([
-        [cg * cb - sg * sa * sb, -sg * ca, cg * sb + sg * sa * cb],
-        [sg * cb + cg * sa * sb, cg * ca, sg * sb - cg * sa * cb],
-        [-ca * sb, sa, ca * cb],
-    ])
+    return np.stack([
+        cg * cb - sg * sa * sb, -sg * ca, cg * sb + sg * sa * cb,
+        sg * cb + cg * sa * sb, cg * ca, sg * sb - cg * sa * cb,
+        -ca * sb, sa, ca * cb,
+    ], axis=1).reshape(-1, 3, 3)
 
 
 def rotate(points: np.ndarray, pose: Pose) -> np.ndarray:
@@ -261,7 +269,7 @@ def pose_faces(lifted: LiftedFace, states: Sequence[FaceState]) -> PosedFaces:
     q[:, :n, :2] = flat.reshape(count, n, 2)
     h = len(lifted.hair)
     # Rotations of the local frame seen in image orientation (y flipped both ways).
-    m = np.array([rotation_matrix(state.pose) for state in states]).reshape(count, 3, 3)
+    m = rotation_matrices([state.pose for state in states])
     m[:, 1, :] = -m[:, 1, :]
     m[:, :, 1] = -m[:, :, 1]
     _graze(q, r.outline, m[:, 2])

@@ -35,7 +35,6 @@ them as a cartoonist would (docs/mouth.md):
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -104,33 +103,33 @@ class MouthOutlines:
     rows: np.ndarray
 
 
-Point = tuple[float, float]  # a point in the mouth's frame (plain floats: a handful per drawing)
+Point = tuple[np.ndarray, np.ndarray]  # one point of each of S mouths in its frame: (S,) x and (S,) y pixels
 
 
-def _row(middle: Point, half_width: float, sag: float, follow: float) -> list[Point]:
+def _row(middle: Point, half_width: np.ndarray, sag: np.ndarray, follow: float) -> list[Point]:
     """The 4 control points of the centre line of a row of teeth through `middle`, from
     `half_width` left of it to as far right, `sag` pixels lower at the middle than at the
     ends. Where the mouth's corners (at y 0) lie above `middle`, the ends rise by `follow`
     x that height, as the edge of a smiling opening does (`follow` includes the square of
-    half_width / the opening's half width)."""
+    half_width / the opening's half width). Arrays (S,) of S mouths."""
     x, y = middle
-    end = y + follow * min(-y, 0.0)
+    end = y + follow * np.minimum(-y, 0.0)
     dip = end + 4 * (sag + y - end) / 3  # a cubic's middle is 3/4 of the way to control points this low
     return [(x - half_width, end), (x - half_width / 3, dip), (x + half_width / 3, dip), (x + half_width, end)]
 
 
-def _half(corner: Point, middle: Point, roundness: float) -> list[Point]:
+def _half(corner: Point, middle: Point, roundness: np.ndarray) -> list[Point]:
     """The 4 control points of a cubic from `corner` to `middle`, level at `middle`. At the
     corner it leaves between along the chord (roundness 0: a third of it) and straight up or
     down to `middle`'s height (roundness 1: an ellipse arm of KAPPA x the height); at
-    `middle` its arm is KAPPA (ellipse) to a third (chord) of the x distance."""
+    `middle` its arm is KAPPA (ellipse) to a third (chord) of the x distance. Arrays (S,)."""
     (cx, cy), (mx, my) = corner, middle
     level = (roundness * KAPPA + (1 - roundness) / 3) * (cx - mx)
     first = (cx + (1 - roundness) * (mx - cx) / 3, cy + (1 - roundness) * (my - cy) / 3 + roundness * KAPPA * (my - cy))
     return [corner, first, (mx + level, my), middle]
 
 
-def _edge(left: Point, middle: Point, right: Point, roundness: float) -> list[Point]:
+def _edge(left: Point, middle: Point, right: Point, roundness: np.ndarray) -> list[Point]:
     """The 7 path rows (start, then 2 cubics) of an edge left -> middle -> right."""
     return _half(left, middle, roundness) + _half(right, middle, roundness)[2::-1]
 
@@ -147,17 +146,11 @@ def mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> MouthOutl
 
 
 def all_mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> list[MouthOutlines]:
-    """mouth_outlines of S mouths (`points` (S, 8, 2), `shown` (S, 4)): each mouth's curves built
-    in its own frame (_local: a few dozen plain floats), all turned into the image by one stacked
-    product (each slice the product of one mouth)."""
-    built = [_local(mouth, amounts, d) for mouth, amounts in zip(points.tolist(), shown.tolist(), strict=True)]
-    local = np.array([rows for rows, _, _ in built], dtype=float).reshape(len(built), -1, 2)
-    turns = np.array([[[ex, ey], [-ey, ex]] for _, (ex, ey, _, _), _ in built], dtype=float).reshape(-1, 2, 2)
-    shifts = np.array([(ox, oy) for _, (_, _, ox, oy), _ in built], dtype=float).reshape(-1, 1, 2)
-    images = local @ turns + shifts
+    """mouth_outlines of S mouths (`points` (S, 8, 2), `shown` (S, 4)), from _drawn's arrays."""
+    images, sizes = _drawn(points, shown, d)
     outlines = []
-    for image, (_, _, sizes) in zip(images, built, strict=True):
-        upper_width, lower_width, bite_width, tongue_rx, tongue_ry, gloss_rx, gloss_ry = sizes
+    for image, (upper_width, lower_width, bite_width, tongue_rx, tongue_ry, gloss_rx, gloss_ry) in zip(
+            images, sizes.tolist(), strict=True):
         (tx, ty), (gx, gy) = image[-2:].tolist()
         outlines.append(MouthOutlines(
             lips=image[:19], opening=image[19:32],
@@ -171,33 +164,54 @@ def all_mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> list[
     return outlines
 
 
-def _local(points: list[list[float]], shown: list[float],
-           d: float) -> tuple[list[float], tuple[float, float, float, float], tuple[float, ...]]:
-    """One mouth of all_mouth_outlines in its frame (x from the corner 8.4 to 8.3, y down the face):
-    the rows of its paths and the tongue's and gloss's centres flattened (x, y, x, y, ...), the
-    frame (ex, ey: its x axis in the image; ox, oy: its origin) and the sizes (the rows' and the
-    bite's widths, the tongue's and the gloss's radii), from `points` (MOUTH_POINTS as [x, y]),
-    `shown` (the SHOWN amounts) and the FAPU `d`."""
-    upper_teeth, lower_teeth, tongue, bite = shown
-    (lx, ly), (rx, ry), *others = points
-    width = max(math.hypot(rx - lx, ry - ly), 1e-9)
+def hypots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """math.hypot of each pair of `x`, `y` (arrays of one shape, pixels; that shape): as the
+    drawing of one state at a time computed them (np.hypot may differ in the last bit)."""
+    return np.array(list(map(math.hypot, x.ravel().tolist(), y.ravel().tolist())), dtype=float).reshape(np.shape(x))
+
+
+def _drawn(points: np.ndarray, shown: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:
+    """S mouths (`points` (S, 8, 2) image pixels of MOUTH_POINTS, `shown` (S, 4) the SHOWN
+    amounts, `d` the FAPU d) in image pixels: (S, 46, 2) the rows of MouthOutlines.rows, then
+    the tongue's and the gloss's centres; (S, 7) the sizes (the rows' and the bite's widths,
+    the tongue's and the gloss's radii). Each mouth built in its frame (_local), all turned into
+    the image by one stacked product (each slice the product of one mouth)."""
+    points, shown = np.asarray(points, dtype=float), np.asarray(shown, dtype=float)
+    (lx, ly), (rx, ry) = points[:, 0].T, points[:, 1].T
+    width = np.maximum(hypots(rx - lx, ry - ly), 1e-9)
     ex, ey = (rx - lx) / width, (ry - ly) / width  # x along the mouth; y = (-ey, ex), down the face
     ox, oy = (lx + rx) / 2, (ly + ry) / 2
-    half = width / 2
-    corner_l, corner_r = (-half, 0.0), (half, 0.0)
-    peak_l, peak_r, bow, inner_up, inner_dn, bottom = (
-        ((x - ox) * ex + (y - oy) * ey, (y - oy) * ex - (x - ox) * ey) for x, y in others)
+    # the other points in the frame, (S, 6) x and y
+    x, y = points[:, 2:, 0] - ox[:, None], points[:, 2:, 1] - oy[:, None]
+    local, sizes = _local(x * ex[:, None] + y * ey[:, None], y * ex[:, None] - x * ey[:, None], width / 2,
+                          shown.T, d)
+    turns = np.stack([ex, ey, -ey, ex], axis=1).reshape(-1, 2, 2)
+    return local @ turns + np.stack([ox, oy], axis=1)[:, None], sizes
+
+
+def _local(x: np.ndarray, y: np.ndarray, half: np.ndarray, shown: np.ndarray,
+           d: float) -> tuple[np.ndarray, np.ndarray]:
+    """_drawn's S mouths in their frames (x from the corner 8.4 to 8.3, y down the face), from
+    `x`, `y` (S, 6) of the points MOUTH_POINTS[2:] in the frame, `half` (S,) half the corners'
+    distance, `shown` (4, S) the SHOWN amounts and the FAPU `d`: (S, 46, 2) the rows of the
+    paths and the tongue's and gloss's centres, (S, 7) the sizes (as _drawn's)."""
+    upper_teeth, lower_teeth, tongue, bite = shown
+    zero = np.zeros_like(half)
+    corner_l, corner_r = (-half, zero), (half, zero)
+    peak_l, peak_r, bow, inner_up, inner_dn, bottom = zip(x.T, y.T, strict=True)
 
     height = inner_dn[1] - inner_up[1]
-    if height < SHUT * d:  # 2.3 on 2.2 (or above it) in the model: shut, whatever the mouth's slant
-        inner_dn, height = inner_up, 0.0
-    inset = min(INSET * height, INSET_MAX * d, 0.5 * half)
-    open_l, open_r = (inset - half, 0.0), (half - inset, 0.0)
+    # 2.3 on 2.2 (or above it) in the model: shut, whatever the mouth's slant
+    shut = height < SHUT * d
+    inner_dn = (np.where(shut, inner_up[0], inner_dn[0]), np.where(shut, inner_up[1], inner_dn[1]))
+    height = np.where(shut, 0.0, height)
+    inset = np.minimum(np.minimum(INSET * height, INSET_MAX * d), 0.5 * half)
+    open_l, open_r = (inset - half, zero), (half - inset, zero)
     inner_half = half - inset
-    roundness = min(height / (ROUND * 2 * inner_half), 1.0)
+    roundness = np.minimum(height / (ROUND * 2 * inner_half), 1.0)
     opening = _edge(open_l, inner_up, open_r, roundness) + _edge(open_r, inner_dn, open_l, roundness)[1:]
 
-    lip_round = max(LIP_ROUND, LIP_FOLLOWS * roundness)
+    lip_round = np.maximum(LIP_ROUND, LIP_FOLLOWS * roundness)
     (px, py), (bx, by), (qx, qy) = peak_l, bow, peak_r
     left_bow, right_bow = BOW * (bx - px), BOW * (qx - bx)
     lips = (_half(corner_l, peak_l, lip_round) + [(px + left_bow, py), (bx - left_bow, by), bow,
@@ -205,12 +219,12 @@ def _local(points: list[list[float]], shown: list[float],
             + _half(corner_r, peak_r, lip_round)[::-1] + _edge(corner_r, bottom, corner_l, lip_round)[1:])
 
     row = TEETH_OF_OPENING * height
-    upper_h = upper_teeth * min(TEETH * d, row)
-    lower_h = lower_teeth * min(LOWER_TEETH * d, row)
+    upper_h = upper_teeth * np.minimum(TEETH * d, row)
+    lower_h = lower_teeth * np.minimum(LOWER_TEETH * d, row)
     span = TEETH_SPAN * inner_half
     follow = TEETH_SPAN**2
     lower_lip = bottom[1] - inner_dn[1]
-    bite_h = bite * min(BITE * d, BITE_OF_LIP * lower_lip)
+    bite_h = bite * np.minimum(BITE * d, BITE_OF_LIP * lower_lip)
     teeth = (_row(inner_up, span, TEETH_SAG * upper_h, follow)
              + _row(inner_dn, span, TEETH_SAG * lower_h, LOWER_FOLLOW * follow)
              + _row((inner_up[0], inner_up[1] + bite_h / 2), span * BITE_SPAN, TEETH_SAG * bite_h,
@@ -223,8 +237,9 @@ def _local(points: list[list[float]], shown: list[float],
     centres = [(inner_dn[0], top + tongue_ry), (0.45 * inner_dn[0] + 0.55 * bottom[0], 0.45 * inner_dn[1] + 0.55 * bottom[1])]
 
     rows = lips + opening + teeth + centres
-    return (list(itertools.chain.from_iterable(rows)), (ex, ey, ox, oy),
-            (2 * upper_h, 2 * lower_h, bite_h, tongue_rx, tongue_ry, GLOSS * 2 * inner_half, 0.22 * lower_lip))
+    return (np.stack([coordinate for row in rows for coordinate in row], axis=1).reshape(len(half), -1, 2),
+            np.stack([2 * upper_h, 2 * lower_h, bite_h, tongue_rx, tongue_ry, GLOSS * 2 * inner_half, 0.22 * lower_lip],
+                     axis=1))
 
 
 # The SVG texts of a drawn mouth, "|" between them, in TEXTS order: the path data of the
@@ -246,11 +261,26 @@ def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
 
 def all_mouth_texts(outlines: Sequence[MouthOutlines]) -> list[dict[str, str]]:
     """mouth_texts of each of `outlines`, every number written by one number_texts."""
-    sizes = np.rint([[o.upper_width, o.lower_width, o.bite_width, *o.tongue[2:], *o.gloss[2:]] for o in outlines])
-    places = np.array([[*o.tongue[:2], *o.gloss[:2]] for o in outlines], dtype=float).reshape(-1, 4)
-    rows = np.array([o.rows for o in outlines], dtype=float).reshape(len(outlines), -1)
-    numbers = np.concatenate([rows, sizes[:, :3], places[:, :2], sizes[:, 3:5], places[:, 2:], sizes[:, 5:]], axis=1)
+    places = np.array([[*o.tongue[:2], *o.gloss[:2]] for o in outlines], dtype=float).reshape(-1, 2, 2)
+    rows = np.array([o.rows for o in outlines], dtype=float).reshape(len(outlines), -1, 2)
+    sizes = np.array([[o.upper_width, o.lower_width, o.bite_width, *o.tongue[2:], *o.gloss[2:]] for o in outlines],
+                     dtype=float).reshape(-1, 7)
+    return _texts(np.concatenate([rows, places], axis=1), sizes)
+
+
+def drawn_mouth_texts(points: np.ndarray, shown: np.ndarray, d: float) -> list[dict[str, str]]:
+    """all_mouth_texts(all_mouth_outlines(points, shown, d)) without the MouthOutlines between:
+    the texts of S mouths (`points` (S, 8, 2), `shown` (S, 4)) straight from _drawn's arrays."""
+    return _texts(*_drawn(points, shown, d))
+
+
+def _texts(images: np.ndarray, sizes: np.ndarray) -> list[dict[str, str]]:
+    """The mouth_texts of S mouths from _drawn's `images` (S, 46, 2) and `sizes` (S, 7) pixels."""
+    sizes = np.rint(sizes)
+    places = images[:, 44:].reshape(-1, 4)
+    numbers = np.concatenate([images[:, :44].reshape(len(images), -1), sizes[:, :3], places[:, :2], sizes[:, 3:5],
+                              places[:, 2:], sizes[:, 5:]], axis=1)
     texts = number_texts(numbers)
     count = numbers.shape[1]
     return [dict(zip(TEXTS, fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|")))
-            for index in range(len(outlines))]
+            for index in range(len(images))]

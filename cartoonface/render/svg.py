@@ -23,7 +23,7 @@ render/sheet.py, render/diagram.py and render/png.py.
 from __future__ import annotations
 
 import functools
-import math
+from collections.abc import Sequence
 
 import numpy as np
 from lxml import etree
@@ -36,7 +36,7 @@ from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
 from cartoonface.render.geometry import all_face_shapes
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import all_mouth_outlines, all_mouth_texts
+from cartoonface.render.mouth import drawn_mouth_texts, hypots
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
@@ -197,52 +197,73 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
 
 def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0) -> list[tuple[Part, ...]]:
     """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
-    of them by geometry's all_face_shapes, the cheeks' and eyes' numbers written by one
-    number_texts; per state the templates filled (and the mouth and the chin's shadow drawn).
-    Written as text: the hot path of render/animation.py."""
+    of them by geometry's all_face_shapes, the cheeks' and eyes' numbers of all of them as arrays
+    written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; per state the
+    templates filled, each part but the mouth once per batch (_parts). Written as text: the hot
+    path of render/animation.py."""
     style = _style_texts(face)
     shapes = all_face_shapes(posed)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
-    rows = posed.xy[:, _ROWS].tolist()
-    pupils, (r0, r1) = posed.pupils.tolist(), posed.iris_r.tolist()
-    numbers = []
-    for points, eyes in zip(rows, pupils, strict=True):
-        left, right = _eyeballs(eyes, (r0, r1), points)
-        numbers += _cheek_numbers(points, face.fapu.d) + _eye_numbers(left) + _eye_numbers(right)
-    texts = number_texts(np.array(numbers))
+    points = posed.xy[:, _ROWS]
+    eyes = _eyeballs(posed.pupils, posed.iris_r, points)
+    texts = number_texts(np.concatenate([_cheek_numbers(points, face.fapu.d), _eye_numbers(eyes)], axis=1))
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
-    mouths = all_mouth_texts(all_mouth_outlines(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d))
+    mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
+    made: dict[tuple[str, ...], Part] = {}
     drawings = []
     for index, (part_shapes, mouth, shadow) in enumerate(zip(shapes, mouths, shadows, strict=True)):
         # the cheeks' and the eyes' numbers (CHEEK_COUNT, then EYE_COUNT per eye)
         state_texts = texts[index * per_state:(index + 1) * per_state]
-        drawings.append(_parts(part_shapes, shadow, state_texts, _mouth(mouth, uid, style), uid, style))
+        drawings.append(_parts(_part_keys(part_shapes, shadow, state_texts), made, uid, style)
+                        + (_mouth(mouth, uid, style),))
     return drawings
 
 
-def _parts(shapes: dict[str, str], shadow: str, texts: tuple[str, ...], mouth: Part, uid: str,
+# The parts drawn as one path of geometry's face_shapes: their class, by the face_shapes name,
+# and their style (_styles).
+_PATHS = {"hair": ("hair", "hair"), "ear-l": ("ear_l", "skin"), "ear-r": ("ear_r", "skin"), "face": ("face", "skin"),
+          "fringe": ("fringe", "fringe"), "nose": ("nose", "nose"), "brow-l": ("brow_l", "brow"),
+          "brow-r": ("brow_r", "brow")}
+
+
+def _part_keys(shapes: dict[str, str], shadow: str, texts: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
+    """The parts of one state but the mouth, in face_parts' order, each as its key: its class and
+    the texts it is drawn from (_part draws it), from the state's path data `shapes` (geometry's
+    face_shapes), the chin's `shadow` and the number `texts` of the cheeks and the eyes."""
+    paths = {name: (name, shapes[shape]) for name, (shape, _) in _PATHS.items()}
+    return (paths["hair"], paths["ear-l"], paths["ear-r"], ("chin-shadow", shadow), paths["face"], paths["fringe"],
+            ("cheeks", *texts[:_CHEEK_COUNT]), paths["nose"], paths["brow-l"], paths["brow-r"],
+            ("eye-l", shapes["eye_l"], shapes["lid_l"], *texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT]),
+            ("eye-r", shapes["eye_r"], shapes["lid_r"], *texts[_CHEEK_COUNT + _EYE_COUNT:]))
+
+
+def _parts(keys: tuple[tuple[str, ...], ...], made: dict[tuple[str, ...], Part], uid: str,
            style: dict[str, str]) -> tuple[Part, ...]:
-    """face_parts' parts of one state from its path data `shapes` (geometry's face_shapes), the
-    chin's `shadow`, the number `texts` of the cheeks and the eyes and the `mouth`."""
-    eyes = [_eye(shapes, "l", texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT], uid, style),
-            _eye(shapes, "r", texts[_CHEEK_COUNT + _EYE_COUNT:], uid, style)]
-    return (
-        Part("hair", f'<path class="hair" d="{shapes["hair"]}"{style["hair"]}/>'),
-        *(Part(f"ear-{side}", f'<path class="ear-{side}" d="{shapes[f"ear_{side}"]}"{style["skin"]}/>')
-          for side in "lr"),
-        Part("chin-shadow", shadow),
-        Part("face", f'<path class="face" d="{shapes["face"]}"{style["skin"]}/>'),
-        Part("fringe", f'<path class="fringe" d="{shapes["fringe"]}"{style["fringe"]}/>'),
-        Part("cheeks", _cheeks(texts[:_CHEEK_COUNT], style)),
-        Part("nose", f'<path class="nose" d="{shapes["nose"]}"{style["nose"]}/>'),
-        *(Part(f"brow-{side}", f'<path class="brow-{side}" d="{shapes[f"brow_{side}"]}"{style["brow"]}/>')
-          for side in "lr"),
-        *eyes,
-        mouth,
-    )
+    """The parts of `keys` (_part_keys), each drawn once per batch: `made` holds those drawn so
+    far by key (a part drawn again is the same object: its text written once, and equal parts of
+    the batch are one object for render/animation.py's pickles and dictionaries)."""
+    parts = []
+    for key in keys:
+        part = made.get(key)
+        if part is None:
+            part = made[key] = _part(key, uid, style)
+        parts.append(part)
+    return tuple(parts)
+
+
+def _part(key: tuple[str, ...], uid: str, style: dict[str, str]) -> Part:
+    """The part of `key` (_part_keys: its class, then its texts)."""
+    name, *texts = key
+    if name in _PATHS:
+        return Part(name, f'<path class="{name}" d="{texts[0]}"{style[_PATHS[name][1]]}/>')
+    if name == "chin-shadow":
+        return Part(name, texts[0])
+    if name == "cheeks":
+        return Part(name, _cheeks(texts, style))
+    return _eye(name[-1], texts[0], texts[1], texts[2:], uid, style)
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> etree._Element:
@@ -261,51 +282,49 @@ def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     return group
 
 
-def _cheek_numbers(points: list[list[float]], d: float) -> list[float]:
+def _cheek_numbers(points: np.ndarray, d: float) -> np.ndarray:
     """Blush under each eye, between the eye's lower lid and the mouth corner on its side: the
-    centre x, y and the horizontal radius of the left's ellipse and the right's (6 pixels).
-    `points`: the posed rows _ROWS as [x, y] lists; `d` the FAPU d in pixels."""
-    numbers = []
-    for first, mouth_corner in ((0, points[8]), (4, points[9])):
-        (ox, oy), _, (ix, iy), (_, lower_y) = points[first:first + 4]
-        width = math.hypot(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
-        cy = 0.5 * lower_y + 0.5 * mouth_corner[1] - CHEEK_LIFT * d
-        numbers += [CHEEK_OUTER * ox + CHEEK_INNER * ix, cy, CHEEK[0] * d * min(width, CHEEK_STRETCH)]
-    return numbers
+    centre x, y and the horizontal radius of the left's ellipse and the right's, (S, 6) pixels.
+    `points`: (S, 10, 2) the posed rows _ROWS of S states; `d` the FAPU d in pixels."""
+    eyes = points[:, :8].reshape(-1, 2, 4, 2)  # (S, eye, outline point, xy)
+    (ox, oy), (ix, iy), lower_y = eyes[:, :, 0].transpose(2, 0, 1), eyes[:, :, 2].transpose(2, 0, 1), eyes[:, :, 3, 1]
+    width = hypots(ox - ix, oy - iy) / (CHEEK_EYE_WIDTH * d)  # foreshortening: narrower when turned away
+    cy = 0.5 * lower_y + 0.5 * points[:, 8:, 1] - CHEEK_LIFT * d
+    return np.stack([CHEEK_OUTER * ox + CHEEK_INNER * ix, cy, CHEEK[0] * d * np.minimum(width, CHEEK_STRETCH)],
+                    axis=2).reshape(-1, 6)
 
 
-def _cheeks(texts: tuple[str, ...], style: dict[str, str]) -> str:
+def _cheeks(texts: Sequence[str], style: dict[str, str]) -> str:
     """The text of the cheeks' `<g class="cheeks">` from the number `texts` of _cheek_numbers."""
     ellipses = "".join(f'<ellipse cx="{cx}" cy="{cy}" rx="{rx}"{style["cheek_ry"]}/>'
                        for cx, cy, rx in (texts[:3], texts[3:6]))
     return f'<g class="cheeks" fill="url(#cf-cheek)">{ellipses}</g>'
 
 
-def _eyeballs(pupils: list[list[float]], radii: tuple[float, float],
-             points: list[list[float]]) -> tuple[tuple[float, float, float], ...]:
-    """(x, y, iris radius) for the eye drawn "l" and "r", each pupil of `pupils` (PosedFace.pupils
-    as lists, iris radii `radii`) paired with the eye whose outline centre (from `points`, the
-    rows _ROWS) is nearest: PosedFace has its own order."""
-    (x0, y0), (x1, y1) = pupils
-    cx = sum(p[0] for p in points[:4]) / 4
-    cy = sum(p[1] for p in points[:4]) / 4
-    r0, r1 = radii
-    if math.hypot(x0 - cx, y0 - cy) <= math.hypot(x1 - cx, y1 - cy):
-        return (x0, y0, r0), (x1, y1, r1)
-    return (x1, y1, r1), (x0, y0, r0)
+def _eyeballs(pupils: np.ndarray, radii: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(S, 2, 3): (x, y, iris radius) for the eye drawn "l" and "r" of S states, each pupil of
+    `pupils` (S, 2, 2: PosedFaces.pupils, iris radii `radii` (2,)) paired with the eye whose
+    outline centre (from `points` (S, 10, 2), the rows _ROWS) is nearest: PosedFace has its own order."""
+    left = points[:, :4]
+    cx = (left[:, 0, 0] + left[:, 1, 0] + left[:, 2, 0] + left[:, 3, 0]) / 4
+    cy = (left[:, 0, 1] + left[:, 1, 1] + left[:, 2, 1] + left[:, 3, 1]) / 4
+    near = hypots(pupils[:, :, 0] - cx[:, None], pupils[:, :, 1] - cy[:, None])
+    eyeballs = np.concatenate([pupils, np.broadcast_to(np.asarray(radii, dtype=float)[:, None], pupils[..., :1].shape)],
+                              axis=2)
+    return np.where((near[:, 0] <= near[:, 1])[:, None, None], eyeballs, eyeballs[:, ::-1])
 
 
-def _eye_numbers(eyeball: tuple[float, float, float]) -> list[float]:
-    """The eyeball's (x, y, iris radius) pixels and what _eye draws of it: pupil radius, the
-    highlight's centre x, y and radius (7 pixels)."""
-    x, y, r = eyeball
-    return [x, y, r, PUPIL * r, x - GLINT_LEFT * r, y - GLINT_UP * r, GLINT * r]
+def _eye_numbers(eyeballs: np.ndarray) -> np.ndarray:
+    """The eyeballs' (S, 2, 3) (x, y, iris radius) pixels and what _eye draws of them: pupil radius,
+    the highlight's centre x, y and radius; (S, 14) pixels, 7 an eye."""
+    x, y, r = eyeballs.transpose(2, 0, 1)
+    return np.stack([x, y, r, PUPIL * r, x - GLINT_LEFT * r, y - GLINT_UP * r, GLINT * r], axis=2).reshape(-1, 14)
 
 
-def _eye(shapes: dict[str, str], side: str, texts: tuple[str, ...], uid: str, style: dict[str, str]) -> Part:
+def _eye(side: str, outline: str, lid: str, texts: Sequence[str], uid: str, style: dict[str, str]) -> Part:
     """Eye `side`: white, clipped iris + pupil + the lid's shadow + highlight, outline, upper
-    lid; its clip path the eye outline. `texts`: the numbers of _eye_numbers as text."""
-    outline, lid = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
+    lid; its clip path the eye `outline` (path data, as the `lid`'s). `texts`: the numbers of
+    _eye_numbers as text."""
     clip_id = f"cf-eye-{side}-{uid}"
     cx, cy, r, pupil, glint_x, glint_y, glint = texts
     text = (f'<g class="eye-{side}"><path d="{outline}"{style["white"]}/><g clip-path="url(#{clip_id})">'
