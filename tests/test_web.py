@@ -710,6 +710,8 @@ def test_a_library_error_from_a_failed_allocation_counts_as_out_of_memory():
     assert out_of_memory(MemoryError())
     assert out_of_memory(RuntimeError("std::bad_alloc"))  # parselmouth's C++ allocation failure
     assert out_of_memory(chained(MemoryError(), ValueError("could not read the recording")))
+    # a library imported under the job's address-space limit (dlopen cannot map it)
+    assert out_of_memory(ImportError("libfoo.so: failed to map segment from shared object"))
     assert not out_of_memory(ValueError("could not read the recording"))
     assert not out_of_memory(chained(KeyError("x"), RuntimeError("a bug")))
 

@@ -30,6 +30,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import parselmouth  # noqa: F401  (loaded in the forkserver that preloads this module, before a job's memory
+# limit: generate imports it only where the pitch track is made, and under RLIMIT_AS a library may fail to map)
+
 from cartoonface.errors import InputError
 from cartoonface.exports.cues import FORMATS as CUE_FORMATS
 from cartoonface.files import write_bytes_atomic
@@ -232,8 +235,9 @@ def main(folder: Path, server_alive: Callable[[], bool], limits: JobLimits | Non
 
 # What libraries say instead of raising MemoryError when an allocation fails (C++ std::bad_alloc
 # through parselmouth, errno ENOMEM through the OS, a thread whose stack does not fit under the
-# address-space limit, ...).
-OUT_OF_MEMORY_WORDS = ("bad_alloc", "cannot allocate memory", "out of memory", "memoryerror", "can't start new thread")
+# address-space limit, a library imported under it that cannot be mapped, ...).
+OUT_OF_MEMORY_WORDS = ("bad_alloc", "cannot allocate memory", "out of memory", "memoryerror", "can't start new thread",
+                       "failed to map segment from shared object")
 
 
 def out_of_memory(exc: BaseException) -> bool:
