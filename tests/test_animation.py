@@ -17,7 +17,7 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.face.lift import lift
 from cartoonface.face.pose import pose_face, rig, unroll
 from cartoonface.render.animation import KEY_TIME_DECIMALS, KEY_TIME_LEAD, KEY_TIME_MIN_LEAD, animation_svg, clock
-from cartoonface.render.pathdata import MIRROR, TOLERANCE, compact_paths
+from cartoonface.render.pathdata import MIRROR, TOLERANCE, compacted
 
 ROOT = Path(__file__).resolve().parent.parent
 NS = {"s": "http://www.w3.org/2000/svg"}
@@ -259,7 +259,7 @@ def test_compact_curves_keep_every_point_to_the_pixel():
     paths = [f"M{a[0, 0]:.1f} {a[1, 0]:.1f}" + "".join(
         f"C{a[0, k]:.1f} {a[1, k]:.1f} {a[0, k + 1]:.1f} {a[1, k + 1]:.1f} {a[0, k + 2]:.1f} {a[1, k + 2]:.1f}"
         for k in (1, 4, 7, 10)) + "Z" for a in numbers]
-    compact = compact_paths(paths)
+    compact = compacted(paths).compact
     for d in paths:
         given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))
         assert np.array_equal(np.array(absolute_points(compact[d])), given)
@@ -270,7 +270,7 @@ def test_compact_polylines_drop_only_points_near_the_line():
     t = np.linspace(0, np.pi, 80)
     xs, ys = 200 + 150 * np.cos(t), 200 - 60 * np.sin(t) + 0.2 * np.sin(40 * t)
     d = f"M{xs[0]:.1f} {ys[0]:.1f}" + "".join(f"L{x:.1f} {y:.1f}" for x, y in zip(xs[1:], ys[1:])) + "Z"
-    kept = np.array(absolute_points(compact_paths([d])[d]))
+    kept = np.array(absolute_points(compacted([d]).compact[d]))
     assert 3 < len(kept) < 40
     given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))
     for x, y in given:  # every rounded input point lies near the kept polyline
@@ -283,16 +283,16 @@ def test_compact_polylines_drop_only_points_near_the_line():
 
 def test_other_path_commands_are_left_alone():
     odd = ["M1 1H5V7", "m1 1l2 2", "M0 0A5 5 0 0 1 10 10"]
-    assert compact_paths(odd) == {d: d for d in odd}
+    assert compacted(odd).compact == {d: d for d in odd}
 
 
 def test_paths_of_one_skeleton_with_other_counts_are_left_alone():
     """Path data with the same command letters but numbers repeating a command (implicit
     linetos) are not read as one skeleton; written ones are, numbers in any form."""
     odd = ["M1 2 3 4", "M1 2", "M-1.5-2"]
-    assert compact_paths(odd) == {d: d for d in odd}
+    assert compacted(odd).compact == {d: d for d in odd}
     plain = ["M1.4,2L-3.6 .5Z", "M10 20L30-.5Z"]  # whole pixels (.5 to even: 0), relative
-    assert compact_paths(plain) == {plain[0]: "m1,2l-5-2z", plain[1]: "m10,20l20-20z"}
+    assert compacted(plain).compact == {plain[0]: "m1,2l-5-2z", plain[1]: "m10,20l20-20z"}
 
 
 def test_smooth_joins_drop_the_mirrored_control_point():
@@ -306,7 +306,7 @@ def test_smooth_joins_drop_the_mirrored_control_point():
             c1, c2 = knots[k] + tangents[k], knots[k + 1] - tangents[k + 1]
             d += f"C{c1[0]:.1f} {c1[1]:.1f} {c2[0]:.1f} {c2[1]:.1f} {knots[k + 1, 0]:.1f} {knots[k + 1, 1]:.1f}"
         paths.append(d)
-    compact = compact_paths(paths)
+    compact = compacted(paths).compact
     for d in paths:
         assert "s" in compact[d]
         given = np.rint(np.array(re.findall(r"\d+\.\d", d), dtype=float).reshape(-1, 2))

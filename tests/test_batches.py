@@ -18,7 +18,7 @@ from cartoonface.render.compact import _extent
 from cartoonface.render.geometry import all_face_shapes, face_shapes
 from cartoonface.render.mouth import (ROWS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts, mouth_outlines,
                                       mouth_texts)
-from cartoonface.render.pathdata import _alike_rows, compact_extents, compacted, merged
+from cartoonface.render.pathdata import _alike_rows, compacted, merged
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.conftest import ROOT
 
@@ -110,7 +110,8 @@ def test_shapes_mouths_and_parts_in_a_batch_as_alone(face):
 def test_extents_read_off_the_numbers_are_those_of_the_text(face):
     lifted = lift(face)
     paths = [d for shapes in all_face_shapes(pose_faces(lifted, random_states(20, 4))) for d in shapes.values()]
-    compact, extents = compact_extents(paths)
+    done = compacted(paths)
+    compact, extents = done.compact, done.extents
     assert extents and set(extents) <= set(compact.values())
     for d in set(compact.values()):
         if d in extents:

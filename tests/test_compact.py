@@ -115,7 +115,7 @@ def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
     from cartoonface.face.pose import pose_face
     from cartoonface.render.animation import track_of
     from cartoonface.render.compact import _PATH_DATA, Writer
-    from cartoonface.render.pathdata import compact_paths
+    from cartoonface.render.pathdata import compacted
     from cartoonface.render.svg import face_parts
 
     writer = Writer(track_of)
@@ -123,8 +123,8 @@ def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
     for state in talking_about(60):
         writer.collect(face_parts(face, pose_face(lifted, state), "u"))
     raw = list(writer.raw)
-    compact = compact_paths(d for part in raw for text in (part.element, *part.definitions)
-                            for d in _PATH_DATA.findall(text))
+    compact = compacted(d for part in raw for text in (part.element, *part.definitions)
+                        for d in _PATH_DATA.findall(text)).compact
     alone = Writer(track_of)
     expected = [b"".join(etree.tostring(node) for node in alone._tidy_part((part.element, *part.definitions), compact))
                 for part in raw]

@@ -18,7 +18,7 @@ from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, find, find_alike, shape_of
+from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, find, find_alike, shapes_of
 from cartoonface.render.svg import face_parts
 from tests.stills import frozen
 
@@ -51,7 +51,7 @@ def documents(face):
 
 def part_shape(face, state: FaceState, name: str) -> Shape:
     parts = {part.name: part for part in face_parts(face, pose_face(lift(face), state), "u")}
-    shape = shape_of((parts[name].text, *parts[name].clips), {})
+    shape = shapes_of([(parts[name].text, *parts[name].clips)], {})[0]
     assert shape is not None and len(shape.points) > 10
     return shape
 

@@ -287,7 +287,7 @@ def part_paths(parts: Iterable[Sequence[str]]) -> Iterator[str]:
 def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, list[str]]:
     """A part's `texts` (its element, then its definitions) with the values that tidying only
     passes on taken out: each path data as "@k@", k numbering its distinct compact forms
-    (`compact`, compact_paths') in order, so paths alike after compacting stay alike (an
+    (`compact`, a Compacted's) in order, so paths alike after compacting stay alike (an
     outline and its clip path); each position (POSITIONS) as SENTINEL + j, j counting them.
     Returns the text and the values: the distinct compact path data, then the positions
     rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""

@@ -1,7 +1,7 @@
 """Compact SVG path data for the animation: whole pixels, relative commands, simplified polylines.
 
 render/geometry.py writes each part as absolute commands in tenths of a pixel. An
-animation repeats a part in thousands of frames, so `compact_paths` rewrites them:
+animation repeats a part in thousands of frames, so `compacted` rewrites them:
 
 - every coordinate is rounded to a whole pixel of the face canvas (the canvas is
   drawn at about its own size, so this is what a screen shows);
@@ -244,22 +244,12 @@ def _plain_numbers(paths: list[str]) -> np.ndarray | None:
 Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data's points
 
 
-def compact_paths(paths: Iterable[str]) -> dict[str, str]:
-    """Map each path data string of `paths` to its compact form (see the module docstring)."""
-    return compact_extents(paths)[0]
-
-
-def compact_extents(paths: Iterable[str]) -> tuple[dict[str, str], dict[str, Extent]]:
-    """compact_paths of `paths`, and the extent of each compact path data written (a path left as
-    it is has none): the box (x0, y0, x1, y1) of every point and control point it writes, read
-    off the rounded numbers (render/compact.py's merge_alike would otherwise parse the text)."""
-    done = compacted(paths)
-    return done.compact, done.extents
-
-
 @dataclass(frozen=True)
 class Compacted:
-    """compact_extents' dicts `compact` and `extents` for some paths, and `firsts`: the first (in
+    """Path data compacted: `compact` maps each path data string to its compact form (see the
+    module docstring); `extents` gives each compact path data written (a path left as it is has
+    none) the box (x0, y0, x1, y1) of every point and control point it writes, read off the rounded
+    numbers (render/compact.py's merge_alike would otherwise parse the text); `firsts`: the first (in
     sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
     all of them (_kept). Paths compacted in two processes are put together by `merged`."""
 
@@ -269,7 +259,7 @@ class Compacted:
 
 
 def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
-    """compact_extents of `paths` as a Compacted, going on from `done` (a Compacted of other paths,
+    """The Compacted of `paths`, going on from `done` (a Compacted of other paths,
     or of some of these and others): its compact forms are taken where its first path data of a
     skeleton is the first of these paths too (so its points are the ones kept), the others are
     compacted here."""

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,7 +58,7 @@ SHIFT_DECIMALS = 1
 # weight".
 FORMS = tuple((linear, shift) for linear in (0, 2, 3, LINEAR_DECIMALS) for shift in (0, SHIFT_DECIMALS))
 IDENTITY = "1 0 0 1 0 0"
-SHORTEN_POINTS = 1 << 18  # points of the pairs _shortened stacks at a time (~4 MB an array)
+PAIR_POINTS = 1 << 18  # points of the pairs _pair_points stacks at a time (~4 MB an array)
 # The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
 # dozen points is about as good as on all of them, and the pairs of a track fit in a few batches); the
 # error is measured on them and, for a pair within the tolerance there, on all the points.
@@ -73,7 +73,7 @@ _DIAGONAL = np.sqrt(0.5)
 _ELLIPSE = np.array([(1, 0), (0, 1), (-1, 0), (0, -1), (_DIAGONAL, _DIAGONAL), (_DIAGONAL, -_DIAGONAL),
                      (-_DIAGONAL, _DIAGONAL), (-_DIAGONAL, -_DIAGONAL)])  # eight points on a unit circle
 _TAG = re.compile(r"<(\w+)")
-_READ = frozenset(("path", "circle", "ellipse", "g", "clipPath"))  # the elements whose geometry shape_of reads
+_READ = frozenset(("path", "circle", "ellipse", "g", "clipPath"))  # the elements whose geometry shapes_of reads
 _GEOMETRY = re.compile(r' (d|cx|cy|r|rx|ry)="([^"]*)"')  # the attributes whose numbers are points
 _PAIRS = re.compile(r"[MLCSQTZ\d\s.,-]*")  # path data of absolute commands taking point pairs
 _STROKE = re.compile(r' stroke-width="([\d.]+)"')
@@ -180,11 +180,6 @@ def shapes_of(parts: Sequence[Sequence[str]],
     return shapes
 
 
-def shape_of(texts: Sequence[str], layouts: dict[str, tuple[np.ndarray, ...] | None]) -> Shape | None:
-    """The Shape of one part (shapes_of)."""
-    return shapes_of([texts], layouts)[0]
-
-
 def joined(shapes: Sequence[Shape | None]) -> Shape | None:
     """The Shape of a drawing made of parts of `shapes` (None if any is)."""
     if any(shape is None for shape in shapes):
@@ -222,25 +217,31 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple
     return matrices, _scale_change(matrices[:, :, :2]), np.max(_distances(sources, matrices, targets), axis=1)
 
 
+def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Sequence[int]
+                 ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The pairs of `shapes` (indices `sources`, `targets`, of one point count each: one skeleton)
+    grouped by point count N, at most PAIR_POINTS points at a time: the pairs' positions (M,) in
+    `sources`, the sources' points and the targets' (M, N, 2)."""
+    counts = np.array([len(shapes[target].points) for target in targets], dtype=int)
+    for count in np.unique(counts).tolist():
+        chosen = np.flatnonzero(counts == count)
+        step = max(1, PAIR_POINTS // count)
+        for start in range(0, len(chosen), step):
+            rows = chosen[start:start + step]
+            yield (rows, np.stack([shapes[sources[row]].points for row in rows.tolist()]),
+                   np.stack([shapes[targets[row]].points for row in rows.tolist()]))
+
+
 def _errors(group: Sequence[Shape], sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
             scales: np.ndarray) -> np.ndarray:
     """For pairs of shapes of `group` (indices `sources`, `targets` (M,), of one point count each:
     one skeleton), the largest distance (px) of the source's points mapped by `matrices` (M, 2, 3)
     from the target's, plus half the wider stroke times `scales` (M,), the matrix's largest change
     of scale: within it, every edge of the transformed drawing lies near the target's. (M,) px;
-    the pairs of each point count computed together, FIT_PAIRS at a time."""
-    counts = np.array([len(shape.points) for shape in group])
+    the pairs computed together (_pair_points)."""
     largest = np.empty(len(sources))
-    for count in np.unique(counts[targets]).tolist():
-        members = np.flatnonzero(counts == count)
-        points = np.stack([group[member].points for member in members.tolist()])  # (G, count, 2)
-        position = np.zeros(len(group), dtype=int)
-        position[members] = np.arange(len(members))
-        chosen = np.flatnonzero(counts[targets] == count)
-        for start in range(0, len(chosen), FIT_PAIRS):
-            pairs = chosen[start:start + FIT_PAIRS]
-            largest[pairs] = np.max(_distances(points[position[sources[pairs]]], matrices[pairs],
-                                               points[position[targets[pairs]]]), axis=1)
+    for rows, source_points, target_points in _pair_points(group, sources.tolist(), targets.tolist()):
+        largest[rows] = np.max(_distances(source_points, matrices[rows], target_points), axis=1)
     strokes = np.array([shape.stroke for shape in group])
     return largest + scales * np.maximum(strokes[sources], strokes[targets]) / 2
 
@@ -273,44 +274,38 @@ def _fixed(units: int, decimals: int) -> str:
 
 def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndarray, float]],
                tolerance: float) -> list[tuple[str, float]]:
-    """The matrix text and error (px, as _error's) of each of `chosen` (a target's and a source's
+    """The matrix text and error (px, as _errors') of each of `chosen` (a target's and a source's
     index into `shapes`, their fitted matrix (2, 3) and its error) in the first of FORMS within
     `tolerance`: a..d the fitted ones rounded to its decimals, e and f the middle of the spread of
     the target's points less the source's transformed, rounded to its decimals; the fitted matrix
-    where none is (its e and f were fitted on the mean, not the middle). Pairs of one number of
-    points are checked together, SHORTEN_POINTS points at a time."""
+    where none is (its e and f were fitted on the mean, not the middle). The pairs are checked
+    together (_pair_points)."""
     if not chosen:
         return []
     matrices = np.stack([matrix for _, _, matrix, _ in chosen])  # (P, 2, 3), replaced by the forms that fit
     errors = np.array([error for _, _, _, error in chosen])
-    by_size: dict[int, list[int]] = {}
-    for index, (target, _, _, _) in enumerate(chosen):
-        by_size.setdefault(len(shapes[target].points), []).append(index)
-    for size, members in by_size.items():
-        step = max(1, SHORTEN_POINTS // size)
-        for start in range(0, len(members), step):
-            rows = np.array(members[start:start + step])
-            sources = np.stack([shapes[chosen[row][1]].points for row in rows])  # (M, N, 2)
-            targets = np.stack([shapes[chosen[row][0]].points for row in rows])
-            fitted = matrices[rows, :, :2]  # (M, 2, 2)
-            strokes = np.array([max(shapes[chosen[row][0]].stroke, shapes[chosen[row][1]].stroke) for row in rows]) / 2
-            for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
-                if not len(rows):
-                    break
-                if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
-                    linear = np.round(fitted, linear_decimals)
-                    a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
-                    residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
-                                                   b * sources[..., 0] + d * sources[..., 1]], axis=2)
-                    middle = (residual.max(axis=1) + residual.min(axis=1)) / 2  # (M, 2)
-                    scale = _scale_change(linear) * strokes
-                shift = np.round(middle, shift_decimals)
-                within = np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1)) + scale
-                fits = within <= tolerance
-                matrices[rows[fits]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
-                errors[rows[fits]] = within[fits]
-                rows, sources, targets, fitted, strokes, linear, residual, middle, scale = (
-                    values[~fits] for values in (rows, sources, targets, fitted, strokes, linear, residual, middle, scale))
+    halves = np.array([max(shapes[target].stroke, shapes[source].stroke) for target, source, _, _ in chosen]) / 2
+    for rows, sources, targets in _pair_points(shapes, [source for _, source, _, _ in chosen],
+                                               [target for target, _, _, _ in chosen]):
+        fitted = matrices[rows, :, :2]  # (M, 2, 2)
+        strokes = halves[rows]
+        for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
+            if not len(rows):
+                break
+            if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
+                linear = np.round(fitted, linear_decimals)
+                a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
+                residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
+                                               b * sources[..., 0] + d * sources[..., 1]], axis=2)
+                middle = (residual.max(axis=1) + residual.min(axis=1)) / 2  # (M, 2)
+                scale = _scale_change(linear) * strokes
+            shift = np.round(middle, shift_decimals)
+            within = np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1)) + scale
+            fits = within <= tolerance
+            matrices[rows[fits]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
+            errors[rows[fits]] = within[fits]
+            rows, sources, targets, fitted, strokes, linear, residual, middle, scale = (
+                values[~fits] for values in (rows, sources, targets, fitted, strokes, linear, residual, middle, scale))
     texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
     return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
             for matrix, error in zip(matrices, errors.tolist(), strict=True)]
