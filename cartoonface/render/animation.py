@@ -263,7 +263,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
         drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress)
         other_drawings, other_moved = theirs()
-        return {name: {**drawings, **other_drawings}[name] for name in names}, {**moved, **other_moved}
+        both = {**drawings, **other_drawings}
+        return {name: both[name] for name in names}, {**moved, **other_moved}
 
     return result
 

@@ -35,6 +35,7 @@ map is a small dense matrix over the named points only.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -199,6 +200,12 @@ def _polygon(rows: list[np.ndarray], points: np.ndarray) -> str:
     """Append polygon vertices to `rows`; return closed "M..L..Z" template text."""
     rows.extend(points)
     return "M%s %s" + "L%s %s" * (len(points) - 1) + "Z"
+
+
+def hypots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """math.hypot of each pair of `x`, `y` (arrays of one shape, pixels; that shape): as the
+    drawing of one state at a time computed them (np.hypot may differ in the last bit)."""
+    return np.array(list(map(math.hypot, x.ravel().tolist(), y.ravel().tolist())), dtype=float).reshape(np.shape(x))
 
 
 def inside(point: np.ndarray, polygon: np.ndarray) -> bool:

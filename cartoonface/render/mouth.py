@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cartoonface.face.lift import LIFTED_INDEX
+from cartoonface.render.geometry import hypots
 from cartoonface.render.numbers import fill, number_texts, template_frame
 
 # The posed points the mouth is drawn from, in this order (thesis 002, Alg. 2.2 step 13).
@@ -162,12 +163,6 @@ def all_mouth_outlines(points: np.ndarray, shown: np.ndarray, d: float) -> list[
             rows=image[:44],
         ))
     return outlines
-
-
-def hypots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """math.hypot of each pair of `x`, `y` (arrays of one shape, pixels; that shape): as the
-    drawing of one state at a time computed them (np.hypot may differ in the last bit)."""
-    return np.array(list(map(math.hypot, x.ravel().tolist(), y.ravel().tolist())), dtype=float).reshape(np.shape(x))
 
 
 def _drawn(points: np.ndarray, shown: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:

@@ -34,9 +34,9 @@ from cartoonface.face.pose import PosedFace, PosedFaces, pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
-from cartoonface.render.geometry import all_face_shapes
+from cartoonface.render.geometry import all_face_shapes, hypots
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
-from cartoonface.render.mouth import drawn_mouth_texts, hypots
+from cartoonface.render.mouth import drawn_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
