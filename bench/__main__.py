@@ -1,4 +1,5 @@
-"""Run every benchmark module in this folder (or those named on the command line)."""
+"""Run every benchmark module in this folder (or those named on the command line). Options
+("--profile", "--minutes 30") are left for the modules, which read sys.argv themselves."""
 
 from __future__ import annotations
 
@@ -10,9 +11,11 @@ from pathlib import Path
 
 
 def main(argv: list[str]) -> int:
-    """Import bench/<name>.py for each name (default: all) and call its main()."""
+    """Import bench/<name>.py for each name in `argv` (default: all) and call its main(); the
+    names come first, the options (from the first "--x" on) are not names."""
     here = Path(__file__).parent
-    names = argv or sorted(m.name for m in pkgutil.iter_modules([str(here)]) if not m.name.startswith("_"))
+    options = next((index for index, arg in enumerate(argv) if arg.startswith("--")), len(argv))
+    names = argv[:options] or sorted(m.name for m in pkgutil.iter_modules([str(here)]) if not m.name.startswith("_"))
     for name in names:
         module = importlib.import_module(f"bench.{name}")
         if not hasattr(module, "main"):
