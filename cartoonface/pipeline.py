@@ -50,7 +50,7 @@ from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
 from cartoonface.video.drive import drive
 from cartoonface.video.track import track
-from cartoonface.workers import helper_pool, offloaded, processes
+from cartoonface.workers import collector_paused, helper_pool, offloaded, processes
 
 # Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
 # job's process, on the sample story and on bench/generate.py's 190 s input, after the analysis
@@ -197,6 +197,7 @@ def clip_sound(clip: Clip, staging: Path) -> tuple[Path, Audio]:
     return wav, Audio(samples=samples, rate=SILENT_RATE, source=str(clip.path))
 
 
+@collector_paused()  # the job's many containers hold no cycles (workers.collector_paused)
 def generate(
     face: Path | FaceModel,
     audio: Path | None,

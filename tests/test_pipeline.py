@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import json
 import math
 import shutil
@@ -76,6 +77,27 @@ def test_same_seed_same_bytes_other_seed_other_schedule(inputs, made, tmp_path):
         assert (again.out_dir / name).read_bytes() == (result.out_dir / name).read_bytes()
     other = generate(FACE, speech, transcript, tmp_path / "other", Options(title="天气", seed=6))
     assert (other.out_dir / "actions.json").read_bytes() != (result.out_dir / "actions.json").read_bytes()
+
+
+def test_the_cycle_collector_pauses_during_a_job_and_is_left_as_found(inputs, tmp_path):
+    speech, transcript = inputs
+    assert gc.isenabled()
+    during: list[bool] = []
+    generate(FACE, speech, transcript, tmp_path / "book", Options(), lambda stage, fraction: during.append(gc.isenabled()))
+    assert during and not any(during)
+    assert gc.isenabled()
+    fake = tmp_path / "speech.wav"
+    fake.write_text("not a recording", encoding="utf-8")
+    with pytest.raises(AudioError):  # a job that fails restores it too
+        generate(FACE, fake, transcript, tmp_path / "failed", Options())
+    assert gc.isenabled()
+    gc.disable()  # a caller that paused it keeps it paused
+    try:
+        with pytest.raises(AudioError):
+            generate(FACE, fake, transcript, tmp_path / "failed", Options())
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
 
 
 def test_edited_actions_and_alignment_are_used(inputs, made, tmp_path):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import gc
 import multiprocessing
 import os
 import subprocess
@@ -20,7 +21,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.workers import forked, helper_pool, offloaded, shares
+from cartoonface.workers import collector_paused, forked, helper_pool, offloaded, shares
 from tests.conftest import ROOT
 from tests.synthetic import synthetic_talk
 
@@ -127,3 +128,17 @@ def test_sampled_states_out_of_range_are_still_refused():
                    if track.name == "turn" else track for track in timeline.tracks)
     with pytest.raises(OptionError, match="turn"):
         states_at(Timeline(timeline.duration, tracks), np.arange(20) / 10)
+
+
+def _collector_enabled() -> bool:
+    return gc.isenabled()
+
+
+def test_the_paused_collector_stays_paused_in_forked_children_and_runs_again_after():
+    with collector_paused():
+        assert not gc.isenabled()
+        assert forked(2, _collector_enabled)() is False
+    assert gc.isenabled()
+    with pytest.raises(ValueError), collector_paused():
+        raise ValueError("a failed job")
+    assert gc.isenabled()
