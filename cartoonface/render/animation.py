@@ -51,8 +51,10 @@ clock from the audio (static/cartoonface.js).
 from __future__ import annotations
 
 import dataclasses
+import gc
 import math
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import reduce
 from itertools import count
@@ -513,6 +515,23 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
         return [first, other()]
 
 
+@contextmanager
+def _uncollected() -> Iterator[None]:
+    """Python's cyclic garbage collector paused (when it is on): animation_svg makes objects by
+    the hundred thousand (parts, drawings, numbers), none of them in a cycle (gc.collect() finds
+    nothing after it), and each full pass of the collector walks every one alive: 0.3 s of the
+    parent's 2.4 s CPU on the 190 s bench book (docs/BENCHMARKS.md, "The SVG stage's middle").
+    On again on leaving, it collects what there is then."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+@_uncollected()
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
                   body: BodyMotion | None = None, progress: Callable[[float], None] | None = None,

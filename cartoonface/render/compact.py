@@ -109,13 +109,14 @@ class RawPart:
 @dataclass(frozen=True)
 class Drawn:
     """The distinct parts one drawing process drew, made ready for Writer.collector by that process
-    (drawn_parts): `parts`, distinct by text and clips; `done`, all their path data compacted; per
+    (drawn_parts): `parts`, distinct, each as (name, text, clips) (elements.Part's fields: plain
+    tuples unpickle six times as fast); `done`, all their path data compacted; per
     part its skeleton and values (_skeleton's with done.compact) as `forms` (the number of its
     skeleton in `skeletons`, a few hundred for ten thousand parts, and the values); `holds`: the
     parts holding a first path data of done.firsts (part number -> those path data), which
     Writer.finish checks are collected."""
 
-    parts: list[Part]
+    parts: list[tuple[str, str, tuple[str, ...]]]
     skeletons: list[str]
     forms: list[tuple[int, list[str]]]
     done: Compacted
@@ -124,17 +125,18 @@ class Drawn:
 
 def drawn_parts(parts: list[Part]) -> Drawn:
     """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts)."""
+    fields = [(part.name, part.text, part.clips) for part in parts]
     done = compacted(part_paths((part.text, *part.clips) for part in parts))
     numbers: dict[str, int] = {}
     forms = []
-    for part in parts:
-        skeleton, values = _skeleton((part.text, *part.clips), done.compact)
+    for _, text, clips in fields:
+        skeleton, values = _skeleton((text, *clips), done.compact)
         forms.append((numbers.setdefault(skeleton, len(numbers)), values))
     # a path data as a part's text writes it (elements.attributes_text): escaped, between quotes
     written = [(d, f' d="{html.escape(d)}"') for d in done.firsts.values()]
-    holds = {number: held for number, part in enumerate(parts)
-             if (held := tuple(d for d, text in written if text in part.text or any(text in clip for clip in part.clips)))}
-    return Drawn(parts, list(numbers), forms, done, holds)
+    holds = {number: held for number, (_, text, clips) in enumerate(fields)
+             if (held := tuple(d for d, value in written if value in text or any(value in clip for clip in clips)))}
+    return Drawn(fields, list(numbers), forms, done, holds)
 
 
 class Writer:
@@ -156,7 +158,7 @@ class Writer:
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
         in drawing order."""
-        return tuple(self._number(part, None) for part in parts)
+        return tuple(self._number((part.name, part.text, part.clips), None) for part in parts)
 
     def collector(self, drawn: Drawn, done: Compacted) -> Callable[[Sequence[int]], tuple[int, ...]]:
         """A `collect` of drawings whose parts are given by their numbers in `drawn` (a drawing
@@ -170,24 +172,25 @@ class Writer:
         raws = [-1] * len(drawn.parts)
 
         def collect(numbers: Sequence[int]) -> tuple[int, ...]:
-            for number in numbers:
-                if raws[number] < 0:
-                    skeleton, values = drawn.forms[number]
-                    raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
-                                                if changed.isdisjoint(values) else None)
-                    self._held.update(drawn.holds.get(number, ()))
-            return tuple(raws[number] for number in numbers)
+            for number in [number for number in numbers if raws[number] < 0]:
+                skeleton, values = drawn.forms[number]
+                raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
+                                            if changed.isdisjoint(values) else None)
+                if number in drawn.holds:
+                    self._held.update(drawn.holds[number])
+            return tuple([raws[number] for number in numbers])
 
         return collect
 
-    def _number(self, part: Part, form: tuple[str, list[str]] | None) -> int:
-        """The raw part number of `part`, a new one when its text and clips are new, which then
-        keeps `form`: its skeleton and values (_skeleton's) or None (finish makes them)."""
-        key = (part.text, part.clips)
+    def _number(self, part: tuple[str, str, tuple[str, ...]], form: tuple[str, list[str]] | None) -> int:
+        """The raw part number of `part` (name, text, clips), a new one when its text and clips are
+        new, which then keeps `form`: its skeleton and values (_skeleton's) or None (finish makes them)."""
+        name, text, clips = part
+        key = (text, clips)
         number = self.raw_ids.get(key)
         if number is None:
             number = self.raw_ids[key] = len(self.raw)
-            self.raw.append(RawPart(self.label_of(part.name), part.text, part.clips))
+            self.raw.append(RawPart(self.label_of(name), text, clips))
             self._forms.append(form)
         return number
 
