@@ -16,9 +16,12 @@ part depends only on its skeleton, the text with its path data (numbered by thei
 forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
 tidied as lxml elements and the others' values are filled into its text. The style classes
 are renamed and the clip paths several drawings hold alike taken out on those texts, and the
-distinct tidy drawings are then parsed in one go. When two processes draw (render/animation.py),
-each compacts its own half's path data (render/pathdata.py's compacted and merged) and finish
-goes on from that ("Finishing in parallel").
+distinct tidy drawings are then parsed in one go. The drawing processes (render/animation.py)
+each number their own distinct parts, compact their path data and make their skeletons
+(`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
+the drawings by those numbers (`Writer.collector`) and goes on from there, making again only the
+skeletons whose path data the other process's first path data changed ("Finishing in parallel",
+"The SVG stage's middle").
 """
 
 from __future__ import annotations
