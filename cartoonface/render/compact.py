@@ -31,6 +31,7 @@ import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from itertools import islice
 from typing import NamedTuple
 
 from lxml import etree
@@ -251,7 +252,7 @@ class Writer:
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        return [[next(nodes) for _ in range(templates[skeleton].count - hoisted)]
+        return [list(islice(nodes, templates[skeleton].count - hoisted))
                 for (skeleton, _), hoisted in zip(distinct, lost, strict=True)]
 
     def _short_classes(self, templates: dict[str, _Template],
