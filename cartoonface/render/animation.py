@@ -70,7 +70,7 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.pathdata import merged
+from cartoonface.render.pathdata import Compacted, merged
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
@@ -515,6 +515,19 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
         return [first, other()]
 
 
+def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
+    """The raw part numbers of each drawing of `halves` (_drawings'), collected by `writer` in
+    order (Writer.collector), and the halves' path data compacted together (pathdata.merged). A
+    drawing whose key an earlier one has is that one's. (The halves are let go on return.)"""
+    done = reduce(merged, (parts.done for _, parts in halves))
+    drawn: dict[DrawingKey, tuple[int, ...]] = {}
+    raw = []
+    for drawings, parts in halves:
+        collect = writer.collector(parts, done)
+        raw += [drawn.get(key) or drawn.setdefault(key, collect(numbers)) for key, numbers in drawings]
+    return raw, done
+
+
 @contextmanager
 def _uncollected() -> Iterator[None]:
     """Python's cyclic garbage collector paused (when it is on): animation_svg makes objects by
@@ -574,14 +587,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    halves = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
-    done = reduce(merged, (parts.done for _, parts in halves))
-    # states whose drawings have one key share the first one's drawing
-    drawn: dict[DrawingKey, tuple[int, ...]] = {}
-    raw = []
-    for drawings, parts in halves:
-        collect = writer.collector(parts, done)
-        raw += [drawn.get(key) or drawn.setdefault(key, collect(numbers)) for key, numbers in drawings]
+    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done)))
     frames = [(distinct[number], raw[number]) for number in shown]
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)

@@ -209,7 +209,7 @@ class Writer:
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. `done`: path data
         compacted already (the drawing processes', drawn_parts and pathdata.merged, whose parts
         `collector` took), which may hold more than the parts collected."""
-        forms = self._forms
+        forms, self._forms = self._forms, []  # let go when finish returns
         if done is None or not self._held.issuperset(done.firsts.values()):
             # the first path data of a skeleton (whose points are kept in all) came from a drawing
             # not collected (a state whose key an earlier drawing has): compacted again, and every
