@@ -173,11 +173,10 @@ class Writer:
         process's, drawn_parts): each part is looked at once. A part's skeleton and values are
         taken from `drawn` when `done` (the path data of all the processes compacted together,
         pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
-        # the compact forms another process's earlier first path data changed (pathdata.merged
-        # compacted the members of such a skeleton again): the skeletons holding them are made again
-        own = drawn.done
-        changed = {own.compact[d] for skeleton, first in own.firsts.items() if done.firsts[skeleton] != first
-                   for d in own.members[skeleton] if done.compact[d] != own.compact[d]}
+        # the compact forms another process's first path data changed (pathdata.merged): the
+        # skeletons holding them are made again
+        changed = set() if done is drawn.done else {form for d, form in drawn.done.compact.items()
+                                                     if done.compact[d] != form}
         raws = [-1] * len(drawn.parts)
 
         def collect(numbers: Sequence[int]) -> tuple[int, ...]:
