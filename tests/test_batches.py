@@ -18,7 +18,7 @@ from cartoonface.render.compact import _extent
 from cartoonface.render.geometry import all_face_shapes, face_shapes
 from cartoonface.render.mouth import (ROWS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts, mouth_outlines,
                                       mouth_texts)
-from cartoonface.render.pathdata import _alike_rows, compacted, merged
+from cartoonface.render.pathdata import _alike_rows, _groups, compacted, merged
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.conftest import ROOT
 
@@ -129,9 +129,13 @@ def test_path_data_compacted_in_two_halves_as_all_at_once(face):
     other_firsts = 0
     for cut in (5, 20, 35):
         halves = [d for shapes in drawn[:cut] for d in shapes], [d for shapes in drawn[cut:] for d in shapes]
-        for done in (merged(compacted(halves[0]), compacted(halves[1] + extra)),
-                     merged(compacted(halves[1]), compacted(halves[0])), compacted(halves[0] + extra)):
+        for done, given in ((merged(compacted(halves[0]), compacted(halves[1] + extra)), paths + extra),
+                            (merged(compacted(halves[1]), compacted(halves[0])), paths),
+                            (compacted(halves[0] + extra), halves[0] + extra)):
             other_firsts += done.firsts != whole.firsts
+            groups = _groups(set(given))  # each corner-cut skeleton's path data, all compacted with its first
+            assert all(done.members[skeleton] == sorted(groups[skeleton]) and done.members[skeleton][0] == first
+                       for skeleton, first in done.firsts.items())
             result = compacted(paths, done)
             assert {d: result.compact[d] for d in set(paths)} == whole.compact
             assert all(result.extents[form] == whole.extents[form] for form in whole.extents)

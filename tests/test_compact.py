@@ -16,6 +16,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
 from cartoonface.render.compact import merge_alike
+from cartoonface.render.elements import Part
 from cartoonface.render.png import svg_to_png
 from tests.stills import frozen
 
@@ -138,6 +139,45 @@ def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
         assert firsts.setdefault(number, text) == text, "one tidy drawing per distinct expected drawing"
     assert len(set(renamed)) == len(tidy)
     assert list(alone.styles) == list(writer.styles), "style classes made in the same order"
+
+
+def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
+    """Writer.collector takes the skeletons each drawing process made of its own parts
+    (compact.drawn_parts): halves cut anywhere, their path data compacted apart (another first
+    path data chooses the points kept), drawings left out (a state whose key an earlier drawing
+    has) among them the one holding a first path data, give the tidy drawings, numbers and style
+    classes of one process collecting the same drawings."""
+    from functools import reduce
+
+    from cartoonface.render.animation import _draw_compacted, track_of
+    from cartoonface.render.compact import Writer, part_paths
+    from cartoonface.render.pathdata import compacted, merged
+
+    states = talking_about(90)
+    (whole, drawn), = [_draw_compacted(face, states)]
+    everything = compacted(part_paths((text, *clips) for _, text, clips in drawn.parts))
+    holding = {index for index, (_, numbers) in enumerate(whole)
+               if any(f' d="{d}"' in drawn.parts[number][1] for number in numbers for d in everything.firsts.values())}
+    assert everything.firsts and holding
+    for left_out in (set(), {min(holding)} | set(range(5, 90, 11))):
+        reference = Writer(track_of)
+        for index, (_, numbers) in enumerate(whole):
+            if index not in left_out:
+                reference.collect([Part(*drawn.parts[number]) for number in numbers])
+        expected = reference.finish()
+        drawings = [b"".join(etree.tostring(node) for node in drawing) for drawing in reference.drawings()]
+        for cut in (7, 45, 80):
+            halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:])]
+            done = reduce(merged, (half.done for _, half in halves))
+            writer = Writer(track_of)
+            for offset, (numbered, half) in zip((0, cut), halves, strict=True):
+                collect = writer.collector(half, done)
+                for index, (_, numbers) in enumerate(numbered, offset):
+                    if index not in left_out:
+                        collect(numbers)
+            assert writer.finish(None, done) == expected
+            assert [b"".join(etree.tostring(node) for node in drawing) for drawing in writer.drawings()] == drawings
+            assert writer.style_sheet() == reference.style_sheet()
 
 
 def test_two_processes_draw_the_same_bytes(face):

@@ -54,6 +54,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import reduce
 from itertools import count
 
 import numpy as np
@@ -64,15 +65,15 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Writer, bare, merge_alike, part_paths, share, short_id
+from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id
 from cartoonface.render.elements import DECIMALS, Part, element, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.pathdata import Compacted, compacted, merged
+from cartoonface.render.pathdata import Compacted, merged
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
-from cartoonface.workers import forked, helper_pool, offloaded, shares
+from cartoonface.workers import collector_paused, forked, helper_pool, offloaded, shares
 
 # The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
@@ -483,31 +484,49 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
     return drawings
 
 
+Numbered = list[tuple[DrawingKey, tuple[int, ...]]]  # _draw's drawings, parts as numbers of a Drawn's parts
+
+
 def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
-                    progress: Callable[[float], None] | None = None) -> tuple[list[tuple[DrawingKey, tuple[Part, ...]]], Compacted]:
-    """_draw of `states`, and the path data of the drawings compacted (render/pathdata.py's
-    compacted): what a drawing process does of compact.Writer.finish's work."""
+                    progress: Callable[[float], None] | None = None) -> tuple[Numbered, Drawn]:
+    """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
+    for the Writer (compact.drawn_parts: their path data compacted, their skeletons): what a
+    drawing process does of compact.Writer.finish's work."""
     drawings = _draw(face, states, progress)
-    parts = dict.fromkeys(part for _, drawn in drawings for part in drawn)  # equal parts are one object
-    return drawings, compacted(part_paths((part.text, *part.clips) for part in parts))
+    numbers: dict[Part, int] = {}
+    numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
+    return numbered, drawn_parts(list(numbers))
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
-              progress: Callable[[float], None]) -> tuple[list[tuple[DrawingKey, tuple[Part, ...]]], Compacted | None]:
-    """_draw of `states`, in order; with `workers` 2 and at least POOL_STATES states the second
-    half is drawn by a forked helper (workers.helper_pool) meanwhile, and each process compacts its
-    half's path data (_draw_compacted; then returned, pathdata.merged, else None). When the helper
-    cannot be started, has not begun or fails, its half is drawn here (workers.offloaded)."""
+              progress: Callable[[float], None]) -> list[tuple[Numbered, Drawn]]:
+    """_draw_compacted of `states`, in order: in one go, or with `workers` 2 and at least
+    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool)
+    meanwhile. When the helper cannot be started, has not begun or fails, its half is drawn here
+    (workers.offloaded)."""
     if workers < 2 or len(states) < POOL_STATES:
-        return _draw(face, states, progress), None
+        return [_draw_compacted(face, states, progress)]
     half = len(states) // 2
     with helper_pool(workers) as pool:
         other = offloaded(pool, _draw_compacted, face, states[half:])
-        first, own = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
-        second, theirs = other()
-    return first + second, merged(own, theirs)
+        first = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
+        return [first, other()]
 
 
+def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
+    """The raw part numbers of each drawing of `halves` (_drawings'), collected by `writer` in
+    order (Writer.collector), and the halves' path data compacted together (pathdata.merged). A
+    drawing whose key an earlier one has is that one's. (The halves are let go on return.)"""
+    done = reduce(merged, (parts.done for _, parts in halves))
+    drawn: dict[DrawingKey, tuple[int, ...]] = {}
+    raw = []
+    for drawings, parts in halves:
+        collect = writer.collector(parts, done)
+        raw += [drawn.get(key) or drawn.setdefault(key, collect(numbers)) for key, numbers in drawings]
+    return raw, done
+
+
+@collector_paused()  # its containers hold no cycles (workers.collector_paused; also for callers but generate)
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
                   body: BodyMotion | None = None, progress: Callable[[float], None] | None = None,
@@ -550,10 +569,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    drawings, done = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done))
-    # states whose drawings have one key share the first one's drawing
-    drawn: dict[DrawingKey, tuple[int, ...]] = {}
-    raw = [drawn.get(key) or drawn.setdefault(key, writer.collect(parts)) for key, parts in drawings]
+    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done)))
     frames = [(distinct[number], raw[number]) for number in shown]
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)

@@ -16,9 +16,12 @@ part depends only on its skeleton, the text with its path data (numbered by thei
 forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
 tidied as lxml elements and the others' values are filled into its text. The style classes
 are renamed and the clip paths several drawings hold alike taken out on those texts, and the
-distinct tidy drawings are then parsed in one go. When two processes draw (render/animation.py),
-each compacts its own half's path data (render/pathdata.py's compacted and merged) and finish
-goes on from that ("Finishing in parallel").
+distinct tidy drawings are then parsed in one go. The drawing processes (render/animation.py)
+each number their own distinct parts, compact their path data and make their skeletons
+(`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
+the drawings by those numbers (`Writer.collector`) and goes on from there, making again only the
+skeletons whose path data the other process's first path data changed ("Finishing in parallel",
+"The SVG stage's middle").
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from itertools import islice
+from typing import NamedTuple
 
 from lxml import etree
 
@@ -95,15 +100,51 @@ class _Template:
     count: int
 
 
-@dataclass(frozen=True)
-class RawPart:
+class RawPart(NamedTuple):
     """A part as face_parts drew it (text: a drawing of every state would not fit in
     memory as lxml trees), with the per-state definitions it references and the `label`
-    the Writer's `label_of` gave it."""
+    the Writer's `label_of` gave it. (A named tuple: made 2.5 times as fast as a frozen
+    dataclass, for ten thousand parts.)"""
 
     label: str
     element: str
     definitions: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Drawn:
+    """The distinct parts one drawing process drew, made ready for Writer.collector by that process
+    (drawn_parts): `parts`, distinct, each as (name, text, clips) (elements.Part's fields: plain
+    tuples unpickle six times as fast); `done`, all their path data compacted; per
+    part its skeleton and values (_skeleton's with done.compact) as `forms` (the number of its
+    skeleton in `skeletons`, a few hundred for ten thousand parts, and the values); `holds`: the
+    parts holding a first path data of done.firsts (part number -> those path data), which
+    Writer.finish checks are collected."""
+
+    parts: list[tuple[str, str, tuple[str, ...]]]
+    skeletons: list[str]
+    forms: list[tuple[int, list[str]]]
+    done: Compacted
+    holds: dict[int, tuple[str, ...]]
+
+
+def drawn_parts(parts: list[Part]) -> Drawn:
+    """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts)."""
+    fields = [(part.name, part.text, part.clips) for part in parts]
+    done = compacted(part_paths((part.text, *part.clips) for part in parts))
+    # a path data as a part's text writes it (elements.attributes_text): escaped, between quotes
+    written = [(d, f' d="{html.escape(d)}"') for d in done.firsts.values()]
+    numbers: dict[str, int] = {}
+    forms = []
+    holds = {}
+    for number, (_, text, clips) in enumerate(fields):
+        whole = "".join((text, *clips))  # elements end in ">": a path data in two cannot match
+        skeleton, values = _skeleton((whole,), done.compact)
+        forms.append((numbers.setdefault(skeleton, len(numbers)), values))
+        held = tuple(d for d, value in written if value in whole)
+        if held:
+            holds[number] = held
+    return Drawn(fields, list(numbers), forms, done, holds)
 
 
 class Writer:
@@ -119,38 +160,72 @@ class Writer:
         self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
         self._templates: dict[str, _Template] = {}  # by skeleton, and the distinct tidy drawings'
         self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
+        self._forms: list[tuple[str, list[str]] | None] = []  # per raw part, when a drawing process made them
+        self._held: set[str] = set()  # the path data of drawn_parts' Drawn.holds the collected parts hold
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
         in drawing order."""
-        numbers = []
-        for part in parts:
-            key = (part.text, part.clips)
-            number = self.raw_ids.get(key)
-            if number is None:
-                number = self.raw_ids[key] = len(self.raw)
-                self.raw.append(RawPart(self.label_of(part.name), part.text, part.clips))
-            numbers.append(number)
-        return tuple(numbers)
+        return tuple(self._number((part.name, part.text, part.clips), None) for part in parts)
+
+    def collector(self, drawn: Drawn, done: Compacted) -> Callable[[Sequence[int]], tuple[int, ...]]:
+        """A `collect` of drawings whose parts are given by their numbers in `drawn` (a drawing
+        process's, drawn_parts): each part is looked at once. A part's skeleton and values are
+        taken from `drawn` when `done` (the path data of all the processes compacted together,
+        pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
+        # the compact forms another process's first path data changed (pathdata.merged): the
+        # skeletons holding them are made again
+        changed = set() if done is drawn.done else {form for d, form in drawn.done.compact.items()
+                                                     if done.compact[d] != form}
+        raws = [-1] * len(drawn.parts)
+
+        def collect(numbers: Sequence[int]) -> tuple[int, ...]:
+            for number in [number for number in numbers if raws[number] < 0]:
+                skeleton, values = drawn.forms[number]
+                raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
+                                            if changed.isdisjoint(values) else None)
+                if number in drawn.holds:
+                    self._held.update(drawn.holds[number])
+            return tuple([raws[number] for number in numbers])
+
+        return collect
+
+    def _number(self, part: tuple[str, str, tuple[str, ...]], form: tuple[str, list[str]] | None) -> int:
+        """The raw part number of `part` (name, text, clips), a new one when its text and clips are
+        new, which then keeps `form`: its skeleton and values (_skeleton's) or None (finish makes them)."""
+        name, text, clips = part
+        key = (text, clips)
+        number = self.raw_ids.get(key)
+        if number is None:
+            number = self.raw_ids[key] = len(self.raw)
+            self.raw.append(RawPart(self.label_of(name), text, clips))
+            self._forms.append(form)
+        return number
 
     def finish(self, progress: Callable[[float], None] | None = None,
                done: Compacted | None = None) -> list[int]:
         """Tidy every raw part; return, per raw part, the number of its distinct tidy drawing
         (`drawings()` then makes them). `progress(fraction)`, when given, is
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. `done`: path data
-        compacted already (pathdata.compacted of the drawing processes' parts, pathdata.merged),
-        which may hold more than the parts collected."""
-        done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
+        compacted already (the drawing processes', drawn_parts and pathdata.merged, whose parts
+        `collector` took), which may hold more than the parts collected."""
+        forms, self._forms = self._forms, []  # let go when finish returns
+        if done is None or not self._held.issuperset(done.firsts.values()):
+            # the first path data of a skeleton (whose points are kept in all) came from a drawing
+            # not collected (a state whose key an earlier drawing has): compacted again, and every
+            # skeleton made here
+            done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
+            forms = [None] * len(self.raw)
         compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
         templates: dict[str, _Template] = {}
         tidy_ids: dict[str, int] = {}
         distinct: list[tuple[str, list[str]]] = []  # skeleton and values of each distinct tidy drawing
         mapping = []
-        for index, part in enumerate(self.raw):
+        for index, (part, form) in enumerate(zip(self.raw, forms, strict=True)):
             if progress is not None and index % PROGRESS_PARTS == 0:
                 progress(index / len(self.raw))
-            skeleton, values = _skeleton((part.element, *part.definitions), compact)
+            skeleton, values = form or _skeleton((part.element, *part.definitions), compact)
             template = templates.get(skeleton)
             if template is None:
                 template = templates[skeleton] = self._template(skeleton)
@@ -177,7 +252,7 @@ class Writer:
         # one parse of all (5x faster than one per drawing); the elements stay in the parsed
         # holder, which declares the namespace for all of them, until they go into the document
         nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        return [[next(nodes) for _ in range(templates[skeleton].count - hoisted)]
+        return [list(islice(nodes, templates[skeleton].count - hoisted))
                 for (skeleton, _), hoisted in zip(distinct, lost, strict=True)]
 
     def _short_classes(self, templates: dict[str, _Template],

@@ -251,11 +251,14 @@ class Compacted:
     none) the box (x0, y0, x1, y1) of every point and control point it writes, read off the rounded
     numbers (render/compact.py's merge_alike would otherwise parse the text); `firsts`: the first (in
     sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
-    all of them (_kept). Paths compacted in two processes are put together by `merged`."""
+    all of them (_kept), and `members` all the path data of each such skeleton compacted with it
+    (sorted; what `merged` compacts again where another first comes earlier). Paths compacted in
+    two processes are put together by `merged`."""
 
     compact: dict[str, str]
     extents: dict[str, Extent]
     firsts: dict[str, str]
+    members: dict[str, list[str]]
 
 
 def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
@@ -263,7 +266,7 @@ def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
     or of some of these and others): its compact forms are taken where its first path data of a
     skeleton is the first of these paths too (so its points are the ones kept), the others are
     compacted here."""
-    known = Compacted(dict(done.compact), dict(done.extents), {}) if done else Compacted({}, {}, {})
+    known = Compacted(dict(done.compact), dict(done.extents), {}, {}) if done else Compacted({}, {}, {}, {})
     distinct = set(paths)
     new = _groups(d for d in distinct if d not in known.compact)
     firsts = done.firsts if done else {}
@@ -274,11 +277,15 @@ def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
     for skeleton, first in firsts.items():
         if skeleton not in stale:
             known.firsts[skeleton] = first
+            known.members[skeleton] = done.members[skeleton] if done else []
         elif skeleton in every:
             _compact_group(skeleton, every[skeleton], known)
     for skeleton, members in new.items():
         if skeleton not in stale:  # compacted with the first, whose points are kept
+            before = known.members.get(skeleton, [])
             _compact_group(skeleton, [firsts[skeleton], *members] if skeleton in firsts else members, known)
+            if before:
+                known.members[skeleton] = sorted({*before, *known.members[skeleton]})
     return known
 
 
@@ -287,16 +294,14 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
     gives it: where a skeleton's first path data differs, the paths of the side whose first comes
     later are compacted again with the other's (its points kept)."""
     done = Compacted({**first.compact, **second.compact}, {**first.extents, **second.extents},
-                     {**first.firsts, **second.firsts})
-    redo = [(skeleton, min(one, other), second if one < other else first)
-            for skeleton, one in first.firsts.items()
-            if (other := second.firsts.get(skeleton)) is not None and one != other]
-    later_groups: dict[int, dict[str, list[str]]] = {}
-    for skeleton, start, later in redo:
-        groups = later_groups.get(id(later))
-        if groups is None:
-            groups = later_groups[id(later)] = _groups(later.compact)
-        _compact_group(skeleton, [start, *groups[skeleton]], done)
+                     {**first.firsts, **second.firsts}, {**first.members, **second.members})
+    for skeleton, one in first.firsts.items():
+        other = second.firsts.get(skeleton)
+        if other is None:
+            continue
+        if one != other:
+            _compact_group(skeleton, [min(one, other), *(second if one < other else first).members[skeleton]], done)
+        done.members[skeleton] = sorted({*first.members[skeleton], *second.members[skeleton]})
     return done
 
 
@@ -325,6 +330,7 @@ def _compact_group(skeleton: str, members: list[str], done: Compacted) -> None:
         return
     if "L" in skeleton:
         done.firsts[skeleton] = members[0]
+        done.members[skeleton] = members
     rounded = np.rint(numbers).astype(np.int64)
     spans = _spans(commands)
     kept = _kept(commands, spans, rounded[0])
