@@ -154,7 +154,8 @@ def collector_paused() -> Iterator[None]:
     no reference cycles: they are freed by reference counting, and the collector's passes over
     them found nothing but took ~10 % of the job's CPU time (~0.4 s of 3.5 s on the 3-minute
     bench book; a pass of the oldest generation walks every container alive); render/animation.py's
-    animation_svg runs under it too. The few hundred objects in cycles a job leaves are collected after it (docs/BENCHMARKS.md, "Collector paused")."""
+    animation_svg runs under it too. The few hundred objects in cycles a job leaves are collected
+    after it (docs/BENCHMARKS.md, "Collector paused")."""
     enabled = gc.isenabled()
     gc.disable()
     try:
