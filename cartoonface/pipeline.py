@@ -48,8 +48,6 @@ from cartoonface.speech.audio import Audio, load_audio, page_copy
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
-from cartoonface.video.drive import drive
-from cartoonface.video.track import track
 from cartoonface.workers import helper_pool, offloaded, processes
 
 # Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
@@ -251,6 +249,8 @@ def generate(
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
         if clip is not None:
+            from cartoonface.video.track import track  # video jobs only: not imported by an audio job's start
+
             tracking = track(clip, lambda done: report("decode", done))
             sound, recording = clip_sound(clip, Path(staging))
         elif audio is not None:
@@ -293,6 +293,8 @@ def generate(
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:
+            from cartoonface.video.drive import drive  # video jobs only, as track above
+
             states = drive(tracking, sample_frames(timeline, options.fps), options.fps, model,
                            combine=transcribed(alignment))
         else:

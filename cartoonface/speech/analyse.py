@@ -24,14 +24,13 @@ from concurrent.futures import Executor
 
 import numpy as np
 
-from pypinyin.seg.mmseg import seg
-
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import MARGIN, align_syllables
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.audio_only import analyse_audio
 from cartoonface.speech.english import analyse_english, detect_language
 from cartoonface.speech.features import HOP
+from cartoonface.speech.lexicon import longest_words
 from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -193,7 +192,7 @@ def word_lengths(texts: Sequence[str]) -> list[int]:
     read out as one token) -> syllables per word, by pypinyin's word segmentation (maximum
     matching over its phrase dictionary, on the Simplified text); the lengths sum to len(texts)."""
     ends, position = {0}, 0
-    for word in seg.cut(to_simplified("".join(texts))):
+    for word in longest_words(to_simplified("".join(texts))):
         position += len(word)
         ends.add(position)
     lengths: list[int] = []
