@@ -317,7 +317,7 @@ def generate(
                            actions=actions_to_json(actions))
                 if captions is not None:
                     write_text_atomic(folder / CAPTIONS_NAME, captions)
-                cues = mouth_cues(alignment)
+                cues = mouth_cues(alignment) if options.cues else ()  # asked for only
                 for fmt in options.cues:
                     write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))
                 size = folder_size(folder)
