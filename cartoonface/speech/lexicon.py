@@ -4,8 +4,8 @@ Importing pypinyin costs ~0.2 s of CPU at every start (it parses its 2.5 MB JSON
 and builds the set of every phrase's beginnings), for the few answers a transcript needs.
 data/lexicon.txt holds those answers for every character and phrase of its dictionaries, written by
 `python -m cartoonface.speech.lexicon_build` (which names the format; tests/test_lexicon.py checks
-it against pypinyin); reading it costs ~25 ms, once, on first use. Readings are tone-numbered with
-5 for the neutral tone and "ü" ("hang2"), as speech/readings.py uses them.
+it against pypinyin); reading it costs ~35 ms of CPU, once, on first use. Readings are
+tone-numbered with 5 for the neutral tone and "ü" ("hang2"), as speech/readings.py uses them.
 """
 
 from __future__ import annotations
@@ -89,8 +89,9 @@ def longest_words(text: str) -> list[str]:
 def words(text: str) -> list[str]:
     """`text` in words as pypinyin.seg.simpleseg.seg gives them: runs of characters pypinyin does
     not read whole, and the `longest_words` of each run of those it reads."""
+    hans = lexicon().hans
     out: list[str] = []
-    for read, chars in itertools.groupby(text, key=lambda c: lexicon().hans.match(c) is not None):
+    for read, chars in itertools.groupby(text, key=lambda c: hans.match(c) is not None):
         run = "".join(chars)
         out.extend(longest_words(run) if read else [run])
     return out
