@@ -2,8 +2,9 @@
 
 Thesis 002, 3.3 picked polyphone readings by hand; we use pypinyin's phrase dictionary
 (on Simplified characters; its answers as speech/lexicon.py's table) and then say the surface
-tones: 一 and 不, doubled syllables, third-tone sandhi. docs/mandarin-mouth-shapes.md writes every rule out. Readings are
-tone-numbered with 5 for the neutral tone and "ü" for u-umlaut: "hang2", erhua "dianr3".
+tones: 一 and 不, doubled syllables, third-tone sandhi. docs/mandarin-mouth-shapes.md writes
+every rule out. Readings are tone-numbered with 5 for the neutral tone and "ü" for u-umlaut:
+"hang2", erhua "dianr3".
 """
 
 from __future__ import annotations
