@@ -4,7 +4,8 @@
 the trees (each with its own `.venv`), fresh processes that
 
 - import what `cartoonface generate` imports (the CLI module, the pipeline, exports.video): wall
-  and CPU seconds of the imports, and whether scipy got imported;
+  and CPU seconds of the imports, and whether scipy got imported; then the CPU seconds with the
+  transcript read as well (`parse_transcript`: its first use loads speech/lexicon.py's table);
 - run `analyse` on bench/generate.py's 190 s input (after one warm-up run in the same process):
   CPU seconds of its segment stage (transcript, speaking parts), of the reconciling (dips) and of
   the alignment, one process, no helper.
@@ -27,12 +28,17 @@ from bench.generate import build_input
 ROUNDS = 5
 IMPORTS = """
 import json, os, sys, time
+from pathlib import Path
 started = time.perf_counter()
 import cartoonface.cli.generate, cartoonface.pipeline, cartoonface.exports.video
 wall = time.perf_counter() - started
 times = os.times()
+scipy = any(name.split(".")[0] == "scipy" for name in sys.modules)
+from cartoonface.speech.transcript import parse_transcript
+parse_transcript(Path(sys.argv[1]).read_text(encoding="utf-8"))
+read = os.times()
 print(json.dumps({"import wall": wall, "import CPU": times.user + times.system,
-                  "scipy": any(name.split(".")[0] == "scipy" for name in sys.modules)}))
+                  "+ transcript CPU": read.user + read.system, "scipy": scipy}))
 """
 ANALYSIS = """
 import json, sys, time
@@ -55,7 +61,7 @@ def measure(tree: Path, audio: Path, transcript: Path) -> dict[str, float]:
     """One round in `tree`: the figures of IMPORTS and ANALYSIS, each in a fresh process."""
     python = str(tree / ".venv" / "bin" / "python")
     figures: dict[str, float] = {}
-    for code, args in ((IMPORTS, []), (ANALYSIS, [str(audio), str(transcript)])):
+    for code, args in ((IMPORTS, [str(transcript)]), (ANALYSIS, [str(audio), str(transcript)])):
         done = subprocess.run([python, "-c", code, *args], cwd=tree, capture_output=True, text=True, check=True)
         figures.update(json.loads(done.stdout.splitlines()[-1]))
     return figures

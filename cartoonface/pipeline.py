@@ -48,8 +48,6 @@ from cartoonface.speech.audio import Audio, load_audio, page_copy
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
-from cartoonface.video.drive import drive
-from cartoonface.video.track import track
 from cartoonface.workers import collector_paused, helper_pool, offloaded, processes
 
 # Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
@@ -252,6 +250,8 @@ def generate(
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
         if clip is not None:
+            from cartoonface.video.track import track  # video jobs only: not imported by an audio job's start
+
             tracking = track(clip, lambda done: report("decode", done))
             sound, recording = clip_sound(clip, Path(staging))
         elif audio is not None:
@@ -294,6 +294,8 @@ def generate(
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:
+            from cartoonface.video.drive import drive  # video jobs only, as track above
+
             states = drive(tracking, sample_frames(timeline, options.fps), options.fps, model,
                            combine=transcribed(alignment))
         else:
@@ -316,7 +318,7 @@ def generate(
                            actions=actions_to_json(actions))
                 if captions is not None:
                     write_text_atomic(folder / CAPTIONS_NAME, captions)
-                cues = mouth_cues(alignment)
+                cues = mouth_cues(alignment) if options.cues else ()  # asked for only
                 for fmt in options.cues:
                     write_text_atomic(folder / cues_name(fmt), cues_text(cues, duration, fmt, sources[0].name))
                 size = folder_size(folder)

@@ -31,3 +31,6 @@ if .venv/bin/python -m pip show -q opencv-python-headless >/dev/null 2>&1; then
   .venv/bin/python -m pip uninstall -q -y opencv-python-headless
 fi
 .venv/bin/python -m pip install -q -e ".[dev,photo]"
+# Our modules' bytecode written now: a shell with PYTHONDONTWRITEBYTECODE set (as ours) would
+# otherwise compile ~100 modules again at every command's start (~0.12 s; docs/BENCHMARKS.md, "Start-up").
+.venv/bin/python -m compileall -q cartoonface

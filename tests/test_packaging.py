@@ -70,3 +70,21 @@ def test_cli_start_loads_no_heavy_module(code):
     done = subprocess.run([sys.executable, "-c", check], capture_output=True, text=True, timeout=60, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == []
+
+
+def test_wheel_holds_the_lexicon(wheel):
+    lexicon = ROOT / "cartoonface" / "data" / "lexicon.txt"
+    assert wheel.read("cartoonface/data/lexicon.txt") == lexicon.read_bytes()
+
+
+# Modules `cartoonface generate` does not import before an audio job's work (issue 16's start-up): pypinyin
+# (0.2 s; speech/lexicon.py holds its answers), scipy, the video tracking, urllib.request (via xml.sax).
+NOT_AT_START = ("pypinyin", "scipy", "cartoonface.video.track", "cartoonface.video.drive", "urllib.request")
+
+
+def test_generate_start_loads_only_what_an_audio_job_needs():
+    check = ("import sys\nimport cartoonface.cli.generate, cartoonface.pipeline, cartoonface.exports.video\n"
+             f"print(' '.join(m for m in sys.modules if m in {NOT_AT_START!r} or m.split('.')[0] in {NOT_AT_START!r}))")
+    done = subprocess.run([sys.executable, "-c", check], capture_output=True, text=True, timeout=60, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == []

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from xml.sax.saxutils import escape
+from html import escape  # with quote=False: & < > as xml.sax.saxutils.escape (which imports urllib.request)
 
 from cartoonface.speech.mouth_shapes import shape_onsets
 from cartoonface.speech.records import Alignment
@@ -123,7 +123,7 @@ def cues_text(cues: tuple[Cue, ...], duration: float, fmt: str, sound_file: str)
         rows = "\n".join(f'    <mouthCue start="{_seconds(c.start)}" end="{_seconds(c.end)}">{c.value}</mouthCue>'
                          for c in cues)
         return ('<?xml version="1.0" encoding="utf-8"?>\n<rhubarbResult>\n  <metadata>\n'
-                f"    <soundFile>{escape(sound_file)}</soundFile>\n    <duration>{_seconds(total)}</duration>\n"
+                f"    <soundFile>{escape(sound_file, quote=False)}</soundFile>\n    <duration>{_seconds(total)}</duration>\n"
                 f"  </metadata>\n  <mouthCues>\n{rows}\n  </mouthCues>\n</rhubarbResult>\n")
     raise ValueError(f"cue format {fmt!r}: expected one of {', '.join(FORMATS)}")
 

@@ -24,14 +24,13 @@ from concurrent.futures import Executor
 
 import numpy as np
 
-from pypinyin.seg.mmseg import seg
-
 from cartoonface.errors import TranscriptError
 from cartoonface.speech.align import MARGIN, align_syllables
 from cartoonface.speech.audio import Audio
 from cartoonface.speech.audio_only import analyse_audio
 from cartoonface.speech.english import analyse_english, detect_language
 from cartoonface.speech.features import HOP
+from cartoonface.speech.lexicon import longest_words
 from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
@@ -193,7 +192,7 @@ def word_lengths(texts: Sequence[str]) -> list[int]:
     read out as one token) -> syllables per word, by pypinyin's word segmentation (maximum
     matching over its phrase dictionary, on the Simplified text); the lengths sum to len(texts)."""
     ends, position = {0}, 0
-    for word in seg.cut(to_simplified("".join(texts))):
+    for word in longest_words(to_simplified("".join(texts))):
         position += len(word)
         ends.add(position)
     lengths: list[int] = []
@@ -213,11 +212,14 @@ def _align_jobs(audio: Audio, jobs: list[tuple[list[SentenceText], Span]], pool:
     there meanwhile. `report("align", fraction)` as this process's share goes on."""
     costs = [span.duration * sum(len(text.syllables) for text in texts) for texts, span in jobs]
     here, there = shares(costs) if pool is not None else (list(range(len(jobs))), [])
-    later = {k: offloaded(pool, _aligned_part, *_part_samples(audio, jobs[k][1]), *jobs[k]) for k in there}
+    # The words of every job found here: the pool's process, forked before the transcript was read,
+    # then needs no lexicon (speech/lexicon.py, ~35 ms to read).
+    words = [[n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])] for texts, _ in jobs]
+    later = {k: offloaded(pool, _aligned_part, *_part_samples(audio, jobs[k][1]), *jobs[k], words[k]) for k in there}
     done: dict[int, list[tuple[Sentence, tuple[float, ...]]]] = {}
     for number, k in enumerate(here):
         report("align", number / len(here))
-        done[k] = _aligned(audio, *jobs[k])
+        done[k] = _aligned(audio, *jobs[k], words[k])
     for k in reversed(there):  # the pool's last jobs first: those it has not begun are done here
         done[k] = later[k]()
     return [done[k] for k in range(len(jobs))]
@@ -234,20 +236,21 @@ def _part_samples(audio: Audio, span: Span) -> tuple[int, np.ndarray, int, int, 
 
 
 def _aligned_part(offset: int, samples: np.ndarray, length: int, rate: int, source: str, texts: list[SentenceText],
-                  span: Span) -> list[tuple[Sentence, tuple[float, ...]]]:
-    """`_aligned(audio, texts, span)` from `_part_samples(audio, span)`: the recording rebuilt with
+                  span: Span, words: list[int]) -> list[tuple[Sentence, tuple[float, ...]]]:
+    """`_aligned(audio, texts, span, words)` from `_part_samples(audio, span)`: the recording rebuilt with
     zeros where the aligner does not read, so the result is the same."""
     whole = np.zeros(length, dtype=samples.dtype)
     whole[offset:offset + len(samples)] = samples
-    return _aligned(Audio(whole, rate, source), texts, span)
+    return _aligned(Audio(whole, rate, source), texts, span, words)
 
 
-def _aligned(audio: Audio, texts: list[SentenceText], span: Span) -> list[tuple[Sentence, tuple[float, ...]]]:
+def _aligned(audio: Audio, texts: list[SentenceText], span: Span,
+             words: list[int]) -> list[tuple[Sentence, tuple[float, ...]]]:
     """Time the syllables of the sentences `texts`, spoken in this order inside `span` of `audio`
-    (pauses likelier between words, and always possible between sentences): each sentence with
-    the aligner's posterior of each of its syllables (SyllableTiming.posterior)."""
+    (pauses likelier between words (`words`: syllables per word, word_lengths of each sentence in
+    turn), and always possible between sentences): each sentence with the aligner's posterior of
+    each of its syllables (SyllableTiming.posterior)."""
     pinyin = [syllable.pinyin for sentence in texts for syllable in sentence.syllables]
-    words = [n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])]
     timings = list(align_syllables(audio, span, pinyin, words))
     sentences = []
     for sentence in texts:

@@ -20,8 +20,6 @@ import unicodedata
 from dataclasses import dataclass
 from functools import cache
 
-from pypinyin.pinyin_dict import pinyin_dict
-
 from cartoonface.speech.english import PHONE_SHAPE, VOWELS
 
 # Onsets English allows at the start of a word (ARPAbet), for cutting consonants between vowels
@@ -101,6 +99,8 @@ class EnglishSyllable:
 @cache
 def mandarin_syllables() -> frozenset[str]:
     """Every toneless pinyin spelling pypinyin's character dictionary reads (ü as u)."""
+    from pypinyin.pinyin_dict import pinyin_dict  # English inside Mandarin only: pypinyin takes 0.2 s to import
+
     spellings = set()
     for readings in pinyin_dict.values():
         for reading in readings.split(","):

@@ -1,9 +1,10 @@
 """Readings of Chinese characters in context: dictionary look-up, erhua and tone sandhi.
 
 Thesis 002, 3.3 picked polyphone readings by hand; we use pypinyin's phrase dictionary
-(on Simplified characters) and then say the surface tones: 一 and 不, doubled syllables,
-third-tone sandhi. docs/mandarin-mouth-shapes.md writes every rule out. Readings are
-tone-numbered with 5 for the neutral tone and "ü" for u-umlaut: "hang2", erhua "dianr3".
+(on Simplified characters; its answers as speech/lexicon.py's table) and then say the surface
+tones: 一 and 不, doubled syllables, third-tone sandhi. docs/mandarin-mouth-shapes.md writes
+every rule out. Readings are tone-numbered with 5 for the neutral tone and "ü" for u-umlaut:
+"hang2", erhua "dianr3".
 """
 
 from __future__ import annotations
@@ -13,11 +14,8 @@ from dataclasses import dataclass, replace
 from functools import cache
 
 from opencc import OpenCC
-from pypinyin import Style, lazy_pinyin
-from pypinyin.contrib.tone_convert import to_tone
-from pypinyin.seg.simpleseg import seg
-from pypinyin.style import convert as convert_style
 
+from cartoonface.speech.lexicon import reading, readings, words, zhuyin_of
 from cartoonface.speech.pinyin import syllable_parts
 
 # Where 儿 is a word of its own (child, son) and not the erhua suffix: the pair it ends,
@@ -75,29 +73,25 @@ def look_up(domain: list[Unit], notes: list[str]) -> list[Unit]:
     """
     hans = "".join(u.han for u in domain if u.han)
     simplified = to_simplified(hans)
-    words = seg(simplified) if simplified else []
     spans: list[tuple[int, str, str]] = []
-    for index, word in enumerate(words):
-        readings = lazy_pinyin(word, style=Style.TONE3, neutral_tone_with_five=True, v_to_u=True)
-        if len(readings) != len(word):
-            readings = [_reading_of(c) for c in word]
-        spans.extend((index, c, r) for c, r in zip(word, readings))
+    for index, word in enumerate(words(simplified) if simplified else []):
+        spans.extend((index, c, r) for c, r in zip(word, readings(word)))
     out: list[Unit] = []
     k = 0
     for unit in domain:
         if not unit.han:
             out.append(replace(unit, word=-1 - len(out), pinyin=unit.reading))  # a word of its own
             continue
-        index, simple, reading = spans[k]
+        index, simple, said = spans[k]
         k += 1
-        if not _READING_RE.fullmatch(reading) and simple != unit.han:
-            reading = _reading_of(unit.han)   # OpenCC maps a few rare characters beyond pypinyin
-        reading = unit.reading or reading
-        if not _READING_RE.fullmatch(reading):
+        if not _READING_RE.fullmatch(said) and simple != unit.han:
+            said = reading(unit.han)   # OpenCC maps a few rare characters beyond pypinyin
+        said = unit.reading or said
+        if not _READING_RE.fullmatch(said):
             notes.append(f"no reading known for {unit.text!r}; skipped (give one like "
                          f"{unit.text}{{hang2}})")
             continue
-        out.append(replace(unit, han=simple, word=index, pinyin=reading))
+        out.append(replace(unit, han=simple, word=index, pinyin=said))
     return out
 
 
@@ -106,12 +100,6 @@ def position_of(text: str, index: int) -> str:
     line = text.count("\n", 0, index) + 1
     column = index - (text.rfind("\n", 0, index) + 1) + 1
     return f"line {line}, column {column}"
-
-
-def _reading_of(han: str) -> str:
-    """pypinyin's reading of one character, tone-numbered ("" when it has none)."""
-    readings = lazy_pinyin(han, style=Style.TONE3, neutral_tone_with_five=True, v_to_u=True)
-    return readings[0] if len(readings) == 1 else ""
 
 
 def erhua(units: list[Unit]) -> list[Unit]:
@@ -215,10 +203,14 @@ def _second(unit: Unit) -> Unit:
     return unit if unit.no_sandhi else replace(unit, pinyin=_with_tone(unit.pinyin, 2))
 
 
-@cache  # a few hundred distinct syllables recur through a text (pypinyin's conversions: ~0.1 ms each)
+@cache  # a few hundred distinct syllables recur through a text
 def zhuyin(pinyin: str) -> str:
     """Tone-numbered pinyin -> Bopomofo with its tone mark; erhua adds ㄦ ("ㄉㄧㄢˇㄦ")."""
     parts = syllable_parts(pinyin)
     base = pinyin[:-2] + pinyin[-1] if parts.erhua else pinyin
-    bopomofo = convert_style(to_tone(base), Style.BOPOMOFO, strict=True)
+    bopomofo = zhuyin_of(base)
+    if bopomofo is None:  # a spelling no character has (a reading in the transcript, an English syllable)
+        from cartoonface.speech.lexicon_build import pypinyin_zhuyin  # pypinyin (0.2 s to import) only then
+
+        bopomofo = pypinyin_zhuyin(base)
     return bopomofo + ("ㄦ" if parts.erhua else "")

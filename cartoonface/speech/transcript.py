@@ -26,8 +26,6 @@ import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
-from pypinyin.contrib.tone_convert import to_tone3
-
 from cartoonface.errors import TranscriptError
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.speech.mouth_shapes import shapes_for
@@ -186,6 +184,8 @@ def _override_reading(token: str, where: str, target: str) -> str:
     """A user's reading: tone-numbered (hang2) or tone-marked (háng) -> tone-numbered."""
     reading = token.lower().replace("v", "ü")
     if not any(c.isdigit() for c in reading):
+        from pypinyin.contrib.tone_convert import to_tone3  # only for tone marks: pypinyin takes 0.2 s to import
+
         if to_tone3(reading, v_to_u=True) == reading:
             raise TranscriptError(
                 f"{where}: reading {token!r} for {target!r} has no tone; expected tone-numbered "
