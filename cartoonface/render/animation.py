@@ -465,11 +465,9 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
     it and turned back by the roll as written (ROLL_DECIMALS; the two turns cancel exactly). The
     drawing depends on the state without roll and on the pupils (written to 0.1 px), the key:
     states that share it differ by a turn of under 0.005 degrees (the roll's rounding), which
-    moves no point by more than 0.02 px. Equal parts are one object (a pickle then holds each
-    once). `progress(fraction)` is told the share drawn after every batch."""
+    moves no point by more than 0.02 px. `progress(fraction)` is told the share drawn after every batch."""
     lifted = lift(face)
     origin = rig(lifted).origin
-    known: dict[Part, Part] = {}
     drawings = []
     size = min(BATCH, max(MIN_BATCH, len(states) // BATCHES))
     for start in range(0, len(states), size):
@@ -480,7 +478,7 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
         posed = unroll_faces(pose_faces(lifted, batch), rolls, origin)
         pupils = np.round(posed.pupils, 1).reshape(len(batch), 4).tolist()
         for state, eyes, parts in zip(batch, pupils, all_face_parts(face, posed, UID), strict=True):
-            drawings.append(((*_unrolled_fields(state), *eyes), tuple(known.setdefault(part, part) for part in parts)))
+            drawings.append(((*_unrolled_fields(state), *eyes), parts))
     return drawings
 
 
