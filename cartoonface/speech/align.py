@@ -412,7 +412,8 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             longest = min(total, int(LONGEST_SHARE * mean) + MIN_FRAMES)
             d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
             # impossible starts before frame 0
-            cand = _before(start_score, k, d, _NEG) + _duration_score(d, mean)[None, :]
+            cand = np.array(_before(start_score, k, d, _NEG))  # copied first: adding to the view is slower
+            cand += _duration_score(d, mean)
             choice = cand.argmax(axis=1)
             after_syllable[i + 1, r] = cand[k, choice]
             length[i, r] = d[choice]
