@@ -50,7 +50,7 @@ from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
 from cartoonface.video.drive import drive
 from cartoonface.video.track import track
-from cartoonface.workers import helper_pool, offloaded, processes
+from cartoonface.workers import frozen_heap, helper_pool, offloaded, processes
 
 # Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
 # job's process, on the sample story and on bench/generate.py's 190 s input, after the analysis
@@ -243,11 +243,13 @@ def generate(
     marks = () if text is None else emotion_marks(text, source)
     clip = None if video is None else video_input(video, text)
     report("decode")
-    # A forked helper (workers.py) computes the pitch track and aligns about half the parts during
-    # the analysis (none for a web job: its CPU-time limit counts per process); forked first, it
-    # holds none of ffmpeg's pipes. The page's compressed audio is made by ffmpeg on the other core
-    # while the animation is drawn (the pool is left, waiting for ffmpeg, before its folder is removed).
-    with (helper_pool(processes()) as helper,
+    # The objects made so far (imports, the face) are left out of the garbage collector's full
+    # passes (workers.frozen_heap). A forked helper (workers.py) computes the pitch track and aligns
+    # about half the parts during the analysis (none for a web job: its CPU-time limit counts per
+    # process); forked first, it holds none of ffmpeg's pipes. The page's compressed audio is made by
+    # ffmpeg at the lowest priority (audio.PAGE_NICENESS) in the time the cores would idle (the pool
+    # is left, waiting for ffmpeg, before its folder is removed).
+    with (frozen_heap(), helper_pool(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
         if clip is not None:

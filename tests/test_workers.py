@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import gc
 import multiprocessing
 import os
 import subprocess
 import sys
 import time
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +22,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.workers import forked, helper_pool, offloaded, shares
+from cartoonface.workers import forked, frozen_heap, helper_pool, offloaded, shares
 from tests.conftest import ROOT
 from tests.synthetic import synthetic_talk
 
@@ -127,3 +129,34 @@ def test_sampled_states_out_of_range_are_still_refused():
                    if track.name == "turn" else track for track in timeline.tracks)
     with pytest.raises(OptionError, match="turn"):
         states_at(Timeline(timeline.duration, tracks), np.arange(20) / 10)
+
+
+class _Node:
+    """A garbage-collected object that can hold a reference cycle."""
+
+    def __init__(self) -> None:
+        self.other: object = self
+
+
+def test_a_frozen_heap_leaves_out_the_objects_before_it_and_still_collects_new_garbage() -> None:
+    before = _Node()
+    with frozen_heap():
+        assert gc.get_freeze_count() > 0
+        assert not any(obj is before for obj in gc.get_objects())  # not walked by the collector
+        cycle = _Node()
+        alive = weakref.ref(cycle)
+        del cycle
+        gc.collect()
+        assert alive() is None  # the cycle made inside is freed inside
+    assert gc.get_freeze_count() == 0 and any(obj is before for obj in gc.get_objects())
+
+
+def test_a_frozen_heap_keeps_the_hosts_own_freeze() -> None:
+    gc.freeze()  # a server that froze its start-up objects
+    try:
+        frozen = gc.get_freeze_count()
+        with frozen_heap():
+            pass
+        assert gc.get_freeze_count() == frozen
+    finally:
+        gc.unfreeze()
