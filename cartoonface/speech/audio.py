@@ -55,10 +55,6 @@ PAGE_BITRATE = "64k"
 # "twoloop", the same size, and no less faithful on speech (waveform SNR of the decoded copy
 # 29.1 dB against 27.7 dB on bench/generate.py's input; docs/BENCHMARKS.md, "Speed of the SVG stage").
 PAGE_CODER = ("-aac_coder", "fast")
-# The page's audio is made beside the analysis and the drawing (pipeline.generate) but needed only at
-# the end: its ffmpeg runs at the lowest priority (Unix nice 19), so it takes the cores when they
-# would idle, not from the work every later stage waits for (docs/BENCHMARKS.md, branch seg).
-PAGE_NICENESS = 19
 # Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
 _SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
 
@@ -237,22 +233,12 @@ def ffmpeg_reason(stderr: str) -> str:
     return reason[:200]
 
 
-def _yield_cpu(pid: int) -> None:
-    """Give the process `pid` the lowest CPU priority (PAGE_NICENESS) where the system allows it."""
-    if hasattr(os, "setpriority"):  # POSIX
-        try:
-            os.setpriority(os.PRIO_PROCESS, pid, PAGE_NICENESS)
-        except OSError:  # already ended, or not allowed: it runs at the normal priority
-            pass
-
-
 def page_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], stem: str = "audio") -> Path:
     """Put the recording at `path` into `out_dir` compressed for the page; return the file's path.
 
     Any format ffmpeg reads becomes `stem`.m4a: AAC-LC, mono, PAGE_BITRATE (every browser plays it;
     the MP4 edit list tells players to skip the encoder's priming, so times stay those of the
-    recording). ffmpeg runs at the lowest CPU priority (PAGE_NICENESS). Raises AudioError when the
-    conversion fails.
+    recording). Raises AudioError when the conversion fails.
     """
     source = Path(path)
     with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as tmp:
@@ -262,10 +248,7 @@ def page_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], ste
             "-map", "0:a:0", "-vn", "-ac", "1", "-c:a", "aac", *PAGE_CODER, "-b:a", PAGE_BITRATE,
             "-movflags", "+faststart", str(m4a),
         ]  # fmt: skip
-        with subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                              errors="replace") as encoder:
-            _yield_cpu(encoder.pid)
-            _, errors = encoder.communicate()
-        if encoder.returncode != 0 or not m4a.is_file():
-            raise AudioError(f"{source}: cannot compress for the page ({ffmpeg_reason(errors)})")
+        done = subprocess.run(command, capture_output=True, text=True, errors="replace")
+        if done.returncode != 0 or not m4a.is_file():
+            raise AudioError(f"{source}: cannot compress for the page ({ffmpeg_reason(done.stderr)})")
         return write_bytes_atomic(Path(out_dir) / f"{stem}.m4a", m4a.read_bytes())
