@@ -252,9 +252,8 @@ def generate(
     # The objects made so far (imports, the face) are left out of the garbage collector's full
     # passes (workers.frozen_heap). A forked helper (workers.py) computes the pitch track and aligns
     # about half the parts during the analysis (none for a web job: its CPU-time limit counts per
-    # process); forked first, it holds none of ffmpeg's pipes. The page's compressed audio is made by
-    # ffmpeg at the lowest priority (audio.PAGE_NICENESS) in the time the cores would idle (the pool
-    # is left, waiting for ffmpeg, before its folder is removed).
+    # process). The page's compressed audio is made by ffmpeg in a thread once the analysis is done
+    # (the pool is left, waiting for ffmpeg, before its folder is removed).
     with (frozen_heap(), helper_pool(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
@@ -271,7 +270,6 @@ def generate(
         pitch = (offloaded(helper, recording_pitch, sound) if helper is not None and options.actions is None
                  else None)
         recording = load_audio(sound) if decoded is None else decoded
-        compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
         duration = recording.duration
         if clip is not None and not clip.has_audio:
             alignment = Alignment((), duration, (SILENT_NOTE,))
@@ -303,6 +301,11 @@ def generate(
                     VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
         if helper is not None:
             helper.shutdown()  # its work is done: the process ends now, not after the drawing
+        # Begun now, ffmpeg takes none of the two cores the analysis uses (0.3 s of CPU for 3 minutes);
+        # it runs beside the frames (one process) and the start of the drawing. At the lowest priority
+        # from the start instead, it waited at the end for seconds on a busy machine (docs/BENCHMARKS.md,
+        # branch seg).
+        compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:
