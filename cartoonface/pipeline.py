@@ -195,6 +195,12 @@ def clip_sound(clip: Clip, staging: Path) -> tuple[Path, Audio]:
     return wav, Audio(samples=samples, rate=SILENT_RATE, source=str(clip.path))
 
 
+def recording_pitch(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """prosody.pitch_track (times (m,) s, f0 (m,) Hz) of the recording at `path`, decoded here."""
+    recording = load_audio(path)
+    return pitch_track(recording.samples, recording.rate)
+
+
 @collector_paused()  # the job's many containers hold no cycles (workers.collector_paused)
 def generate(
     face: Path | FaceModel,
@@ -242,24 +248,28 @@ def generate(
     marks = () if text is None else emotion_marks(text, source)
     clip = None if video is None else video_input(video, text)
     report("decode")
-    # A forked helper (workers.py) computes the pitch track and aligns about half the parts during
-    # the analysis (none for a web job: its CPU-time limit counts per process); forked first, it
-    # holds none of ffmpeg's pipes. The page's compressed audio is made by ffmpeg on the other core
-    # while the animation is drawn (the pool is left, waiting for ffmpeg, before its folder is removed).
+    # A forked helper (workers.py) computes the pitch track and aligns
+    # about half the parts during the analysis (none for a web job: its CPU-time limit counts per
+    # process). The page's compressed audio is made by ffmpeg in a thread once the analysis is done
+    # (the pool is left, waiting for ffmpeg, before its folder is removed).
     with (helper_pool(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
+        decoded = None
         if clip is not None:
             from cartoonface.video.track import track  # video jobs only: not imported by an audio job's start
 
             tracking = track(clip, lambda done: report("decode", done))
-            sound, recording = clip_sound(clip, Path(staging))
+            sound, decoded = clip_sound(clip, Path(staging))
         elif audio is not None:
-            sound, recording = audio, load_audio(audio)
+            sound = audio
         else:
             raise OptionError("no recording: expected an audio file or a video")
-        compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
-        pitch = offloaded(helper if options.actions is None else None, pitch_track, recording.samples, recording.rate)
+        # the helper decodes the recording itself for the pitch track, while this process does,
+        # rather than wait for it and be sent the samples (12 MB for 3 minutes, ~0.1 s of piping)
+        pitch = (offloaded(helper, recording_pitch, sound) if helper is not None and options.actions is None
+                 else None)
+        recording = load_audio(sound) if decoded is None else decoded
         duration = recording.duration
         if clip is not None and not clip.has_audio:
             alignment = Alignment((), duration, (SILENT_NOTE,))
@@ -276,7 +286,7 @@ def generate(
             actions = load_actions(options.actions, duration)
         else:
             actions = () if not alignment.sentences else schedule(  # a silent clip: nothing to schedule by
-                duration, speech_pauses(alignment), options.seed, style=style, peaks=pitch_peaks(recording, alignment, pitch()),
+                duration, speech_pauses(alignment), options.seed, style=style, peaks=pitch_peaks(recording, alignment, None if pitch is None else pitch()),
                 speech=speech_spans(alignment), breath_pauses=silences_of(alignment))
             spans = marked_spans(alignment, marks)
             if spans is None:
@@ -291,6 +301,11 @@ def generate(
                     VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
         if helper is not None:
             helper.shutdown()  # its work is done: the process ends now, not after the drawing
+        # Begun now, ffmpeg takes none of the two cores the analysis uses (0.3 s of CPU for 3 minutes);
+        # it runs beside the frames (one process) and the start of the drawing. At the lowest priority
+        # from the start instead, it waited at the end for seconds on a busy machine (docs/BENCHMARKS.md,
+        # branch seg).
+        compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:

@@ -93,6 +93,22 @@ def test_dct_matrix_is_the_orthonormal_dct(speech: tuple[np.ndarray, int]) -> No
         np.testing.assert_allclose(logmel @ dsp.dct_matrix(logmel.shape[1], keep), reference, rtol=0, atol=1e-10)
 
 
+def test_dips_from_the_whole_recordings_filter_are_the_parts_own() -> None:
+    """The parts cut from the whole story's high-passed samples (the filter restarted only over its
+    settling time at each part's start) are each part filtered from rest, to float32 rounding, and
+    give the same dips."""
+    audio = load_audio(STORY)
+    whole = sentences.high_passed(audio)
+    parts = sentences.find_speech_parts(audio, filtered=whole)
+    assert len(parts) > 1 and parts == sentences.find_speech_parts(audio)
+    cuts = [(int(part.start * audio.rate), int(part.end * audio.rate)) for part in parts]
+    for mine, (first, last) in zip(sentences._restarted(audio, whole, cuts), cuts, strict=True):
+        sos = signal.butter(sentences.HIGH_PASS_ORDER, sentences.HIGH_PASS_HZ, "highpass", fs=audio.rate, output="sos")
+        np.testing.assert_allclose(mine, signal.sosfilt(sos, audio.samples[first:last]), rtol=0, atol=1e-7)
+    found = sentences.all_dips(audio, parts, filtered=whole)
+    assert sum(map(len, found)) > 0 and found == sentences.all_dips(audio, parts)
+
+
 def test_the_analysis_is_the_same_with_scipys_filters(monkeypatch: pytest.MonkeyPatch) -> None:
     """The segmentation and the lip sync without a transcript (high-pass, resampling, peaks, MFCC)
     give the same parts and syllables as with the scipy functions themselves."""

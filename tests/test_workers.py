@@ -117,6 +117,21 @@ def test_analyse_with_a_helper_gives_the_one_process_alignment():
     assert aligning == sorted(aligning) and aligning[-1] == 1.0
 
 
+
+def test_generate_with_its_helper_makes_what_one_process_makes(tmp_path, monkeypatch):
+    """The helper decodes the recording itself for the pitch track and aligns half the parts: the
+    page folder is the one a single process (a web job's) makes, byte for byte."""
+    from cartoonface import pipeline
+
+    if pipeline.processes() < 2:
+        pytest.skip("no second process on this machine")
+    inputs = (ROOT / "samples" / "faces" / "female.json", STORY / "story.wav", STORY / "story.txt")
+    pipeline.generate(*inputs, tmp_path / "two")
+    monkeypatch.setattr(pipeline, "processes", lambda: 1)
+    pipeline.generate(*inputs, tmp_path / "one")
+    for name in ("alignment.TextGrid", "actions.json", "animation.svg", "index.html"):
+        assert (tmp_path / "two" / name).read_bytes() == (tmp_path / "one" / name).read_bytes(), name
+
 def test_sampled_states_out_of_range_are_still_refused():
     alignment = synthetic_talk(30.0, seed=2)
     timeline = build_timeline(alignment, schedule(alignment.duration, speech_pauses(alignment), seed=5))

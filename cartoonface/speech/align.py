@@ -57,7 +57,7 @@ from typing import TYPE_CHECKING, Protocol, Sequence
 import numpy as np
 
 from cartoonface.speech.audio import MIN_RECORDED, digital_silence, quantum
-from cartoonface.speech.features import HOP, WINDOW_SECONDS, frames, smooth
+from cartoonface.speech.features import HOP, WINDOW_SECONDS, bands, smooth
 from cartoonface.speech.pinyin import split_initial
 
 if TYPE_CHECKING:
@@ -412,7 +412,8 @@ def _forward(evidence: np.ndarray, silence: np.ndarray, edges: np.ndarray, means
             longest = min(total, int(LONGEST_SHARE * mean) + MIN_FRAMES)
             d = np.arange(MIN_FRAMES, max(longest, MIN_FRAMES) + 1)
             # impossible starts before frame 0
-            cand = _before(start_score, k, d, _NEG) + _duration_score(d, mean)[None, :]
+            cand = np.array(_before(start_score, k, d, _NEG))  # copied first: adding to the view is slower
+            cand += _duration_score(d, mean)
             choice = cand.argmax(axis=1)
             after_syllable[i + 1, r] = cand[k, choice]
             length[i, r] = d[choice]
@@ -544,11 +545,11 @@ def align_details(audio: Audio, span: SpanLike, syllables: Sequence[str],
     clip = np.asarray(audio.samples[max(first, 0):max(last, 0)], dtype=np.float64)
     step = quantum(clip)  # of the recorded samples: the zeros padded on below lie off a DC-offset grid
     clip = np.concatenate([np.zeros(max(-first, 0)), clip, np.zeros(max(last - max(first, 0) - clip.size - max(-first, 0), 0))])
-    feats = frames(clip, audio.rate)
-    recorded = ~_dead_frames(clip, audio.rate, feats.low.size, step)
-    low = smooth(_lift_digital_silence(feats.low, recorded, LOW_NOISE_RANGE_DB), SMOOTH_FRAMES)
-    mid = smooth(_lift_digital_silence(feats.mid, recorded, MID_NOISE_RANGE_DB), SMOOTH_FRAMES)
-    high = smooth(_lift_digital_silence(feats.high, recorded, HIGH_NOISE_RANGE_DB), SMOOTH_FRAMES)
+    low, mid, high = bands(clip, audio.rate)
+    recorded = ~_dead_frames(clip, audio.rate, low.size, step)
+    low = smooth(_lift_digital_silence(low, recorded, LOW_NOISE_RANGE_DB), SMOOTH_FRAMES)
+    mid = smooth(_lift_digital_silence(mid, recorded, MID_NOISE_RANGE_DB), SMOOTH_FRAMES)
+    high = smooth(_lift_digital_silence(high, recorded, HIGH_NOISE_RANGE_DB), SMOOTH_FRAMES)
     # boundary k (time span.start + k * HOP) sits at the centre of feature frame MARGIN + k - 1.
     index = np.clip(MARGIN + np.arange(total + 1) - 1, 0, low.size - 1)
     inner = low[index[:-1]]

@@ -34,7 +34,7 @@ from cartoonface.speech.lexicon import longest_words
 from cartoonface.speech.readings import to_simplified
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
-from cartoonface.speech.sentences import Span, find_speech_parts
+from cartoonface.speech.sentences import Span, find_speech_parts, high_passed
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, FALLBACK_NOTE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
 from cartoonface.workers import offloaded, shares
@@ -99,7 +99,8 @@ def analyse(
     spoken = parse_transcript(transcript_text, source)  # every sentence has syllables
     for sentence in spoken:
         notes += sentence.notes
-    parts = find_speech_parts(audio, pause)
+    filtered = high_passed(audio)  # the energy of the segmentation and of the reconciling's dips
+    parts = find_speech_parts(audio, pause, filtered)
     if not parts:
         parts = (Span(0.0, round(audio.duration, 3)),)
         notes.append("no speaking part told apart from noise: the whole recording is taken as speech")
@@ -107,7 +108,7 @@ def analyse(
     pieces, owners = sentence_pieces(spoken)
     counts = [len(piece.syllables) for piece in pieces]
     _check_rate(sum(counts), sum(part.duration for part in parts), source, notes)
-    spans = reconcile(audio, parts, counts)
+    spans = reconcile(audio, parts, counts, filtered)
     jobs: list[tuple[list[SentenceText], Span]] = []
     for block in _blocks(spans, owners):
         span = Span(spans[block[0]].start, spans[block[-1]].end)

@@ -66,8 +66,7 @@ def sos_filter_each(sos: np.ndarray, pieces: Sequence[np.ndarray], dtype: type =
     is applied in the frequency domain instead, block by block (overlap-add), the blocks longer
     than the impulse response's tail, so no block's output wraps around; GROUP blocks at a time,
     so the temporary spectra stay small on long recordings."""
-    radius = max(float(np.abs(np.roots(section[3:])).max(initial=0.0)) for section in sos)
-    tail = int(np.ceil(np.log(DECAY) / np.log(radius))) if radius > 0 else 3 * len(sos)
+    tail = settling(sos)
     starts = np.cumsum([0] + [len(piece) + tail for piece in pieces])
     length = int(starts[-1]) - tail
     size = min(max(BLOCK, _power_of_two(4 * tail)), max(_power_of_two(length + tail), _power_of_two(2 * tail)))
@@ -93,6 +92,14 @@ def sos_filter_each(sos: np.ndarray, pieces: Sequence[np.ndarray], dtype: type =
         carry = blocks[-1, hop:]
         out[first : first + len(chunk)] = body.ravel()[: len(chunk)]
     return [out[start : start + len(piece)] for start, piece in zip(starts, pieces)]
+
+
+def settling(sos: np.ndarray) -> int:
+    """Samples after which the impulse response of the stable sections `sos` (sections, 6) has died
+    out: its envelope (the largest pole radius to the power n) is below DECAY. The filter's output
+    that many samples into a signal no longer depends on where the signal started."""
+    radius = max(float(np.abs(np.roots(section[3:])).max(initial=0.0)) for section in sos)
+    return int(np.ceil(np.log(DECAY) / np.log(radius))) if radius > 0 else 3 * len(sos)
 
 
 def _power_of_two(n: int) -> int:

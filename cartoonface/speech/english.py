@@ -29,7 +29,7 @@ from cartoonface.speech.audio import Audio
 from cartoonface.speech.dsp import resample_poly
 from cartoonface.speech.reconcile import reconcile
 from cartoonface.speech.records import Alignment, Sentence, Syllable
-from cartoonface.speech.sentences import Span, find_speech_parts
+from cartoonface.speech.sentences import Span, find_speech_parts, high_passed
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE
 from cartoonface.speech.readings import HAN_RE, position_of
 
@@ -348,7 +348,8 @@ def analyse_english(
     spoken = parse_english(transcript_text, decoder, source)
     notes: list[str] = []
     report("segment", 0.0)
-    parts = find_speech_parts(audio, pause)
+    filtered = high_passed(audio)  # the energy of the segmentation and of the reconciling's dips
+    parts = find_speech_parts(audio, pause, filtered)
     if not parts:
         parts = (Span(0.0, round(audio.duration, 3)),)
         notes.append("no speaking part told apart from noise: the whole recording is taken as speech")
@@ -360,7 +361,7 @@ def analyse_english(
             f"{source}: {sum(counts)} syllables to fit in {speech:.1f} s of speech (English is read at 3-7 "
             f"per second, at most {MAX_RATE:g} accepted): is this the transcript of this recording?"
         )
-    spans = reconcile(audio, parts, counts)
+    spans = reconcile(audio, parts, counts, filtered)
     sentences: list[Sentence] = []
     wide = None  # the decoder with WIDE_BEAM, made when first needed
     for block in _blocks(spans):

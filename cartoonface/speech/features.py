@@ -102,14 +102,26 @@ def frames(samples: np.ndarray, rate: int) -> Frames:
     # einsum rather than a BLAS product: a small product on a loaded machine is slowed many
     # times by BLAS threads waiting for cores (measured in bench/align.py)
     logmel = np.log(np.einsum("tf,fm->tm", power, _BANK) + MEL_FLOOR)
+    low, mid, high = _bands(power)
     return Frames(
         logmel=logmel,
         mfcc=np.einsum("tm,mc->tc", logmel, _DCT),  # the orthonormal DCT-II's first CEPSTRA
         energy=band_db(power, 0.0, RATE / 2),
-        low=band_db(power, *LOW_BAND),
-        mid=band_db(power, *MID_BAND),
-        high=band_db(power, *HIGH_BAND),
+        low=low,
+        mid=mid,
+        high=high,
     )
+
+
+def bands(samples: np.ndarray, rate: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(n,) mono samples at `rate` Hz -> (T,) dB of LOW_BAND, MID_BAND and HIGH_BAND per 10 ms frame:
+    Frames.low, .mid and .high alone (what the aligner reads), without the mel spectra's cost."""
+    return _bands(power_spectrum(to_rate(samples, rate)))
+
+
+def _bands(power: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(T, 257) power spectra -> (T,) dB of LOW_BAND, MID_BAND, HIGH_BAND."""
+    return band_db(power, *LOW_BAND), band_db(power, *MID_BAND), band_db(power, *HIGH_BAND)
 
 
 def smooth(x: np.ndarray, width: int) -> np.ndarray:

@@ -42,15 +42,17 @@ class _Cut:
     part: int  # index of the speaking part it is in (pause: the part before it)
 
 
-def reconcile(audio: Audio, parts: tuple[Span, ...], counts: list[int]) -> tuple[Span, ...]:
-    """Lay sentences of `counts` syllables over the speaking `parts` of `audio`.
+def reconcile(audio: Audio, parts: tuple[Span, ...], counts: list[int],
+              filtered: np.ndarray | None = None) -> tuple[Span, ...]:
+    """Lay sentences of `counts` syllables over the speaking `parts` of `audio`
+    (`filtered`: sentences.high_passed(audio) when the caller has it, for the dips).
 
     Returns one Span per sentence, in order. The spans cover the parts'
     speech and do not overlap; two consecutive spans touch (end == next
     start) where a part was cut between them (at a dip, or an evenly spaced
     point), and are apart where a pause between parts separates them.
     """
-    cuts = _cuts(audio, parts, len(counts))
+    cuts = _cuts(audio, parts, len(counts), filtered)
     speech_before = _speech_clock(parts)
     left = np.array([cut.left for cut in cuts])
     right = np.array([cut.right for cut in cuts])
@@ -64,10 +66,10 @@ def reconcile(audio: Audio, parts: tuple[Span, ...], counts: list[int]) -> tuple
     )
 
 
-def _cuts(audio: Audio, parts: tuple[Span, ...], sentences: int) -> list[_Cut]:
+def _cuts(audio: Audio, parts: tuple[Span, ...], sentences: int, filtered: np.ndarray | None) -> list[_Cut]:
     """Every candidate cut in time order, between a "start" and an "end" cut."""
     cuts = [_Cut(parts[0].start, parts[0].start, 0.0, "start", 0)]
-    for index, (part, part_dips) in enumerate(zip(parts, all_dips(audio, parts), strict=True)):
+    for index, (part, part_dips) in enumerate(zip(parts, all_dips(audio, parts, filtered=filtered), strict=True)):
         found = sorted(part_dips, key=lambda dip: -dip[1])
         keep = max(MIN_DIPS, math.ceil(part.duration * DIPS_PER_SECOND))
         for time, plateau in sorted(found[:keep]):

@@ -24,7 +24,7 @@ import numpy as np
 
 from cartoonface.errors import OptionError
 from cartoonface.speech.audio import MIN_RECORDED, Audio, digital_silence
-from cartoonface.speech.dsp import butter_highpass, find_peaks, resample_poly, sos_filter_each
+from cartoonface.speech.dsp import butter_highpass, find_peaks, resample_poly, settling, sos_filter_each
 
 # thesis 002, Alg. 3.1 step 3 and the paragraph after it: c1 = 0.95.
 C1 = 0.95
@@ -96,15 +96,17 @@ class Span:
         return self.end - self.start
 
 
-def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None) -> tuple[Span, ...]:
+def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None,
+                      filtered: np.ndarray | None = None) -> tuple[Span, ...]:
     """Split `audio` into speaking parts separated by sentence pauses (Alg. 3.1).
 
     `pause` = (start, end) seconds of the first pause between sentences
-    selects the thesis's mode; None (default) the automatic mode. Returns the
+    selects the thesis's mode; None (default) the automatic mode. `filtered`: `high_passed(audio)`
+    when the caller has it (it also serves `all_dips`). Returns the
     speaking parts in time order (possibly one part covering all speech).
     Raises OptionError when `pause` lies outside the recording or is empty.
     """
-    power = frame_power(audio)
+    power = _frame_power(high_passed(audio) if filtered is None else filtered, audio.rate)
     if pause is not None:
         return _thesis_parts(audio, power, pause)
     return _automatic_parts(audio, power)
@@ -112,7 +114,12 @@ def find_speech_parts(audio: Audio, pause: tuple[float, float] | None = None) ->
 
 def frame_power(audio: Audio) -> np.ndarray:
     """Mean square of each 10 ms frame of the 80 Hz high-passed audio, smoothed over 30 ms; shape (frames,)."""
-    return _frame_power(_high_passed(audio.rate, [audio.samples])[0], audio.rate)
+    return _frame_power(high_passed(audio), audio.rate)
+
+
+def high_passed(audio: Audio) -> np.ndarray:
+    """(n,) float32: the samples of `audio` high-passed at HIGH_PASS_HZ from a zero state."""
+    return _high_passed(audio.rate, [audio.samples])[0]
 
 
 def _high_passed(rate: int, pieces: list[np.ndarray]) -> list[np.ndarray]:
@@ -301,12 +308,25 @@ def dips(audio: Audio, span: Span, margin: float = DIP_MARGIN) -> tuple[tuple[fl
     return all_dips(audio, (span,), margin)[0]
 
 
-def all_dips(audio: Audio, spans: tuple[Span, ...], margin: float = DIP_MARGIN) -> list[tuple[tuple[float, float], ...]]:
-    """`dips` of each of `spans`, each part high-passed on its own (from a zero state) but all in one pass."""
+def all_dips(audio: Audio, spans: tuple[Span, ...], margin: float = DIP_MARGIN,
+             filtered: np.ndarray | None = None) -> list[tuple[tuple[float, float], ...]]:
+    """`dips` of each of `spans`, each part high-passed on its own (from a zero state) but all in one
+    pass; `filtered`: `high_passed(audio)`, when the caller has it, gives the parts for less work."""
     cuts = [(int(span.start * audio.rate), int(span.end * audio.rate)) for span in spans]
-    filtered = _high_passed(audio.rate, [audio.samples[first:last] for first, last in cuts])
+    parts = (_high_passed(audio.rate, [audio.samples[first:last] for first, last in cuts]) if filtered is None
+             else _restarted(audio, filtered, cuts))
     return [_dips(_frame_power(part, audio.rate), span, margin) if len(part) / audio.rate >= 2 * margin + HOP else ()
-            for part, span in zip(filtered, spans, strict=True)]
+            for part, span in zip(parts, spans, strict=True)]
+
+
+def _restarted(audio: Audio, filtered: np.ndarray, cuts: list[tuple[int, int]]) -> list[np.ndarray]:
+    """The samples [first, last) of each of `cuts` high-passed from a zero state, from `filtered` ((n,),
+    the whole recording high-passed): past the filter's settling time (dsp.settling, ~0.13 s at 16 kHz)
+    into a part the two agree (the response to the samples before the part has died out, below
+    dsp.DECAY), so only each part's first samples are filtered again, on their own (as float rounding)."""
+    settle = settling(butter_highpass(HIGH_PASS_ORDER, HIGH_PASS_HZ, audio.rate))
+    heads = _high_passed(audio.rate, [audio.samples[first:min(first + settle, last)] for first, last in cuts])
+    return [np.concatenate((head, filtered[first + len(head):last])) for head, (first, last) in zip(heads, cuts)]
 
 
 def _dips(power: np.ndarray, span: Span, margin: float) -> tuple[tuple[float, float], ...]:

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cartoonface.speech.align import MIN_PAUSE
-from cartoonface.speech.features import HOP, frames, smooth
+from cartoonface.speech.features import HOP, bands, smooth
 
 if TYPE_CHECKING:
     from cartoonface.speech.audio import Audio
@@ -64,7 +64,7 @@ def _low_band(audio: Audio, start: float, end: float) -> np.ndarray:
     clip = np.asarray(audio.samples[max(int(start * audio.rate), 0):max(int(end * audio.rate), 0)], dtype=np.float64)
     if clip.size == 0:
         return np.zeros(0)
-    return smooth(frames(clip, audio.rate).low, SMOOTH_FRAMES)
+    return smooth(bands(clip, audio.rate)[0], SMOOTH_FRAMES)
 
 
 def _choose(candidates: np.ndarray, low: np.ndarray, targets: np.ndarray, scale: float) -> np.ndarray | None:
