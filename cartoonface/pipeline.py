@@ -15,7 +15,7 @@ import os
 import tempfile
 import time
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,7 +37,7 @@ from cartoonface.exports.cues import cues_name, cues_text, mouth_cues
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
 from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
-from cartoonface.render.animation import animation_svg
+from cartoonface.render.animation import DRAWN_SHARE, animation_svg
 from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.audio_only import AUDIO_ONLY_NOTE, transcribed
@@ -250,7 +250,7 @@ def generate(
     report("decode")
     # A forked helper (workers.py) computes the pitch track and aligns
     # about half the parts during the analysis (none for a web job: its CPU-time limit counts per
-    # process). The page's compressed audio is made by ffmpeg in a thread once the analysis is done
+    # process). The page's compressed audio is made by ffmpeg in a thread once the frames are drawn
     # (the pool is left, waiting for ffmpeg, before its folder is removed).
     with (helper_pool(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
@@ -301,11 +301,6 @@ def generate(
                     VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
         if helper is not None:
             helper.shutdown()  # its work is done: the process ends now, not after the drawing
-        # Begun now, ffmpeg takes none of the two cores the analysis uses (0.3 s of CPU for 3 minutes);
-        # it runs beside the frames (one process) and the start of the drawing. At the lowest priority
-        # from the start instead, it waited at the end for seconds on a busy machine (docs/BENCHMARKS.md,
-        # branch seg).
-        compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:
@@ -317,15 +312,28 @@ def generate(
             states = with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak)
         states = on_twos(states)
         body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
+        compressed: Future[Path] | None = None
+
+        def drawing(done: float) -> None:
+            """Tell `progress` the svg stage's share `done`; begin the page's compressed audio once the
+            frames are drawn (render/animation.DRAWN_SHARE). ffmpeg (0.3 s of CPU for 3 minutes) then
+            runs on the core the drawing's two processes leave idle while this one tidies, not beside
+            the analysis's two or the drawing's two (docs/BENCHMARKS.md, "ffmpeg between the stages")."""
+            nonlocal compressed
+            report("svg", done)
+            if compressed is None and done >= DRAWN_SHARE:
+                compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
+
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                             wide=options.page == "announcer", title=options.title, body=body,
-                            progress=lambda done: report("svg", done), workers=processes())
+                            progress=drawing, workers=processes())
         report("pages")
         try:
             with atomic_directory(target) as folder:
                 sources = copy_audio(sound, folder, keep_original=options.keep_original,
-                                     compressed=compressed.result())
+                                     # animation_svg reports 1.0 at its end: begun by then
+                                     compressed=(compressed or pool.submit(page_copy, sound, staging, AUDIO_STEM)).result())
                 captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
                 html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
                                  fps=options.fps, links=options.links, captions=captions)
