@@ -26,6 +26,7 @@ skeletons whose path data the other process's first path data changed ("Finishin
 
 from __future__ import annotations
 
+import functools
 import html
 import re
 from collections import Counter
@@ -131,19 +132,21 @@ class Drawn:
 def drawn_parts(parts: list[Part]) -> Drawn:
     """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts)."""
     fields = [(part.name, part.text, part.clips) for part in parts]
-    done = compacted(part_paths((part.text, *part.clips) for part in parts))
-    # a path data as a part's text writes it (elements.attributes_text): escaped, between quotes
-    written = [(d, f' d="{html.escape(d)}"') for d in done.firsts.values()]
+    # each part's text cut at its values once (_VALUE), for its path data and its skeleton; its
+    # elements end in ">": a path data in two cannot match
+    cuts = [_VALUE.split("".join((text, *clips))) for _, text, clips in fields]
+    paths = [[_text(cut[index + 1]) for index in range(1, len(cut), 3) if cut[index] == "d"] for cut in cuts]
+    done = compacted(d for part_paths_ in paths for d in part_paths_)
+    rank = {d: place for place, d in enumerate(done.firsts.values())}  # holds keep firsts' order
     numbers: dict[str, int] = {}
     forms = []
     holds = {}
-    for number, (_, text, clips) in enumerate(fields):
-        whole = "".join((text, *clips))  # elements end in ">": a path data in two cannot match
-        skeleton, values = _skeleton((whole,), done.compact)
+    for number, (cut, part_paths_) in enumerate(zip(cuts, paths, strict=True)):
+        skeleton, values = _skeleton_of(cut, done.compact)
         forms.append((numbers.setdefault(skeleton, len(numbers)), values))
-        held = tuple(d for d, value in written if value in whole)
+        held = {d for d in part_paths_ if d in rank}
         if held:
-            holds[number] = held
+            holds[number] = tuple(sorted(held, key=rank.__getitem__))
     return Drawn(fields, list(numbers), forms, done, holds)
 
 
@@ -366,18 +369,43 @@ def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, lis
     outline and its clip path); each position (POSITIONS) as SENTINEL + j, j counting them.
     Returns the text and the values: the distinct compact path data, then the positions
     rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
+    return _skeleton_of(_VALUE.split("".join(texts)), compact)
+
+
+def _skeleton_of(cut: list[str], compact: dict[str, str]) -> tuple[str, list[str]]:
+    """_skeleton of the texts `cut` by _VALUE.split (text, then (name, value, text) per value:
+    one pass, no callback); `cut` is used up."""
     distinct: dict[str, int] = {}
     positions: list[str] = []
-    pieces = _VALUE.split("".join(texts))  # text, then (name, value, text) per value: one pass, no callback
-    for index in range(1, len(pieces), 3):
-        name, value = pieces[index], pieces[index + 1]
+    for index in range(1, len(cut), 3):
+        name, value = cut[index], cut[index + 1]
         if name == "d":
-            pieces[index] = f' d="@{distinct.setdefault(compact[_text(value)], len(distinct))}@"'
+            cut[index] = _path_token(distinct.setdefault(compact[_text(value)], len(distinct)))
         else:
-            pieces[index] = f' {name}="{SENTINEL + len(positions)}"'
-            positions.append(str(round(float(value))))
-        pieces[index + 1] = ""
-    return "".join(pieces), [*distinct, *positions]
+            cut[index] = _position_token(name, len(positions))
+            positions.append(_whole(value))
+        cut[index + 1] = ""
+    return "".join(cut), [*distinct, *positions]
+
+
+@functools.cache
+def _path_token(number: int) -> str:
+    """_skeleton's placeholder of its path data `number` (made once: formatting it per value cost
+    a quarter of the drawing processes' skeletons)."""
+    return f' d="@{number}@"'
+
+
+@functools.cache
+def _position_token(name: str, number: int) -> str:
+    """_skeleton's attribute `name` (POSITIONS) holding its placeholder position `number`."""
+    return f' {name}="{SENTINEL + number}"'
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _whole(value: str) -> str:
+    """A position's text `value` rounded to whole pixels, as text (the drawings repeat a few
+    thousand positions over and over)."""
+    return str(round(float(value)))
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:

@@ -315,11 +315,19 @@ class _Stacked:
 
 def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
     """face_shapes of S posed faces at once (a `cartoonface.face.pose.PosedFaces`: `xy` (S, N, 2),
-    `hair` (S, H, 2), `front` (S, F, 2), `nose_side` (S,)): the maps applied to all of them by
-    stacked products (each slice the product of one face, so the same numbers). A part whose
-    numbers, in tenths, are those of another face of the stack (the hair, the ears, the nose
-    under one pose with another mouth) is written once and its text shared: the distinct
-    rows of each part written by one numbers.tenths_texts and a template fill each."""
+    `hair` (S, H, 2), `front` (S, F, 2), `nose_side` (S,)): all_face_shape_columns' path data of
+    each face, by part."""
+    columns = all_face_shape_columns(posed)
+    return [{name: texts[which[index]] for name, (texts, which) in columns.items()} for index in range(len(posed.xy))]
+
+
+def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[int]]]:
+    """The path data of S posed faces (as all_face_shapes reads them) by part, in face_shapes'
+    order: the part's distinct path data and, per face, the number of its own among them. The
+    maps are applied to all faces by stacked products (each slice the product of one face, so
+    the same numbers). A part whose numbers, in tenths, are those of another face of the stack
+    (the hair, the ears, the nose under one pose with another mouth) is written once: the
+    distinct rows of each part written by one numbers.tenths_texts and a template fill each."""
     count = len(posed.xy)
     hair = np.asarray(posed.hair, dtype=float)
     names = LIFTED_NAMES + FRONT_NAMES
@@ -338,17 +346,22 @@ def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
         chosen = np.flatnonzero(sides == side)
         coordinates[chosen, written:] = (side_plan.matrix @ columns[chosen])[..., 0].transpose(0, 2, 1)
     tenths = rounded_tenths(coordinates).reshape(count, -1)
-    shapes: list[dict[str, str]] = [{} for _ in range(count)]
+    shapes: dict[str, tuple[list[str], list[int]]] = {name: ([], [0] * count) for name in plan.names}
     for side, side_plan in plans.items():
         chosen = np.flatnonzero(sides == side)
         for name, frame, (start, end) in zip(side_plan.names, side_plan.frames, side_plan.slots, strict=True):
             # each face's row as bytes, numbered in the order first seen (3x faster than np.unique)
             width = end - start
             data, step = np.ascontiguousarray(tenths[chosen, start:end]).tobytes(), tenths.itemsize * width
+            paths, which = shapes[name]
             seen: dict[bytes, int] = {}
-            inverse = [seen.setdefault(data[at:at + step], len(seen)) for at in range(0, len(data), step)]
+            offset = len(paths)  # the other nose side's, written before
+            inverse = [seen.setdefault(data[at:at + step], len(seen) + offset) for at in range(0, len(data), step)]
             texts = tenths_texts(np.frombuffer(b"".join(seen), dtype=tenths.dtype))
-            paths = [fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(seen))]
-            for index, row in zip(chosen.tolist(), inverse, strict=True):
-                shapes[index][name] = paths[row]
+            paths += [fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(seen))]
+            if len(plans) == 1:
+                shapes[name] = paths, inverse
+            else:
+                for index, row in zip(chosen.tolist(), inverse, strict=True):
+                    which[index] = row
     return shapes

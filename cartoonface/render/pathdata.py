@@ -43,7 +43,9 @@ MIRROR = 2  # pixels: a first control point this close to the mirrored one is le
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 _ARITY = {"M": 2, "L": 2, "C": 6, "Q": 4, "Z": 0}
 _LETTERS = "".join(chr(c) for c in range(65, 91)) + "".join(chr(c) for c in range(97, 123))
-_ONLY_LETTERS = {ord(c): None for c in "0123456789.,+- \t\n\r"}
+# what _groups deletes to leave the letters, as bytes: bytes.translate deletes at twice the
+# speed of str.translate (UTF-8 writes no other character with these bytes)
+_NOT_LETTERS = b"0123456789.,+- \t\n\r"
 _LETTERS_TO_SPACES = {ord(c): " " for c in _LETTERS + ","}
 _SEPARATOR = "|"  # between the paths _plain_numbers reads together
 
@@ -310,7 +312,7 @@ def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
     exponent), else the text with "#" for each number."""
     groups: dict[str, list[str]] = {}
     for d in paths:
-        letters = d.translate(_ONLY_LETTERS)
+        letters = d.encode().translate(None, _NOT_LETTERS).decode()
         groups.setdefault(letters if "e" not in letters and "E" not in letters else _NUMBER.sub("#", d), []).append(d)
     return groups
 

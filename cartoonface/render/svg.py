@@ -23,7 +23,8 @@ render/sheet.py, render/diagram.py and render/png.py.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Hashable, Sequence
+from typing import TypeVar
 
 import numpy as np
 from lxml import etree
@@ -34,7 +35,7 @@ from cartoonface.face.pose import PosedFace, PosedFaces, pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
-from cartoonface.render.geometry import all_face_shapes, hypots
+from cartoonface.render.geometry import all_face_shape_columns, hypots
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import drawn_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
@@ -180,6 +181,7 @@ _ROWS = [LIFTED_INDEX[n] for n in EYES["l"] + EYES["r"] + ("8.4", "8.3")]
 # The chin shadow's paint, after the outline render/scenery.py's chin_shadow gives.
 # Numbers face_parts writes per state for the cheeks (_cheek_numbers) and for each eye (_eye_numbers).
 _CHEEK_COUNT, _EYE_COUNT = 6, 7
+_Key = TypeVar("_Key", bound=Hashable)  # what _once draws a part from
 _CHIN_SHADOW = attributes_text({"class": "chin-shadow", "fill": COLOURS["jaw shadow"], "opacity": JAW_SHADOW_OPACITY})
 
 
@@ -197,29 +199,35 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
 
 def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0) -> list[tuple[Part, ...]]:
     """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
-    of them by geometry's all_face_shapes, the cheeks' and eyes' numbers of all of them as arrays
-    written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; per state the
-    templates filled, each part but the mouth once per batch (_parts). Written as text: the hot
-    path of render/animation.py."""
+    of them by geometry's all_face_shape_columns, the cheeks' and eyes' numbers of all of them as
+    arrays written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; each
+    part but the mouth drawn once per batch (_once), part by part, and the states' drawings
+    zipped from those columns. Written as text: the hot path of render/animation.py."""
     style = _style_texts(face)
-    shapes = all_face_shapes(posed)
+    shapes = all_face_shape_columns(posed)
+    count = len(posed.xy)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
     points = posed.xy[:, _ROWS]
     eyes = _eyeballs(posed.pupils, posed.iris_r, points)
     texts = number_texts(np.concatenate([_cheek_numbers(points, face.fapu.d), _eye_numbers(eyes)], axis=1))
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
+    starts = range(0, count * per_state, per_state)  # each state's numbers: CHEEK_COUNT, then EYE_COUNT per eye
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
-    made: dict[tuple[str, ...], Part] = {}
-    drawings = []
-    for index, (part_shapes, mouth, shadow) in enumerate(zip(shapes, mouths, shadows, strict=True)):
-        # the cheeks' and the eyes' numbers (CHEEK_COUNT, then EYE_COUNT per eye)
-        state_texts = texts[index * per_state:(index + 1) * per_state]
-        drawings.append(_parts(_part_keys(part_shapes, shadow, state_texts), made, uid, style)
-                        + (_mouth(mouth, uid, style),))
-    return drawings
+    paths = {name: _path_parts(name, *shapes[shape], style[kind]) for name, (shape, kind) in _PATHS.items()}
+    eye_parts = []
+    for side, first in (("l", _CHEEK_COUNT), ("r", _CHEEK_COUNT + _EYE_COUNT)):
+        (outlines, outline_of), (lids, lid_of) = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
+        keys = [(side, outlines[outline], lids[lid], *texts[start + first:start + first + _EYE_COUNT])
+                for start, outline, lid in zip(starts, outline_of, lid_of, strict=True)]
+        eye_parts.append(_once(keys, lambda key: _eye(key[0], key[1], key[2], key[3:], uid, style)))
+    cheeks = _once([texts[start:start + _CHEEK_COUNT] for start in starts],
+                   lambda key: Part("cheeks", _cheeks(key, style)))
+    return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
+                    paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
+                    *eye_parts, [_mouth(mouth, uid, style) for mouth in mouths], strict=True))
 
 
 # The parts drawn as one path of geometry's face_shapes: their class, by the face_shapes name,
@@ -229,41 +237,18 @@ _PATHS = {"hair": ("hair", "hair"), "ear-l": ("ear_l", "skin"), "ear-r": ("ear_r
           "brow-r": ("brow_r", "brow")}
 
 
-def _part_keys(shapes: dict[str, str], shadow: str, texts: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
-    """The parts of one state but the mouth, in face_parts' order, each as its key: its class and
-    the texts it is drawn from (_part draws it), from the state's path data `shapes` (geometry's
-    face_shapes), the chin's `shadow` and the number `texts` of the cheeks and the eyes."""
-    paths = {name: (name, shapes[shape]) for name, (shape, _) in _PATHS.items()}
-    return (paths["hair"], paths["ear-l"], paths["ear-r"], ("chin-shadow", shadow), paths["face"], paths["fringe"],
-            ("cheeks", *texts[:_CHEEK_COUNT]), paths["nose"], paths["brow-l"], paths["brow-r"],
-            ("eye-l", shapes["eye_l"], shapes["lid_l"], *texts[_CHEEK_COUNT:_CHEEK_COUNT + _EYE_COUNT]),
-            ("eye-r", shapes["eye_r"], shapes["lid_r"], *texts[_CHEEK_COUNT + _EYE_COUNT:]))
+def _path_parts(name: str, paths: list[str], which: list[int], style: str) -> list[Part]:
+    """The part `name` (one of _PATHS) of each state, drawn once per distinct path data of
+    `paths` (geometry's all_face_shape_columns: its numbers per state `which`), with the `style` text."""
+    made = [Part(name, f'<path class="{name}" d="{d}"{style}/>') for d in paths]
+    return [made[number] for number in which]
 
 
-def _parts(keys: tuple[tuple[str, ...], ...], made: dict[tuple[str, ...], Part], uid: str,
-           style: dict[str, str]) -> tuple[Part, ...]:
-    """The parts of `keys` (_part_keys), each drawn once per batch: `made` holds those drawn so
-    far by key (a part drawn again is the same object: its text written once, and equal parts of
-    the batch are one object for render/animation.py's pickles and dictionaries)."""
-    parts = []
-    for key in keys:
-        part = made.get(key)
-        if part is None:
-            part = made[key] = _part(key, uid, style)
-        parts.append(part)
-    return tuple(parts)
-
-
-def _part(key: tuple[str, ...], uid: str, style: dict[str, str]) -> Part:
-    """The part of `key` (_part_keys: its class, then its texts)."""
-    name, *texts = key
-    if name in _PATHS:
-        return Part(name, f'<path class="{name}" d="{texts[0]}"{style[_PATHS[name][1]]}/>')
-    if name == "chin-shadow":
-        return Part(name, texts[0])
-    if name == "cheeks":
-        return Part(name, _cheeks(texts, style))
-    return _eye(name[-1], texts[0], texts[1], texts[2:], uid, style)
+def _once(keys: Sequence[_Key], draw: Callable[[_Key], Part]) -> list[Part]:
+    """The part `draw(key)` of each of `keys` (hashable: the texts it is drawn from), each
+    distinct key drawn once (a part drawn again is the same object, its text written once)."""
+    made: dict[_Key, Part] = {}
+    return [made.get(key) or made.setdefault(key, draw(key)) for key in keys]
 
 
 def face_group(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0.0) -> etree._Element:
