@@ -325,43 +325,61 @@ def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[int]
     """The path data of S posed faces (as all_face_shapes reads them) by part, in face_shapes'
     order: the part's distinct path data and, per face, the number of its own among them. The
     maps are applied to all faces by stacked products (each slice the product of one face, so
-    the same numbers). A part whose numbers, in tenths, are those of another face of the stack
-    (the hair, the ears, the nose under one pose with another mouth) is written once: the
-    distinct rows of each part written by one numbers.tenths_texts and a template fill each."""
+    the same numbers), the hair's to each distinct hair outline once (a pose shown with many
+    mouths has one). A part whose numbers, in tenths, are those of another face of the stack
+    (the hair, the ears, the nose under one pose with another mouth) is written once (_written)."""
     count = len(posed.xy)
     hair = np.asarray(posed.hair, dtype=float)
     names = LIFTED_NAMES + FRONT_NAMES
     plans = {side: _plan(names, hair.shape[1], side) for side in {int(side) for side in np.atleast_1d(posed.nose_side)}}
     plan = next(iter(plans.values()))
-    written, size = plan.hair.shape[0], plan.hair.shape[0] + len(plan.matrix)
-    coordinates = np.empty((count, size, 2))
-    # the sparse map on the hair of all faces side by side: (8 H, H) @ (H, 2 S)
-    wide = plan.hair @ hair.transpose(1, 0, 2).reshape(hair.shape[1], -1)
-    coordinates[:, :written] = wide.reshape(written, count, 2).transpose(1, 0, 2)
+    outlines, outline_of = _distinct_rows(hair.reshape(count, -1))
+    outlines = outlines.reshape(len(outlines), -1, 2)
+    # the sparse map on the U distinct hair outlines side by side: (8 H, H) @ (H, 2 U); each
+    # column alone, so the same numbers as for one face
+    wide = plan.hair @ outlines.transpose(1, 0, 2).reshape(hair.shape[1], -1)
+    written = plan.hair.shape[0]
+    paths, numbers = _written(plan.frames[0], rounded_tenths(wide.reshape(written, len(outlines), 2)
+                                                             .transpose(1, 0, 2)).reshape(len(outlines), -1))
+    shapes = {"hair": (paths, [numbers[outline] for outline in outline_of])}
+    coordinates = np.empty((count, len(plan.matrix), 2))
     # each axis of each face's points as a column (S, 2, N, 1): matrix-vector products, as
     # face_shapes made them one face at a time (4x faster than one product with (N, 2))
     columns = np.ascontiguousarray(np.concatenate([posed.xy, posed.front], axis=1).transpose(0, 2, 1))[..., None]
     sides = np.asarray(posed.nose_side).reshape(-1)
     for side, side_plan in plans.items():
         chosen = np.flatnonzero(sides == side)
-        coordinates[chosen, written:] = (side_plan.matrix @ columns[chosen])[..., 0].transpose(0, 2, 1)
+        coordinates[chosen] = (side_plan.matrix @ columns[chosen])[..., 0].transpose(0, 2, 1)
     tenths = rounded_tenths(coordinates).reshape(count, -1)
-    shapes: dict[str, tuple[list[str], list[int]]] = {name: ([], [0] * count) for name in plan.names}
+    shapes.update((name, ([], [0] * count)) for name in plan.names[1:])
     for side, side_plan in plans.items():
         chosen = np.flatnonzero(sides == side)
-        for name, frame, (start, end) in zip(side_plan.names, side_plan.frames, side_plan.slots, strict=True):
-            # each face's row as bytes, numbered in the order first seen (3x faster than np.unique)
-            width = end - start
-            data, step = np.ascontiguousarray(tenths[chosen, start:end]).tobytes(), tenths.itemsize * width
+        for name, frame, (start, end) in zip(side_plan.names[1:], side_plan.frames[1:], side_plan.slots[1:],
+                                             strict=True):
+            texts, numbers = _written(frame, tenths[chosen, start - 2 * written:end - 2 * written])
             paths, which = shapes[name]
-            seen: dict[bytes, int] = {}
-            offset = len(paths)  # the other nose side's, written before
-            inverse = [seen.setdefault(data[at:at + step], len(seen) + offset) for at in range(0, len(data), step)]
-            texts = tenths_texts(np.frombuffer(b"".join(seen), dtype=tenths.dtype))
-            paths += [fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(seen))]
             if len(plans) == 1:
-                shapes[name] = paths, inverse
-            else:
-                for index, row in zip(chosen.tolist(), inverse, strict=True):
-                    which[index] = row
+                shapes[name] = texts, numbers
+                continue
+            for index, number in zip(chosen.tolist(), numbers, strict=True):
+                which[index] = len(paths) + number  # after the other nose side's
+            paths += texts
     return shapes
+
+
+def _written(frame: tuple[str, ...], tenths: np.ndarray) -> tuple[list[str], list[int]]:
+    """The path data of the `frame` (numbers.template_frame) of each row of `tenths` (n, k: the
+    numbers in whole tenths of a pixel), written once per distinct row: those texts, in the order
+    first seen, and each row's number among them (n)."""
+    distinct, numbers = _distinct_rows(tenths)
+    texts, width = tenths_texts(distinct), tenths.shape[1]
+    return [fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(distinct))], numbers
+
+
+def _distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, list[int]]:
+    """The distinct rows of `rows` (n, k), k > 0, in the order first seen, (u, k), and each row's
+    number among them (n): the rows compared as bytes (3x faster than np.unique)."""
+    data, step = np.ascontiguousarray(rows).tobytes(), rows.itemsize * rows.shape[1]
+    seen: dict[bytes, int] = {}
+    numbers = [seen.setdefault(data[at:at + step], len(seen)) for at in range(0, len(data), step)]
+    return np.frombuffer(b"".join(seen), dtype=rows.dtype).reshape(len(seen), rows.shape[1]), numbers
