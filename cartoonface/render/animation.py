@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import operator
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import reduce
@@ -448,14 +449,17 @@ def _body(dressed: etree._Element, body: BodyMotion, figure: Figure, fps: int) -
 DrawingKey = tuple[object, ...]  # _draw's key of a drawing: the fields of the state but its roll, the pupils
 
 
-_STATE_FIELDS = tuple(f.name for f in dataclasses.fields(FaceState) if f.name != "pose")
-_POSE_FIELDS = tuple(f.name for f in dataclasses.fields(Pose) if f.name != "roll")
+# the fields of a state but its pose and of a pose but its roll, each read as a tuple by one
+# attrgetter (several names: a tuple)
+_STATE_FIELDS = operator.attrgetter(*(f.name for f in dataclasses.fields(FaceState) if f.name != "pose"))
+_POSE_FIELDS = operator.attrgetter(*(f.name for f in dataclasses.fields(Pose) if f.name != "roll"))
 
 
 def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
     """The fields of face/pose.py's unrolled(state) (the state without roll), as a tuple: equal
     for equal unrolled states, without making (and checking) a FaceState per frame."""
-    return (*(getattr(state.pose, name) for name in _POSE_FIELDS), *(getattr(state, name) for name in _STATE_FIELDS))
+    fields: tuple[object, ...] = _POSE_FIELDS(state.pose) + _STATE_FIELDS(state)
+    return fields
 
 
 def _draw(face: FaceModel, states: Sequence[FaceState],

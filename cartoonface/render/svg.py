@@ -205,26 +205,25 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     zipped from those columns. Written as text: the hot path of render/animation.py."""
     style = _style_texts(face)
     shapes = all_face_shape_columns(posed)
-    count = len(posed.xy)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
     points = posed.xy[:, _ROWS]
     eyes = _eyeballs(posed.pupils, posed.iris_r, points)
     texts = number_texts(np.concatenate([_cheek_numbers(points, face.fapu.d), _eye_numbers(eyes)], axis=1))
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
-    starts = range(0, count * per_state, per_state)  # each state's numbers: CHEEK_COUNT, then EYE_COUNT per eye
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
     paths = {name: _path_parts(name, *shapes[shape], style[kind]) for name, (shape, kind) in _PATHS.items()}
+    # each state's numbers (CHEEK_COUNT, then EYE_COUNT per eye) as columns: number j of every state
+    numbers = [texts[j::per_state] for j in range(per_state)]
     eye_parts = []
     for side, first in (("l", _CHEEK_COUNT), ("r", _CHEEK_COUNT + _EYE_COUNT)):
         (outlines, outline_of), (lids, lid_of) = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
-        keys = [(side, outlines[outline], lids[lid], *texts[start + first:start + first + _EYE_COUNT])
-                for start, outline, lid in zip(starts, outline_of, lid_of, strict=True)]
-        eye_parts.append(_once(keys, lambda key: _eye(key[0], key[1], key[2], key[3:], uid, style)))
-    cheeks = _once([texts[start:start + _CHEEK_COUNT] for start in starts],
-                   lambda key: Part("cheeks", _cheeks(key, style)))
+        keys = zip([side] * len(outline_of), [outlines[number] for number in outline_of],
+                   [lids[number] for number in lid_of], *numbers[first:first + _EYE_COUNT], strict=True)
+        eye_parts.append(_once(list(keys), lambda key: _eye(key[0], key[1], key[2], key[3:], uid, style)))
+    cheeks = _once(list(zip(*numbers[:_CHEEK_COUNT], strict=True)), lambda key: Part("cheeks", _cheeks(key, style)))
     return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
                     paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
                     *eye_parts, [_mouth(mouth, uid, style) for mouth in mouths], strict=True))
