@@ -203,13 +203,11 @@ def _plan(commands: list[tuple[str, int]], spans: list[list[int]], kept: list[bo
 
 
 @functools.lru_cache(maxsize=8)
-def _texts(limit: int) -> tuple[np.ndarray, np.ndarray]:
-    """Number texts for -limit..limit (index value + limit): plain ('5', '-5') and with a
-    separating comma where one is needed (',5', '-5')."""
+def _texts(limit: int) -> np.ndarray:
+    """Number texts for -limit..limit (index value + limit): plain ('5', '-5'), then (index
+    value + 3 limit + 1) with a separating comma where one is needed (',5', '-5')."""
     values = range(-limit, limit + 1)
-    plain = np.array([str(v) for v in values], dtype=object)
-    comma = np.array([str(v) if v < 0 else f",{v}" for v in values], dtype=object)
-    return plain, comma
+    return np.array([str(v) for v in values] + [str(v) if v < 0 else f",{v}" for v in values], dtype=object)
 
 
 def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
@@ -218,10 +216,12 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     bases = np.where(plan.references >= 0, rounded[:, np.maximum(plan.references, 0)], 0)
     relative = values - bases
     limit = 1 << max(int(np.abs(relative).max(initial=0)).bit_length(), 10)
-    plain, comma = _texts(limit)
-    numbers = np.where(plan.after_letter, plain[relative + limit], comma[relative + limit])
-    pieces = plan.prefixes + numbers
-    return ["".join(row) + plan.tail for row in pieces.tolist()]
+    # one look-up in the plain texts then the comma ones; the letters added only where there are
+    # some (most numbers have none)
+    numbers = _texts(limit)[relative + limit + np.where(plan.after_letter, 0, 2 * limit + 1)]
+    lettered = np.flatnonzero(plan.prefixes != "")
+    numbers[:, lettered] = plan.prefixes[lettered] + numbers[:, lettered]
+    return ["".join(row) + plan.tail for row in numbers.tolist()]
 
 
 def _plain_numbers(paths: list[str]) -> np.ndarray | None:
