@@ -462,14 +462,15 @@ def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
     return fields
 
 
-def _draw(face: FaceModel, states: Sequence[FaceState],
-          progress: Callable[[float], None] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
+def _draw(face: FaceModel, states: Sequence[FaceState], progress: Callable[[float], None] | None = None,
+          tenths: dict[str, np.ndarray] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
     """Draw each of `states` (render/svg.py's all_face_parts, uid UID, up to BATCH states at a time):
     its key and its parts. The head's roll is not drawn (the layers turn): the face is posed with
     it and turned back by the roll as written (ROLL_DECIMALS; the two turns cancel exactly). The
     drawing depends on the state without roll and on the pupils (written to 0.1 px), the key:
     states that share it differ by a turn of under 0.005 degrees (the roll's rounding), which
-    moves no point by more than 0.02 px. `progress(fraction)` is told the share drawn after every batch."""
+    moves no point by more than 0.02 px. `progress(fraction)` is told the share drawn after every batch;
+    `tenths` gets the numbers of the path data all_face_parts wrote from whole tenths (pathdata.Tenths)."""
     lifted = lift(face)
     origin = rig(lifted).origin
     drawings = []
@@ -481,7 +482,7 @@ def _draw(face: FaceModel, states: Sequence[FaceState],
         rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS for state in batch]
         posed = unroll_faces(pose_faces(lifted, batch), rolls, origin)
         pupils = np.round(posed.pupils, 1).reshape(len(batch), 4).tolist()
-        for state, eyes, parts in zip(batch, pupils, all_face_parts(face, posed, UID), strict=True):
+        for state, eyes, parts in zip(batch, pupils, all_face_parts(face, posed, UID, tenths=tenths), strict=True):
             drawings.append(((*_unrolled_fields(state), *eyes), parts))
     return drawings
 
@@ -494,10 +495,11 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
     """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
     for the Writer (compact.drawn_parts: their path data compacted, their skeletons): what a
     drawing process does of compact.Writer.finish's work."""
-    drawings = _draw(face, states, progress)
+    tenths: dict[str, np.ndarray] = {}  # compacting takes the path data's numbers as drawn, not read again
+    drawings = _draw(face, states, progress, tenths)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
-    return numbered, drawn_parts(list(numbers))
+    return numbered, drawn_parts(list(numbers), tenths)
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,

@@ -38,7 +38,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, parse_elements
-from cartoonface.render.pathdata import Compacted, Extent, compacted
+from cartoonface.render.pathdata import Compacted, Extent, Tenths, compacted
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -129,14 +129,15 @@ class Drawn:
     holds: dict[int, tuple[str, ...]]
 
 
-def drawn_parts(parts: list[Part]) -> Drawn:
-    """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts)."""
+def drawn_parts(parts: list[Part], tenths: Tenths | None = None) -> Drawn:
+    """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts); `tenths`: the
+    numbers of some of their path data as written (pathdata.Tenths), not read again."""
     fields = [(part.name, part.text, part.clips) for part in parts]
     # each part's text cut at its values once (_VALUE), for its path data and its skeleton; its
     # elements end in ">": a path data in two cannot match
     cuts = [_VALUE.split("".join((text, *clips))) for _, text, clips in fields]
     paths = [[_text(cut[index + 1]) for index in range(1, len(cut), 3) if cut[index] == "d"] for cut in cuts]
-    done = compacted(d for part_paths_ in paths for d in part_paths_)
+    done = compacted((d for part_paths_ in paths for d in part_paths_), tenths=tenths)
     rank = {d: place for place, d in enumerate(done.firsts.values())}  # holds keep firsts' order
     numbers: dict[str, int] = {}
     forms = []

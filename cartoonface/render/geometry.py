@@ -318,12 +318,13 @@ def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
     `hair` (S, H, 2), `front` (S, F, 2), `nose_side` (S,)): all_face_shape_columns' path data of
     each face, by part."""
     columns = all_face_shape_columns(posed)
-    return [{name: texts[which[index]] for name, (texts, which) in columns.items()} for index in range(len(posed.xy))]
+    return [{name: texts[which[index]] for name, (texts, _, which) in columns.items()} for index in range(len(posed.xy))]
 
 
-def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[int]]]:
+def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[np.ndarray], list[int]]]:
     """The path data of S posed faces (as all_face_shapes reads them) by part, in face_shapes'
-    order: the part's distinct path data and, per face, the number of its own among them. The
+    order: the part's distinct path data, their numbers in whole tenths of a pixel as written
+    ((k,) int64 each: render/pathdata.py's Tenths) and, per face, the number of its own among them. The
     maps are applied to all faces by stacked products (each slice the product of one face, so
     the same numbers), the hair's to each distinct hair outline once (a pose shown with many
     mouths has one). A part whose numbers, in tenths, are those of another face of the stack
@@ -339,9 +340,9 @@ def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[int]
     # column alone, so the same numbers as for one face
     wide = plan.hair @ outlines.transpose(1, 0, 2).reshape(hair.shape[1], -1)
     written = plan.hair.shape[0]
-    paths, numbers = _written(plan.frames[0], rounded_tenths(wide.reshape(written, len(outlines), 2)
-                                                             .transpose(1, 0, 2)).reshape(len(outlines), -1))
-    shapes = {"hair": (paths, [numbers[outline] for outline in outline_of])}
+    paths, rows, numbers = _written(plan.frames[0], rounded_tenths(wide.reshape(written, len(outlines), 2)
+                                                                   .transpose(1, 0, 2)).reshape(len(outlines), -1))
+    shapes = {"hair": (paths, rows, [numbers[outline] for outline in outline_of])}
     coordinates = np.empty((count, len(plan.matrix), 2))
     # each axis of each face's points as a column (S, 2, N, 1): matrix-vector products, as
     # face_shapes made them one face at a time (4x faster than one product with (N, 2))
@@ -351,29 +352,31 @@ def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[int]
         chosen = np.flatnonzero(sides == side)
         coordinates[chosen] = (side_plan.matrix @ columns[chosen])[..., 0].transpose(0, 2, 1)
     tenths = rounded_tenths(coordinates).reshape(count, -1)
-    shapes.update((name, ([], [0] * count)) for name in plan.names[1:])
+    shapes.update((name, ([], [], [0] * count)) for name in plan.names[1:])
     for side, side_plan in plans.items():
         chosen = np.flatnonzero(sides == side)
         for name, frame, (start, end) in zip(side_plan.names[1:], side_plan.frames[1:], side_plan.slots[1:],
                                              strict=True):
-            texts, numbers = _written(frame, tenths[chosen, start - 2 * written:end - 2 * written])
-            paths, which = shapes[name]
+            texts, distinct, numbers = _written(frame, tenths[chosen, start - 2 * written:end - 2 * written])
+            paths, rows, which = shapes[name]
             if len(plans) == 1:
-                shapes[name] = texts, numbers
+                shapes[name] = texts, distinct, numbers
                 continue
             for index, number in zip(chosen.tolist(), numbers, strict=True):
                 which[index] = len(paths) + number  # after the other nose side's
             paths += texts
+            rows += distinct
     return shapes
 
 
-def _written(frame: tuple[str, ...], tenths: np.ndarray) -> tuple[list[str], list[int]]:
+def _written(frame: tuple[str, ...], tenths: np.ndarray) -> tuple[list[str], list[np.ndarray], list[int]]:
     """The path data of the `frame` (numbers.template_frame) of each row of `tenths` (n, k: the
     numbers in whole tenths of a pixel), written once per distinct row: those texts, in the order
-    first seen, and each row's number among them (n)."""
+    first seen, their rows ((k,) each) and each row's number among them (n)."""
     distinct, numbers = _distinct_rows(tenths)
     texts, width = tenths_texts(distinct), tenths.shape[1]
-    return [fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(distinct))], numbers
+    return ([fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(distinct))],
+            list(distinct), numbers)
 
 
 def _distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, list[int]]:

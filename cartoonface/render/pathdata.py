@@ -33,10 +33,12 @@ from __future__ import annotations
 import functools
 import re
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
+
+from cartoonface.render.numbers import TENTHS
 
 TOLERANCE = 0.5  # pixels: a dropped point lies closer than this to the simplified line
 MIRROR = 2  # pixels: a first control point this close to the mirrored one is left out (`s`)
@@ -224,11 +226,16 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     return ["".join(row) + plan.tail for row in numbers.tolist()]
 
 
-def _plain_numbers(paths: list[str]) -> np.ndarray | None:
+def _plain_numbers(paths: list[str], tenths: Tenths | None = None) -> np.ndarray | None:
     """The numbers of `paths` (path data of plain numbers: letters, commas, spaces and signs
     between them) as an (n, k) float array, k each; None when they hold different counts or a
     text that is no number. All of them read by one np.fromstring (C's strtod: the values
-    float() gives), "nan" between the paths."""
+    float() gives), "nan" between the paths; or, when `tenths` (Tenths) has every path and they
+    hold one count, not read but taken from it: tenths / 10 is the value strtod reads of the
+    tenths' text (both the double nearest the decimal), but for the sign of a zero, which
+    compacting (rounding to whole pixels) does not see."""
+    if tenths is not None and all(d in tenths for d in paths) and len({len(tenths[d]) for d in paths}) == 1:
+        return np.array([tenths[d] for d in paths]) / TENTHS
     text = _SEPARATOR.join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").replace(_SEPARATOR, " nan ")
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)  # numpy's word for text it cannot read
@@ -243,6 +250,9 @@ def _plain_numbers(paths: list[str]) -> np.ndarray | None:
     return flat[~np.isnan(flat)].reshape(len(paths), int(counts[0]))
 
 
+# Path data written from whole tenths of a pixel (render/geometry.py), by their text: those numbers
+# in the order written ((k,) int64), as render/numbers.py's tenths_texts wrote them.
+Tenths = Mapping[str, np.ndarray]
 Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data's points
 
 
@@ -263,11 +273,13 @@ class Compacted:
     members: dict[str, list[str]]
 
 
-def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
+def compacted(paths: Iterable[str], done: Compacted | None = None,
+              tenths: Tenths | None = None) -> Compacted:
     """The Compacted of `paths`, going on from `done` (a Compacted of other paths,
     or of some of these and others): its compact forms are taken where its first path data of a
     skeleton is the first of these paths too (so its points are the ones kept), the others are
-    compacted here."""
+    compacted here. `tenths` (Tenths): the numbers of some of `paths` as they were written, not
+    read again (the same compact forms)."""
     known = Compacted(dict(done.compact), dict(done.extents), {}, {}) if done else Compacted({}, {}, {}, {})
     distinct = set(paths)
     new = _groups(d for d in distinct if d not in known.compact)
@@ -281,11 +293,11 @@ def compacted(paths: Iterable[str], done: Compacted | None = None) -> Compacted:
             known.firsts[skeleton] = first
             known.members[skeleton] = done.members[skeleton] if done else []
         elif skeleton in every:
-            _compact_group(skeleton, every[skeleton], known)
+            _compact_group(skeleton, every[skeleton], known, tenths)
     for skeleton, members in new.items():
         if skeleton not in stale:  # compacted with the first, whose points are kept
             before = known.members.get(skeleton, [])
-            _compact_group(skeleton, [firsts[skeleton], *members] if skeleton in firsts else members, known)
+            _compact_group(skeleton, [firsts[skeleton], *members] if skeleton in firsts else members, known, tenths)
             if before:
                 known.members[skeleton] = sorted({*before, *known.members[skeleton]})
     return known
@@ -317,15 +329,16 @@ def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
     return groups
 
 
-def _compact_group(skeleton: str, members: list[str], done: Compacted) -> None:
+def _compact_group(skeleton: str, members: list[str], done: Compacted,
+                   tenths: Tenths | None = None) -> None:
     """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
-    the first one's points kept in all)."""
+    the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them."""
     members.sort()
     if "#" in skeleton:
         texts = [_NUMBER.findall(d) for d in members]
         numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
     else:
-        numbers = _plain_numbers(members)
+        numbers = _plain_numbers(members, tenths)
     commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
     if commands is None or numbers is None:
         done.compact.update((d, d) for d in members)

@@ -197,12 +197,15 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
     return all_face_parts(face, PosedFaces.stack([posed]), uid, neck_lean)[0]
 
 
-def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0) -> list[tuple[Part, ...]]:
+def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0,
+                   tenths: dict[str, np.ndarray] | None = None) -> list[tuple[Part, ...]]:
     """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
     of them by geometry's all_face_shape_columns, the cheeks' and eyes' numbers of all of them as
     arrays written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; each
     part but the mouth drawn once per batch (_once), part by part, and the states' drawings
-    zipped from those columns. Written as text: the hot path of render/animation.py."""
+    zipped from those columns. Written as text: the hot path of render/animation.py. `tenths`,
+    when given, gets the numbers of the path data of geometry's shapes as written (render/pathdata.py's
+    Tenths: what compacting them would read again)."""
     style = _style_texts(face)
     shapes = all_face_shape_columns(posed)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
@@ -214,12 +217,15 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
-    paths = {name: _path_parts(name, *shapes[shape], style[kind]) for name, (shape, kind) in _PATHS.items()}
+    paths = {name: _path_parts(name, shapes[shape][0], shapes[shape][2], style[kind])
+             for name, (shape, kind) in _PATHS.items()}
+    if tenths is not None:
+        tenths.update(pair for texts, rows, _ in shapes.values() for pair in zip(texts, rows, strict=True))
     # each state's numbers (CHEEK_COUNT, then EYE_COUNT per eye) as columns: number j of every state
     numbers = [texts[j::per_state] for j in range(per_state)]
     eye_parts = []
     for side, first in (("l", _CHEEK_COUNT), ("r", _CHEEK_COUNT + _EYE_COUNT)):
-        (outlines, outline_of), (lids, lid_of) = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
+        (outlines, _, outline_of), (lids, _, lid_of) = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
         keys = zip([side] * len(outline_of), [outlines[number] for number in outline_of],
                    [lids[number] for number in lid_of], *numbers[first:first + _EYE_COUNT], strict=True)
         eye_parts.append(_once(list(keys), lambda key: _eye(key[0], key[1], key[2], key[3:], uid, style)))
