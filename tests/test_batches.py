@@ -14,7 +14,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.mouth import MOUTH_SYMBOLS, shown_parts
 from cartoonface.face.pose import PosedFaces, pose_face, pose_faces, rig, unroll, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import _extent
+from cartoonface.render.compact import _extent, part_paths
 from cartoonface.render.geometry import all_face_shapes, face_shapes
 from cartoonface.render.mouth import (ROWS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts, mouth_outlines,
                                       mouth_texts)
@@ -150,3 +150,16 @@ def test_alike_rows_group_equal_rows():
     assert len({pattern for pattern, _ in groups}) == len(groups)
     for pattern, rows in groups:
         assert all(tuple(marks[row].tolist()) == pattern for row in rows)
+
+
+def test_path_data_compacted_from_its_numbers_as_drawn_as_from_its_text(face):
+    """The numbers all_face_parts hands on with the path data it drew (pathdata.Tenths) compact
+    them as reading their text does: the same compact forms, extents and firsts."""
+    lifted = lift(face)
+    tenths: dict[str, np.ndarray] = {}
+    drawn = all_face_parts(face, pose_faces(lifted, random_states(40, 8)), "u", tenths=tenths)
+    paths = list(part_paths((part.text, *part.clips) for parts in drawn for part in parts))
+    assert len(tenths.keys() & set(paths)) > len(set(paths)) / 2  # the hair, outlines, mouths
+    ties = np.concatenate([row[row % 10 == 5] // 10 % 2 for row in tenths.values()])
+    assert set(ties.tolist()) == {0, 1}  # halves of a pixel to round, to an even and to an odd whole
+    assert compacted(paths, tenths=tenths) == compacted(paths)

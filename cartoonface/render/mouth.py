@@ -43,7 +43,7 @@ import numpy as np
 
 from cartoonface.face.lift import LIFTED_INDEX
 from cartoonface.render.geometry import hypots
-from cartoonface.render.numbers import fill, number_texts, template_frame
+from cartoonface.render.numbers import fill, rounded_tenths, template_frame, tenths_texts
 
 # The posed points the mouth is drawn from, in this order (thesis 002, Alg. 2.2 step 13).
 MOUTH_POINTS = ("8.4", "8.3", "8.9", "8.10", "8.1", "2.2", "2.3", "8.2")
@@ -242,9 +242,12 @@ def _local(x: np.ndarray, y: np.ndarray, half: np.ndarray, shown: np.ndarray,
 # MouthOutlines.rows order, then single numbers.
 TEXTS = ("lips", "opening", "upper_teeth", "lower_teeth", "bite", "upper_width", "lower_width", "bite_width",
          "tongue_cx", "tongue_cy", "tongue_rx", "tongue_ry", "gloss_cx", "gloss_cy", "gloss_rx", "gloss_ry")
-_TEMPLATE = template_frame("|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close
-                                     for pieces, close in ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))]
+_PATHS = ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))  # the path data's cubic pieces and close
+_TEMPLATE = template_frame("|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close for pieces, close in _PATHS]
                                     + ["%s"] * 11))
+# where each path data's numbers lie among a mouth's numbers (_texts: Tenths)
+_PATH_ENDS = np.cumsum([2 + 6 * pieces for pieces, _ in _PATHS]).tolist()
+_PATH_SLICES = tuple(zip(TEXTS, [0, *_PATH_ENDS[:-1]], _PATH_ENDS))
 
 
 def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
@@ -255,7 +258,7 @@ def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
 
 
 def all_mouth_texts(outlines: Sequence[MouthOutlines]) -> list[dict[str, str]]:
-    """mouth_texts of each of `outlines`, every number written by one number_texts."""
+    """mouth_texts of each of `outlines`, every number written by one numbers.tenths_texts."""
     places = np.array([[*o.tongue[:2], *o.gloss[:2]] for o in outlines], dtype=float).reshape(-1, 2, 2)
     rows = np.array([o.rows for o in outlines], dtype=float).reshape(len(outlines), -1, 2)
     sizes = np.array([[o.upper_width, o.lower_width, o.bite_width, *o.tongue[2:], *o.gloss[2:]] for o in outlines],
@@ -263,19 +266,26 @@ def all_mouth_texts(outlines: Sequence[MouthOutlines]) -> list[dict[str, str]]:
     return _texts(np.concatenate([rows, places], axis=1), sizes)
 
 
-def drawn_mouth_texts(points: np.ndarray, shown: np.ndarray, d: float) -> list[dict[str, str]]:
+def drawn_mouth_texts(points: np.ndarray, shown: np.ndarray, d: float,
+                      tenths: dict[str, np.ndarray] | None = None) -> list[dict[str, str]]:
     """all_mouth_texts(all_mouth_outlines(points, shown, d)) without the MouthOutlines between:
     the texts of S mouths (`points` (S, 8, 2), `shown` (S, 4)) straight from _drawn's arrays."""
-    return _texts(*_drawn(points, shown, d))
+    return _texts(*_drawn(points, shown, d), tenths)
 
 
-def _texts(images: np.ndarray, sizes: np.ndarray) -> list[dict[str, str]]:
-    """The mouth_texts of S mouths from _drawn's `images` (S, 46, 2) and `sizes` (S, 7) pixels."""
+def _texts(images: np.ndarray, sizes: np.ndarray, tenths: dict[str, np.ndarray] | None = None) -> list[dict[str, str]]:
+    """The mouth_texts of S mouths from _drawn's `images` (S, 46, 2) and `sizes` (S, 7) pixels.
+    `tenths`, when given, gets the numbers of their path data as written (render/pathdata.py's Tenths)."""
     sizes = np.rint(sizes)
     places = images[:, 44:].reshape(-1, 4)
     numbers = np.concatenate([images[:, :44].reshape(len(images), -1), sizes[:, :3], places[:, :2], sizes[:, 3:5],
                               places[:, 2:], sizes[:, 5:]], axis=1)
-    texts = number_texts(numbers)
+    rounded = rounded_tenths(numbers)
+    texts = tenths_texts(rounded)
     count = numbers.shape[1]
-    return [dict(zip(TEXTS, fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|")))
-            for index in range(len(images))]
+    drawn = [dict(zip(TEXTS, fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|")))
+             for index in range(len(images))]
+    if tenths is not None:
+        for name, start, end in _PATH_SLICES:
+            tenths.update(zip([mouth[name] for mouth in drawn], rounded[:, start:end], strict=True))
+    return drawn
