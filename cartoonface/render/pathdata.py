@@ -234,8 +234,9 @@ def _plain_numbers(paths: list[str], tenths: Tenths | None = None) -> np.ndarray
     hold one count, not read but taken from it: tenths / 10 is the value strtod reads of the
     tenths' text (both the double nearest the decimal), but for the sign of a zero, which
     compacting (rounding to whole pixels) does not see."""
-    if tenths is not None and all(d in tenths for d in paths) and len({len(tenths[d]) for d in paths}) == 1:
-        return np.array([tenths[d] for d in paths]) / TENTHS
+    rows = [tenths[d] for d in paths if d in tenths] if tenths is not None else []
+    if len(rows) == len(paths) and len({len(row) for row in rows}) == 1:
+        return np.array(rows) / TENTHS
     text = _SEPARATOR.join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").replace(_SEPARATOR, " nan ")
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)  # numpy's word for text it cannot read
