@@ -13,7 +13,7 @@ from cartoonface.face.model import load_face
 from cartoonface.face.pose import pose_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
-from cartoonface.render.scenery import CLOTHES, NECK, _points, _short_tenths, chin_shadows, figure_of
+from cartoonface.render.scenery import CLOTHES, NECK, _points, _shadow_data, _short_tenths, chin_shadows, figure_of
 from cartoonface.render.svg import face_svg
 from tests.conftest import ROOT
 from tests.shapes import NUMBER, polygon
@@ -131,6 +131,21 @@ def test_the_cut_shadow_writes_its_numbers_as_the_scenery_does():
         corners = corners[:len(corners) // 2 * 2].reshape(-1, 2)
         template = "M" + "L".join(["%.1f,%.1f"] * len(corners)) + "Z"
         assert _short_tenths(template % tuple(corners.ravel().tolist())) == _points(*corners.tolist())
+
+
+def test_cut_shadows_written_from_tenths_are_written_as_the_scenery_writes_them():
+    # rows of plain numbers, of binary halves of a tenth (12.25), of decimal ones (1.45: a product
+    # that may land on a half), of numbers under a pixel and -0: each row's text is the per-number writer's
+    rng = np.random.default_rng(8)
+    rows = np.concatenate([rng.uniform(20, 900, (40, 32)), np.round(rng.uniform(20, 900, (40, 32)), 2),
+                           rng.integers(200, 9000, (40, 32)) / 10 + 0.05, rng.integers(-400, 400, (20, 32)) / 8,
+                           rng.uniform(-2, 2, (10, 32)), np.full((1, 32), -0.0)])
+    tenths: dict[str, np.ndarray] = {}
+    written = _shadow_data(rows, tenths)
+    assert written == [_points(*row.reshape(-1, 2).tolist()) for row in rows]
+    assert 40 < len(tenths) < len(rows)  # many written from tenths, not all
+    for data, numbers in tenths.items():  # what compacting reads of the text
+        assert [float(v) for v in data[1:-1].replace("L", ",").split(",")] == (numbers / 10).tolist()
 
 
 def test_the_shadow_beyond_a_side_is_the_polygon_and_within_the_ellipse(face):

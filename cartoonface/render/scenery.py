@@ -22,7 +22,7 @@ from lxml import etree
 from cartoonface.errors import OptionError
 from cartoonface.face.model import FaceModel
 from cartoonface.render.elements import DECIMALS, element
-from cartoonface.render.numbers import decimal_text
+from cartoonface.render.numbers import TENTHS, decimal_text, fill, rounded_tenths, template_frame, tenths_texts
 
 BACKGROUNDS = ("studio", "newsroom", "classroom", "plain")
 CLOTHES = ("suit", "shirt", "sweater", "none")
@@ -159,6 +159,9 @@ _SHADOW_ANGLES = np.linspace(0, 2 * np.pi, SHADOW_POINTS, endpoint=False)  # the
 _SHADOW_COS, _SHADOW_SIN = np.cos(_SHADOW_ANGLES), np.sin(_SHADOW_ANGLES)
 # The cut shadow's path data with its corners' x, y %-formatted to DECIMALS (1) decimal (_num, then _short_tenths).
 _SHADOW_TEMPLATE = "M" + "L".join(["%.1f,%.1f"] * SHADOW_POINTS) + "Z"
+# The same with the numbers written from whole tenths by numbers.tenths_texts (chin_shadows: the
+# same text where the tenths are what %.1f rounds to and the number has a whole part).
+_SHADOW_FRAME = template_frame(_SHADOW_TEMPLATE.replace("%.1f", "%s"))
 LEAN_DECIMALS = 1  # the neck's lean is written to 0.1 degree: 0.1 px at the chin for a lever of 60 px
 # The torso's motion (animate/body.py), our choices tuned by eye: a full breath lifts the
 # shoulders by BREATH_RISE fw (about 4 px on the sample faces) and the neck by NECK_BREATH of
@@ -423,7 +426,8 @@ def torso_shift(figure: Figure, turn: np.ndarray, breath: np.ndarray) -> tuple[n
     return dx, dy, NECK_BREATH * dy
 
 
-def chin_shadows(figure: Figure, chins: np.ndarray, middles: np.ndarray, paint: str = "") -> list[str]:
+def chin_shadows(figure: Figure, chins: np.ndarray, middles: np.ndarray, paint: str = "",
+                 tenths: dict[str, np.ndarray] | None = None) -> list[str]:
     """The jaw's shadow on the neck for each posed chin 2.1 of `chins` (S, 2) pixels, the
     text of one SVG element (no namespace declaration) with the attribute text `paint` (' fill="..."',
     class, opacity) after its outline's: an ellipse centred on the chin, SHADOW_WIDTH of the
@@ -431,8 +435,8 @@ def chin_shadows(figure: Figure, chins: np.ndarray, middles: np.ndarray, paint: 
     pass a side of the neck (whose middle at the chin's height is in `middles` (S,), neck_middle), a
     polygon of SHADOW_POINTS corners cut at that side instead; corner SHADOW_POINTS // 4 is its
     lowest point, right under the chin while the chin is over the neck. Numbers are written as
-    `_num` writes them, the polygon's in one %-format (the hot path of an animation); the corners of all
-    cut ones are computed together."""
+    `_num` writes them; the corners of all cut ones are computed together and written by
+    _shadow_data (the hot path of an animation), which hands `tenths` on."""
     half = figure.face_width * NECK
     lefts, rights = middles - half, middles + half
     rx, ry = half * SHADOW_WIDTH, figure.face_width * JAW_SHADOW
@@ -442,13 +446,30 @@ def chin_shadows(figure: Figure, chins: np.ndarray, middles: np.ndarray, paint: 
     corners = np.empty((len(chins), SHADOW_POINTS, 2))
     corners[:, :, 0] = np.clip(cx[:, None] + rx * _SHADOW_COS, lefts[:, None], rights[:, None])
     corners[:, :, 1] = chins[:, 1, None] + ry * _SHADOW_SIN
-    shadows = []
-    for (x, y), whole, row in zip(chins.tolist(), inside, corners.reshape(len(chins), -1).tolist(), strict=True):
-        if whole:
-            shadows.append(f'<ellipse cx="{_num(x)}" cy="{_num(y)}" rx="{_num(rx)}" ry="{_num(ry)}"{paint}/>')
-        else:
-            shadows.append(f'<path d="{_short_tenths(_SHADOW_TEMPLATE % tuple(row))}"{paint}/>')
-    return shadows
+    cut = [index for index, whole in enumerate(inside) if not whole]
+    written = iter(_shadow_data(corners[cut].reshape(len(cut), 2 * SHADOW_POINTS), tenths))
+    return [f'<ellipse cx="{_num(x)}" cy="{_num(y)}" rx="{_num(rx)}" ry="{_num(ry)}"{paint}/>' if whole
+            else f'<path d="{next(written)}"{paint}/>' for (x, y), whole in zip(chins.tolist(), inside, strict=True)]
+
+
+def _shadow_data(numbers: np.ndarray, tenths: dict[str, np.ndarray] | None = None) -> list[str]:
+    """The path data of cut shadows (`numbers` (n, 2 SHADOW_POINTS): each one's corners x, y pixels) as
+    _short_tenths(_SHADOW_TEMPLATE % row) writes them: from whole tenths by one numbers.tenths_texts,
+    but a row with a number under 1 px ("0.5" is ".5" there) or a tenth rounded from a half by the
+    %-format (which rounds the exact binary value: the product rounded_tenths rounds lies on the same
+    side of every half but where it is one). `tenths` gets the rows written from tenths (pathdata.Tenths)."""
+    rounded = rounded_tenths(numbers)
+    scaled = numbers * TENTHS
+    plain = ~np.any(scaled - np.floor(scaled) == 0.5, axis=1) & np.all(np.abs(rounded) >= TENTHS, axis=1)
+    texts, width = tenths_texts(rounded[plain]), numbers.shape[1]
+    written = iter([fill(_SHADOW_FRAME, texts[start:start + width]) for start in range(0, len(texts), width)])
+    data = []
+    for row, alike in zip(numbers.tolist(), plain.tolist(), strict=True):
+        data.append(next(written) if alike else _short_tenths(_SHADOW_TEMPLATE % tuple(row)))
+    if tenths is not None:
+        tenths.update(zip([d for d, alike in zip(data, plain.tolist(), strict=True) if alike], rounded[plain],
+                          strict=True))
+    return data
 
 
 Point = tuple[float, float | None]

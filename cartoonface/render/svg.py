@@ -204,7 +204,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     arrays written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; each
     part but the mouth drawn once per batch (_once), part by part, and the states' drawings
     zipped from those columns. Written as text: the hot path of render/animation.py. `tenths`,
-    when given, gets the numbers of the path data of geometry's shapes and the mouths as written (render/pathdata.py's
+    when given, gets the numbers of the path data of geometry's shapes, the mouths and the chin shadows as written (render/pathdata.py's
     Tenths: what compacting them would read again)."""
     style = _style_texts(face)
     shapes = all_face_shape_columns(posed)
@@ -216,7 +216,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d, tenths)
-    shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW)
+    shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW, tenths)
     paths = {name: _path_parts(name, shapes[shape][0], shapes[shape][2], style[kind])
              for name, (shape, kind) in _PATHS.items()}
     if tenths is not None:
