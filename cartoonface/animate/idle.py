@@ -25,6 +25,9 @@ AXES = (0.0, 0.0, 1.0)
 # A child of the seed no other random stream uses (behaviour.schedule uses 0-7).
 SWAY_STREAM = 8
 ANGLE_STEP = 1  # decimals: angles to 0.1 degree, as frames.py quantises them
+# |10 x - (k + 1/2)| below this is left to round(): the product 10 x of an angle within MAX_ANGLE is
+# off by less than 1e-13, so rint decides every value further from a half as round() does.
+TIE_MARGIN = 1e-6
 
 
 def sway(times: np.ndarray, seed: int, peak: float) -> np.ndarray:
@@ -48,25 +51,31 @@ def with_sway(states: Sequence[FaceState], fps: int, seed: int, peak: float) -> 
     Angles are rounded to 0.1 degree and kept within +-MAX_ANGLE; identical
     consecutive states stay equal (and are the same object).
     """
-    angles = sway(np.arange(len(states)) / fps, seed, peak)
+    poses = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states], dtype=float).reshape(-1, 3)
+    angles = rounded_angles(poses + sway(np.arange(len(states)) / fps, seed, peak))
+    moved = np.ones(len(states), dtype=bool)
+    moved[1:] = np.any(angles[1:] != angles[:-1], axis=1)
     out: list[FaceState] = []
-    previous: tuple | None = None
-    for state, (tilt, turn, roll) in zip(states, angles.tolist(), strict=True):
-        pose = state.pose
-        values = (
-            _angle(pose.tilt + tilt),
-            _angle(pose.turn + turn),
-            _angle(pose.roll + roll),
-        )
-        key = (state, values)
-        if out and key == previous:
+    before = None
+    for state, values, move in zip(states, angles.tolist(), moved.tolist(), strict=True):
+        if not move and (state is before or state == before):  # the frame before, unchanged
             out.append(out[-1])
-            continue
-        out.append(trusted_state(state, pose=trusted_pose(*values)))  # angles clamped and rounded: in range
-        previous = key
+        else:
+            out.append(trusted_state(state, pose=trusted_pose(*values)))  # angles clamped and rounded: in range
+        before = state
     return tuple(out)
 
 
-def _angle(value: float) -> float:
-    """`value` degrees rounded to 0.1 and kept within +-MAX_ANGLE (no negative zero)."""
-    return round(min(max(value, -MAX_ANGLE), MAX_ANGLE), ANGLE_STEP) + 0.0
+def rounded_angles(values: np.ndarray) -> np.ndarray:
+    """`values` (any shape, degrees) kept within +-MAX_ANGLE and rounded to 0.1 exactly as Python's
+    round(x, 1) does (the decimal value of x, half to even), without negative zero.
+
+    rint(10 x) / 10 is that result wherever 10 x is not next to a half (its product's error is far
+    smaller than the margin); the few values next to one are rounded by round() itself.
+    """
+    clamped = np.clip(values, -MAX_ANGLE, MAX_ANGLE)
+    scaled = clamped * 10**ANGLE_STEP
+    out = np.rint(scaled) / 10**ANGLE_STEP + 0.0
+    near_half = np.abs(scaled - np.floor(scaled) - 0.5) < TIE_MARGIN
+    out[near_half] = [round(value, ANGLE_STEP) + 0.0 for value in clamped[near_half].tolist()]
+    return out
