@@ -1,11 +1,25 @@
-"""idle.with_sway's angles: vectorised, yet each one Python's round(x, 1) of the clamped sum."""
+"""The idle sway added as frames are sampled: each angle Python's round(x, 1) of the clamped sum."""
+
+import dataclasses
 
 import numpy as np
+import pytest
 
-from cartoonface.animate.idle import rounded_angles, sway, with_sway
-from cartoonface.face.state import MAX_ANGLE, FaceState, Pose
+from cartoonface.animate.behaviour import schedule, speech_pauses
+from cartoonface.animate.frames import frame_times, states_at
+from cartoonface.animate.idle import rounded_angles, sway
+from cartoonface.animate.timeline import Keyframe, Track, build_timeline
+from cartoonface.errors import OptionError
+from cartoonface.face.state import MAX_ANGLE
+from tests.synthetic import synthetic_talk
 
 FPS = 30
+
+
+@pytest.fixture(scope="module")
+def timeline():
+    alignment = synthetic_talk(20.0, seed=4)
+    return build_timeline(alignment, schedule(alignment.duration, speech_pauses(alignment), seed=1))
 
 
 def _round(value: float) -> float:
@@ -18,20 +32,29 @@ def test_rounded_angles_round_as_python_does_next_to_halves_too():
     values = np.concatenate([halves, np.nextafter(halves, 99.0), np.nextafter(halves, -99.0),
                              np.random.default_rng(3).uniform(-20, 20, 5000), [-0.0, -0.04, 0.04]])
     got = rounded_angles(values)
-    expected = [_round(value) for value in values.tolist()]
-    assert got.tolist() == expected
+    assert got.tolist() == [_round(value) for value in values.tolist()]
     assert not np.signbit(got[got == 0]).any()
 
 
-def test_with_sway_adds_the_sway_to_each_pose_and_rounds_it():
-    poses = [Pose(tilt=2.3, turn=-1.1, roll=0.4)] * 40 + [Pose(roll=14.9)] * 40 + [Pose(roll=-14.9)] * 40
-    states = tuple(FaceState(pose=pose) for pose in poses)
-    swayed = with_sway(states, FPS, 2, 1.5)
-    added = sway(np.arange(len(states)) / FPS, 2, 1.5)
-    for state, after, (tilt, turn, roll) in zip(states, swayed, added.tolist(), strict=True):
-        pose = state.pose
+@pytest.mark.parametrize("peak", [1.5, 40.0])  # 40: the sums reach the +-MAX_ANGLE clamp
+def test_the_sway_is_added_to_each_sampled_pose_and_rounded(timeline, peak):
+    times = frame_times(timeline, FPS)
+    added = sway(times, 2, peak)
+    still = states_at(timeline, times)
+    swayed = states_at(timeline, times, added)
+    assert len(swayed) == len(still)
+    for before, after, (tilt, turn, roll) in zip(still, swayed, added.tolist(), strict=True):
+        pose = before.pose
         assert (after.pose.tilt, after.pose.turn, after.pose.roll) == (
             _round(pose.tilt + tilt), _round(pose.turn + turn), _round(pose.roll + roll))
-        assert after.mouth == state.mouth and after.blink == state.blink
+        assert dataclasses.replace(after, pose=pose) == before
     for a, b in zip(swayed, swayed[1:]):
         assert (a == b) == (a is b)
+
+
+def test_an_angle_out_of_range_is_named_before_the_sway_clamps_it(timeline):
+    wild = Track("tilt", (Keyframe(0, 0.0), Keyframe(1000, MAX_ANGLE + 5)), "cosine")
+    broken = dataclasses.replace(timeline, tracks=tuple(wild if t.name == "tilt" else t for t in timeline.tracks))
+    times = frame_times(broken, FPS)
+    with pytest.raises(OptionError, match="roll"):
+        states_at(broken, times, sway(times, 0, 1.0))

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from cartoonface.animate.idle import rounded_angles
 from cartoonface.animate.timeline import Timeline, Track
 from cartoonface.errors import OptionError
 from cartoonface.face.emotion import EMOTIONS
@@ -46,22 +47,28 @@ NOD_SIGN = 1.0
 REST = FaceState()  # the checked state whose fields every sampled state replaces
 
 
-def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
-    """One FaceState per frame: frame i shows time i / fps seconds.
-
-    `fps` an int in 12..60 (OptionError otherwise). Frames cover the whole
-    timeline: ceil(duration * fps) of them. Identical consecutive states are
-    the same object.
-    """
+def frame_times(timeline: Timeline, fps: int) -> np.ndarray:
+    """(n,) seconds of the frames at `fps`: frame i shows time i / fps, and they cover the whole
+    timeline, ceil(duration * fps) of them. `fps` an int in 12..60 (OptionError otherwise)."""
     if isinstance(fps, bool) or not isinstance(fps, int | np.integer) or not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
         low, high = FPS_RANGE
         raise OptionError(f"fps: {fps!r}; expected a whole number of frames per second from {low} to {high}")
-    count = -(-timeline.duration * int(fps) // 1000)
-    return states_at(timeline, np.arange(count) / fps)
+    return np.arange(-(-timeline.duration * int(fps) // 1000)) / fps
 
 
-def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[FaceState, ...]:
-    """The face state at each of `times` ((n,) seconds), interpolated between key frames."""
+def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
+    """One FaceState per frame of frame_times(timeline, fps). Identical consecutive states are the
+    same object."""
+    return states_at(timeline, frame_times(timeline, fps))
+
+
+def states_at(timeline: Timeline, times: np.ndarray | Sequence[float], sway: np.ndarray | None = None) -> tuple[FaceState, ...]:
+    """The face state at each of `times` ((n,) seconds), interpolated between key frames.
+
+    `sway`: (n, 3) degrees (tilt, turn, roll; animate/idle.py) added to the poses, the sums kept
+    within +-MAX_ANGLE and rounded to 0.1 degree (idle.rounded_angles). Identical consecutive
+    states are the same object.
+    """
     t = np.asarray(times, dtype=float) * 1000.0
     mouth = _mouth(timeline.track("mouth"), t)
     blink, brow, smile = (_amount(timeline.track(name), t) for name in ("blink", "brow", "smile"))
@@ -69,14 +76,18 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
     pitch = NOD_SIGN * nod + 0.0
     feelings = _emotions(timeline, t)
     lips = _stepped(timeline.track("lips"), t) if any(feelings) else np.ones_like(t)
-    columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
-                  gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
     # The mouth mixes and emotion names are made in range here; the numbers are checked at once, and
     # only when one is out of range (an edited actions.json) are the states made by FaceState's
     # checks, which name it.
     checked = (_within(MAX_ANGLE, pitch, turn, tilt) and _within(MAX_GAZE, gaze_h, gaze_v)
                and _within(0.5, blink - 0.5, brow - 0.5, smile - 0.5, lips - 0.5)  # each 0..1
                and all(0.0 <= amount <= 1.0 for feeling in feelings for _, amount in feeling))
+    if sway is not None:
+        if not checked:  # FaceState's checks name the number out of range before the sway clamps it
+            states_at(timeline, times)
+        pitch, turn, tilt = rounded_angles(np.stack([pitch, turn, tilt], axis=1) + sway).T
+    columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
+                  gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
     states: list[FaceState] = []
     previous = None
     for values in columns:
@@ -140,8 +151,8 @@ def breaths_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> np.nd
 
 
 def sample_breaths(timeline: Timeline, fps: int) -> np.ndarray:
-    """(n,) depth of the breath at each frame of sample_frames(timeline, fps) (frame i at i / fps s)."""
-    return breaths_at(timeline, np.arange(-(-timeline.duration * int(fps) // 1000)) / fps)
+    """(n,) depth of the breath at each frame of frame_times(timeline, fps)."""
+    return breaths_at(timeline, frame_times(timeline, fps))
 
 
 def _segments(track: Track, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

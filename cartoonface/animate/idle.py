@@ -3,18 +3,16 @@
 A still head between scheduled moves looks frozen; people's heads drift all
 the time. `sway(times, seed, peak)` is smooth noise: per axis a sum of
 COMPONENTS sines with periods drawn in PERIODS and random phases, weighted
-1, 1/2, 1/3 and scaled so it never exceeds its peak. `with_sway` adds it to
-the poses of sampled frames. Reproducible from the seed; our choice of
+1, 1/2, 1/3 and scaled so it never exceeds its peak. frames.states_at adds it to
+the poses of the sampled frames (`rounded_angles`: the sums to 0.1 degree). Reproducible from the seed; our choice of
 numbers (docs/animation.md "Idle motion").
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
-from cartoonface.face.state import MAX_ANGLE, FaceState, trusted_pose, trusted_state
+from cartoonface.face.state import MAX_ANGLE
 
 COMPONENTS = 3
 PERIODS = (2.5, 9.0)  # seconds: slow, like a breathing or standing sway
@@ -43,27 +41,6 @@ def sway(times: np.ndarray, seed: int, peak: float) -> np.ndarray:
         waves = np.sin(2 * np.pi * t[:, None] / periods + phases) @ weights
         out[:, axis] = share * peak * waves / weights.sum()
     return out
-
-
-def with_sway(states: Sequence[FaceState], fps: int, seed: int, peak: float) -> tuple[FaceState, ...]:
-    """`states` (frame i at i / fps s) with the sway of `seed` and `peak` degrees added to each pose.
-
-    Angles are rounded to 0.1 degree and kept within +-MAX_ANGLE; identical
-    consecutive states stay equal (and are the same object).
-    """
-    poses = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states], dtype=float).reshape(-1, 3)
-    angles = rounded_angles(poses + sway(np.arange(len(states)) / fps, seed, peak))
-    moved = np.ones(len(states), dtype=bool)
-    moved[1:] = np.any(angles[1:] != angles[:-1], axis=1)
-    out: list[FaceState] = []
-    before = None
-    for state, values, move in zip(states, angles.tolist(), moved.tolist(), strict=True):
-        if not move and (state is before or state == before):  # the frame before, unchanged
-            out.append(out[-1])
-        else:
-            out.append(trusted_state(state, pose=trusted_pose(*values)))  # angles clamped and rounded: in range
-        before = state
-    return tuple(out)
 
 
 def rounded_angles(values: np.ndarray) -> np.ndarray:
