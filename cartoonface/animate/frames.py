@@ -112,10 +112,11 @@ def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float]
     """The emotions at times `t` (ms): ((name, intensity), ...) of those above 0, to 0.01 and in
     steps (_stepped), in EMOTIONS order; () where none is felt (or the timeline has no emotion
     tracks)."""
-    names = [name for name in EMOTIONS if f"emotion:{name}" in timeline.names]
-    amounts = [_stepped(timeline.track(f"emotion:{name}"), t).tolist() for name in names]
-    return [tuple((name, a) for name, a in zip(names, column, strict=True) if a > 0)
-            for column in zip(*amounts, strict=True)] if names else [()] * len(t)
+    tracks = {name: _stepped(timeline.track(f"emotion:{name}"), t)
+              for name in EMOTIONS if f"emotion:{name}" in timeline.names}
+    felt = {name: amounts.tolist() for name, amounts in tracks.items() if np.any(amounts > 0)}  # the others add nothing
+    return [tuple((name, a) for name, a in zip(felt, column, strict=True) if a > 0)
+            for column in zip(*felt.values(), strict=True)] if felt else [()] * len(t)
 
 
 # A slow head move is drawn on twos (our choice, as animators do; it lightens the SVG, where every
@@ -133,14 +134,16 @@ def on_twos(states: Sequence[FaceState]) -> tuple[FaceState, ...]:
     by EASE_STEP: held, the fastest part moves two steps at 15 frames a second, as animators
     draw on twos); fast head moves, the gaze, the mouth and the rest are unchanged."""
     poses = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states]).reshape(-1, 3)
-    steps = np.abs(np.diff(poses, axis=0)).max(axis=1) if len(poses) > 1 else np.zeros(0)
+    steps = np.append(np.abs(np.diff(poses, axis=0)).max(axis=1, initial=0.0), 0.0)  # (n,): to the next; 0 at the end
+    odd = np.arange(1, len(states), 2)  # only odd frames change, and only from the (even) frame before
+    slow = (steps[odd - 1] > 0.0) & (steps[odd - 1] < HOLD_STEP) & (steps[odd] < HOLD_STEP)  # > 0: a new pose
     out = list(states)
-    for i in range(1, len(out), 2):
-        after = steps[i] if i < len(steps) else 0.0
-        if steps[i - 1] < HOLD_STEP and after < HOLD_STEP and out[i].pose != out[i - 1].pose:
-            out[i] = trusted_state(out[i], pose=out[i - 1].pose)  # fields of checked states
-        if (out[i].emotion, out[i].lips) != (out[i - 1].emotion, out[i - 1].lips):
-            out[i] = trusted_state(out[i], emotion=out[i - 1].emotion, lips=out[i - 1].lips)
+    for i in odd[slow].tolist():
+        out[i] = trusted_state(out[i], pose=out[i - 1].pose)  # fields of checked states
+    for i in odd.tolist():
+        now, before = out[i], out[i - 1]
+        if now is not before and (now.emotion, now.lips) != (before.emotion, before.lips):
+            out[i] = trusted_state(now, emotion=before.emotion, lips=before.lips)
     return tuple(out)
 
 
