@@ -26,7 +26,7 @@ from cartoonface.animate.timeline import Timeline, Track
 from cartoonface.errors import OptionError
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.face.state import MAX_ANGLE, MAX_GAZE, FaceState, Pose, trusted_pose, trusted_state
+from cartoonface.face.state import MAX_ANGLE, MAX_GAZE, FaceState, Pose, trusted_face_state, trusted_pose, trusted_state
 
 FPS_RANGE = (12, 60)  # frames per second allowed (default 30; docs/animation.md)
 EASINGS = {
@@ -44,7 +44,6 @@ EASE_STEP = 0.125
 # A nod bends the head down: Pose.tilt is the rotation about X and positive
 # means the face looks down (face/state.py), so a nod of depth d is tilt +d.
 NOD_SIGN = 1.0
-REST = FaceState()  # the checked state whose fields every sampled state replaces
 
 
 def frame_times(timeline: Timeline, fps: int) -> np.ndarray:
@@ -88,15 +87,14 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float], sway: np.
         pitch, turn, tilt = rounded_angles(np.stack([pitch, turn, tilt], axis=1) + sway).T
     columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
                   gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
+    state_of, pose_of = (trusted_face_state, trusted_pose) if checked else (FaceState, Pose)
     states: list[FaceState] = []
     previous = None
     for values in columns:
         if values != previous:
             eyes, brows, smiling, down, sideways, lean, look_h, look_v, mix, feeling, gamma = values
-            fields = dict(blink=eyes, smile=smiling, brow=brows, mouth=mix, gaze_h=look_h, gaze_v=look_v,
-                          emotion=feeling, lips=gamma if feeling else 1.0)
-            states.append(trusted_state(REST, pose=trusted_pose(down, sideways, lean), **fields) if checked
-                          else FaceState(pose=Pose(tilt=down, turn=sideways, roll=lean), **fields))
+            states.append(state_of(pose_of(down, sideways, lean), eyes, smiling, brows, mix, look_h, look_v, feeling,
+                                   gamma if feeling else 1.0))
             previous = values
         else:
             states.append(states[-1])
