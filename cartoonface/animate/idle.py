@@ -4,8 +4,8 @@ A still head between scheduled moves looks frozen; people's heads drift all
 the time. `sway(times, seed, peak)` is smooth noise: per axis a sum of
 COMPONENTS sines with periods drawn in PERIODS and random phases, weighted
 1, 1/2, 1/3 and scaled so it never exceeds its peak. frames.states_at adds it to
-the poses of the sampled frames (`rounded_angles`: the sums to 0.1 degree). Reproducible from the seed; our choice of
-numbers (docs/animation.md "Idle motion").
+the poses of the sampled frames (`rounded_angles`: the sums to 0.1 degree).
+Reproducible from the seed; our choice of numbers (docs/animation.md "Idle motion").
 """
 
 from __future__ import annotations
