@@ -28,9 +28,9 @@ import numpy as np
 
 from bench.generate import build_input
 from cartoonface.animate.behaviour import schedule, speech_pauses, speech_spans
-from cartoonface.animate.frames import on_twos, sample_frames
+from cartoonface.animate.frames import frame_times, on_twos, states_at
 from cartoonface.animate.gaze import DART_RADIUS
-from cartoonface.animate.idle import with_sway
+from cartoonface.animate.idle import sway
 from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import STYLES
 from cartoonface.animate.timeline import build_timeline
@@ -65,7 +65,9 @@ def measure(name: str, alignment, peaks: tuple[float, ...], face) -> None:
     speech = speech_spans(alignment)
     plan = schedule(duration, pauses, SEED, style=style, peaks=peaks, speech=speech)
     chance = schedule(duration, pauses, SEED, style=style, peaks=(), speech=speech)
-    states = with_sway(sample_frames(build_timeline(alignment, plan), FPS), FPS, SEED, style.sway_peak)
+    timeline = build_timeline(alignment, plan)
+    times = frame_times(timeline, FPS)
+    states = states_at(timeline, times, sway(times, SEED, style.sway_peak))
     kinds = [a.kind for a in plan]
     saccades = {a.start for a in plan if a.kind in ("gaze_h", "gaze_v")}
     gaze = np.array([(s.gaze_h, s.gaze_v) for s in states])

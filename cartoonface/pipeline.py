@@ -25,8 +25,8 @@ import soundfile
 from cartoonface.animate.actions import actions_to_json, load_actions
 from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedule, silences_of, speech_pauses, speech_spans
 from cartoonface.animate.body import body_motion
-from cartoonface.animate.frames import FPS_RANGE, on_twos, sample_breaths, sample_frames
-from cartoonface.animate.idle import with_sway
+from cartoonface.animate.frames import FPS_RANGE, frame_times, on_twos, sample_breaths, sample_frames, states_at
+from cartoonface.animate.idle import sway
 from cartoonface.animate.prosody import pitch_peaks, pitch_track
 from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
@@ -309,7 +309,8 @@ def generate(
             states = drive(tracking, sample_frames(timeline, options.fps), options.fps, model,
                            combine=transcribed(alignment))
         else:
-            states = with_sway(sample_frames(timeline, options.fps), options.fps, options.seed, style.sway_peak)
+            times = frame_times(timeline, options.fps)  # the idle sway added as the frames are sampled
+            states = states_at(timeline, times, sway(times, options.seed, style.sway_peak))
         states = on_twos(states)
         body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
         compressed: Future[Path] | None = None

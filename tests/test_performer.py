@@ -8,8 +8,8 @@ import pytest
 from cartoonface.animate import gaze
 from cartoonface.animate.actions import actions_from_json, actions_to_json
 from cartoonface.animate.behaviour import ANGLE_KINDS, KINDS, MAX_ANGLE, schedule, speech_pauses
-from cartoonface.animate.frames import sample_frames
-from cartoonface.animate.idle import sway, with_sway
+from cartoonface.animate.frames import frame_times, sample_frames, states_at
+from cartoonface.animate.idle import sway
 from cartoonface.animate.prosody import pitch_peaks
 from cartoonface.animate.style import ANNOUNCER, PAGE_STYLES, STORYTELLER, STYLES
 from cartoonface.animate.timeline import build_timeline
@@ -178,9 +178,10 @@ def test_sway_is_small_smooth_and_seeded():
     assert not np.array_equal(one, sway(times, 5, peak))
 
 
-def test_with_sway_moves_the_head_and_keeps_equal_frames_equal():
-    states = (FaceState(),) * 90
-    swayed = with_sway(states, FPS, 0, 1.0)
+def test_the_sway_moves_the_head_and_keeps_equal_frames_equal():
+    timeline = build_timeline(synthetic_talk(3.0, seed=1), ())
+    times = frame_times(timeline, FPS)
+    swayed = states_at(timeline, times, sway(times, 0, 1.0))
     rolls = [s.pose.roll for s in swayed]
     assert len(set(rolls)) > 3 and max(abs(r) for r in rolls) <= 1.0
     for a, b in zip(swayed, swayed[1:]):

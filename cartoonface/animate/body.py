@@ -40,15 +40,20 @@ def follow(angles: np.ndarray, fps: int) -> np.ndarray:
     """FOLLOW x `angles` ((n,) degrees, one per frame at `fps`) delayed and eased by two
     first-order lags of FOLLOW_LAG s in series, starting at rest at the first angle."""
     keep = float(np.exp(-1.0 / (fps * FOLLOW_LAG)))  # share of the lagged value kept from frame to frame
-    out = FOLLOW * np.asarray(angles, dtype=float)
-    for _ in range(2):
-        lagged = np.empty_like(out)
-        value = out[0] if len(out) else 0.0
-        for index, target in enumerate(out.tolist()):
-            value = keep * value + (1.0 - keep) * target
-            lagged[index] = value
-        out = lagged
-    return out
+    ease = 1.0 - keep
+    targets = (FOLLOW * np.asarray(angles, dtype=float)).tolist()
+    if not targets:
+        return np.zeros(0)
+    # Both lags in one pass, each starting at rest at its own first input (the second's is the
+    # first's first output); Python floats, as numpy's per-element arithmetic: the same bits.
+    first = targets[0]
+    second = keep * first + ease * first
+    out = []
+    for target in targets:
+        first = keep * first + ease * target
+        second = keep * second + ease * first
+        out.append(second)
+    return np.array(out)
 
 
 def body_motion(states: Sequence[FaceState], breaths: np.ndarray, fps: int) -> BodyMotion:

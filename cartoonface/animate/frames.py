@@ -21,11 +21,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from cartoonface.animate.idle import rounded_angles
 from cartoonface.animate.timeline import Timeline, Track
 from cartoonface.errors import OptionError
 from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.mouth import MOUTH_SYMBOLS
-from cartoonface.face.state import MAX_ANGLE, MAX_GAZE, FaceState, Pose, trusted_pose, trusted_state
+from cartoonface.face.state import MAX_ANGLE, MAX_GAZE, FaceState, Pose, trusted_face_state, trusted_pose, trusted_state
 
 FPS_RANGE = (12, 60)  # frames per second allowed (default 30; docs/animation.md)
 EASINGS = {
@@ -43,25 +44,30 @@ EASE_STEP = 0.125
 # A nod bends the head down: Pose.tilt is the rotation about X and positive
 # means the face looks down (face/state.py), so a nod of depth d is tilt +d.
 NOD_SIGN = 1.0
-REST = FaceState()  # the checked state whose fields every sampled state replaces
 
 
-def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
-    """One FaceState per frame: frame i shows time i / fps seconds.
-
-    `fps` an int in 12..60 (OptionError otherwise). Frames cover the whole
-    timeline: ceil(duration * fps) of them. Identical consecutive states are
-    the same object.
-    """
+def frame_times(timeline: Timeline, fps: int) -> np.ndarray:
+    """(n,) seconds of the frames at `fps`: frame i shows time i / fps, and they cover the whole
+    timeline, ceil(duration * fps) of them. `fps` an int in 12..60 (OptionError otherwise)."""
     if isinstance(fps, bool) or not isinstance(fps, int | np.integer) or not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
         low, high = FPS_RANGE
         raise OptionError(f"fps: {fps!r}; expected a whole number of frames per second from {low} to {high}")
-    count = -(-timeline.duration * int(fps) // 1000)
-    return states_at(timeline, np.arange(count) / fps)
+    return np.arange(-(-timeline.duration * int(fps) // 1000)) / fps
 
 
-def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[FaceState, ...]:
-    """The face state at each of `times` ((n,) seconds), interpolated between key frames."""
+def sample_frames(timeline: Timeline, fps: int) -> tuple[FaceState, ...]:
+    """One FaceState per frame of frame_times(timeline, fps). Identical consecutive states are the
+    same object."""
+    return states_at(timeline, frame_times(timeline, fps))
+
+
+def states_at(timeline: Timeline, times: np.ndarray | Sequence[float], sway: np.ndarray | None = None) -> tuple[FaceState, ...]:
+    """The face state at each of `times` ((n,) seconds), interpolated between key frames.
+
+    `sway`: (n, 3) degrees (tilt, turn, roll; animate/idle.py) added to the poses, the sums kept
+    within +-MAX_ANGLE and rounded to 0.1 degree (idle.rounded_angles). Identical consecutive
+    states are the same object.
+    """
     t = np.asarray(times, dtype=float) * 1000.0
     mouth = _mouth(timeline.track("mouth"), t)
     blink, brow, smile = (_amount(timeline.track(name), t) for name in ("blink", "brow", "smile"))
@@ -69,23 +75,26 @@ def states_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> tuple[
     pitch = NOD_SIGN * nod + 0.0
     feelings = _emotions(timeline, t)
     lips = _stepped(timeline.track("lips"), t) if any(feelings) else np.ones_like(t)
-    columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
-                  gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
     # The mouth mixes and emotion names are made in range here; the numbers are checked at once, and
     # only when one is out of range (an edited actions.json) are the states made by FaceState's
     # checks, which name it.
     checked = (_within(MAX_ANGLE, pitch, turn, tilt) and _within(MAX_GAZE, gaze_h, gaze_v)
                and _within(0.5, blink - 0.5, brow - 0.5, smile - 0.5, lips - 0.5)  # each 0..1
                and all(0.0 <= amount <= 1.0 for feeling in feelings for _, amount in feeling))
+    if sway is not None:
+        if not checked:  # FaceState's checks name the number out of range before the sway clamps it
+            states_at(timeline, times)
+        pitch, turn, tilt = rounded_angles(np.stack([pitch, turn, tilt], axis=1) + sway).T
+    columns = zip(blink.tolist(), brow.tolist(), smile.tolist(), pitch.tolist(), turn.tolist(), tilt.tolist(),
+                  gaze_h.tolist(), gaze_v.tolist(), mouth, feelings, lips.tolist(), strict=True)
+    state_of, pose_of = (trusted_face_state, trusted_pose) if checked else (FaceState, Pose)
     states: list[FaceState] = []
     previous = None
     for values in columns:
         if values != previous:
             eyes, brows, smiling, down, sideways, lean, look_h, look_v, mix, feeling, gamma = values
-            fields = dict(blink=eyes, smile=smiling, brow=brows, mouth=mix, gaze_h=look_h, gaze_v=look_v,
-                          emotion=feeling, lips=gamma if feeling else 1.0)
-            states.append(trusted_state(REST, pose=trusted_pose(down, sideways, lean), **fields) if checked
-                          else FaceState(pose=Pose(tilt=down, turn=sideways, roll=lean), **fields))
+            states.append(state_of(pose_of(down, sideways, lean), eyes, smiling, brows, mix, look_h, look_v, feeling,
+                                   gamma if feeling else 1.0))
             previous = values
         else:
             states.append(states[-1])
@@ -101,10 +110,11 @@ def _emotions(timeline: Timeline, t: np.ndarray) -> list[tuple[tuple[str, float]
     """The emotions at times `t` (ms): ((name, intensity), ...) of those above 0, to 0.01 and in
     steps (_stepped), in EMOTIONS order; () where none is felt (or the timeline has no emotion
     tracks)."""
-    names = [name for name in EMOTIONS if f"emotion:{name}" in timeline.names]
-    amounts = [_stepped(timeline.track(f"emotion:{name}"), t).tolist() for name in names]
-    return [tuple((name, a) for name, a in zip(names, column, strict=True) if a > 0)
-            for column in zip(*amounts, strict=True)] if names else [()] * len(t)
+    tracks = {name: _stepped(timeline.track(f"emotion:{name}"), t)
+              for name in EMOTIONS if f"emotion:{name}" in timeline.names}
+    felt = {name: amounts.tolist() for name, amounts in tracks.items() if np.any(amounts > 0)}  # the others add nothing
+    return [tuple((name, a) for name, a in zip(felt, column, strict=True) if a > 0)
+            for column in zip(*felt.values(), strict=True)] if felt else [()] * len(t)
 
 
 # A slow head move is drawn on twos (our choice, as animators do; it lightens the SVG, where every
@@ -122,14 +132,16 @@ def on_twos(states: Sequence[FaceState]) -> tuple[FaceState, ...]:
     by EASE_STEP: held, the fastest part moves two steps at 15 frames a second, as animators
     draw on twos); fast head moves, the gaze, the mouth and the rest are unchanged."""
     poses = np.array([(s.pose.tilt, s.pose.turn, s.pose.roll) for s in states]).reshape(-1, 3)
-    steps = np.abs(np.diff(poses, axis=0)).max(axis=1) if len(poses) > 1 else np.zeros(0)
+    steps = np.append(np.abs(np.diff(poses, axis=0)).max(axis=1, initial=0.0), 0.0)  # (n,): to the next; 0 at the end
+    odd = np.arange(1, len(states), 2)  # only odd frames change, and only from the (even) frame before
+    slow = (steps[odd - 1] > 0.0) & (steps[odd - 1] < HOLD_STEP) & (steps[odd] < HOLD_STEP)  # > 0: a new pose
     out = list(states)
-    for i in range(1, len(out), 2):
-        after = steps[i] if i < len(steps) else 0.0
-        if steps[i - 1] < HOLD_STEP and after < HOLD_STEP and out[i].pose != out[i - 1].pose:
-            out[i] = trusted_state(out[i], pose=out[i - 1].pose)  # fields of checked states
-        if (out[i].emotion, out[i].lips) != (out[i - 1].emotion, out[i - 1].lips):
-            out[i] = trusted_state(out[i], emotion=out[i - 1].emotion, lips=out[i - 1].lips)
+    for i in odd[slow].tolist():
+        out[i] = trusted_state(out[i], pose=out[i - 1].pose)  # fields of checked states
+    for i in odd.tolist():
+        now, before = out[i], out[i - 1]
+        if now is not before and (now.emotion, now.lips) != (before.emotion, before.lips):
+            out[i] = trusted_state(now, emotion=before.emotion, lips=before.lips)
     return tuple(out)
 
 
@@ -140,8 +152,8 @@ def breaths_at(timeline: Timeline, times: np.ndarray | Sequence[float]) -> np.nd
 
 
 def sample_breaths(timeline: Timeline, fps: int) -> np.ndarray:
-    """(n,) depth of the breath at each frame of sample_frames(timeline, fps) (frame i at i / fps s)."""
-    return breaths_at(timeline, np.arange(-(-timeline.duration * int(fps) // 1000)) / fps)
+    """(n,) depth of the breath at each frame of frame_times(timeline, fps)."""
+    return breaths_at(timeline, frame_times(timeline, fps))
 
 
 def _segments(track: Track, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -191,13 +203,25 @@ def _mouth(track: Track, t: np.ndarray) -> list[tuple[tuple[str, float], ...]]:
     shapes = np.array([MOUTH_SYMBOLS.index(key.value) for key in track.keys])
     before, after, eased = _segments(track, t)
     hundredths = np.round(eased * 100).astype(int)
-    mixes: list[tuple[tuple[str, float], ...]] = []
-    for a, b, k in zip(shapes[before].tolist(), shapes[after].tolist(), hundredths.tolist(), strict=True):
-        if a == b or k == 0:
-            mixes.append(((MOUTH_SYMBOLS[a], 1.0),))
-        elif k == 100:
-            mixes.append(((MOUTH_SYMBOLS[b], 1.0),))
-        else:
-            pair = sorted(((a, (100 - k) / 100), (b, k / 100)))
-            mixes.append(tuple((MOUTH_SYMBOLS[i], w) for i, w in pair))
-    return mixes
+    first, second = shapes[before], shapes[after]
+    mixed = (first != second) & (hundredths > 0) & (hundredths < 100)
+    # Each frame's mix as one number: a shape alone is its index, a mix of a, b at k hundredths is
+    # past those; the few distinct mixes are made once (a 3-minute book: ~5,700 frames, ~1,000 mixes).
+    count = len(MOUTH_SYMBOLS)
+    codes = np.where(mixed, count + (first * count + second) * 101 + hundredths,
+                     np.where(hundredths == 100, second, first))
+    distinct, index = np.unique(codes, return_inverse=True)
+    table = [_mix(code) for code in distinct.tolist()]
+    return [table[i] for i in index.tolist()]
+
+
+def _mix(code: int) -> tuple[tuple[str, float], ...]:
+    """The mouth mix of a _mouth code: the shape of index `code`, or past len(MOUTH_SYMBOLS) shapes
+    a and b at k hundredths of the way from a to b, in MOUTH_SYMBOLS order."""
+    count = len(MOUTH_SYMBOLS)
+    if code < count:
+        return ((MOUTH_SYMBOLS[code], 1.0),)
+    pair, k = divmod(code - count, 101)
+    a, b = divmod(pair, count)
+    from_a, to_b = (MOUTH_SYMBOLS[a], (100 - k) / 100), (MOUTH_SYMBOLS[b], k / 100)
+    return (from_a, to_b) if a < b else (to_b, from_a)  # a != b

@@ -3,18 +3,16 @@
 A still head between scheduled moves looks frozen; people's heads drift all
 the time. `sway(times, seed, peak)` is smooth noise: per axis a sum of
 COMPONENTS sines with periods drawn in PERIODS and random phases, weighted
-1, 1/2, 1/3 and scaled so it never exceeds its peak. `with_sway` adds it to
-the poses of sampled frames. Reproducible from the seed; our choice of
-numbers (docs/animation.md "Idle motion").
+1, 1/2, 1/3 and scaled so it never exceeds its peak. frames.states_at adds it to
+the poses of the sampled frames (`rounded_angles`: the sums to 0.1 degree).
+Reproducible from the seed; our choice of numbers (docs/animation.md "Idle motion").
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
-from cartoonface.face.state import MAX_ANGLE, FaceState, trusted_pose, trusted_state
+from cartoonface.face.state import MAX_ANGLE
 
 COMPONENTS = 3
 PERIODS = (2.5, 9.0)  # seconds: slow, like a breathing or standing sway
@@ -25,6 +23,9 @@ AXES = (0.0, 0.0, 1.0)
 # A child of the seed no other random stream uses (behaviour.schedule uses 0-7).
 SWAY_STREAM = 8
 ANGLE_STEP = 1  # decimals: angles to 0.1 degree, as frames.py quantises them
+# |10 x - (k + 1/2)| below this is left to round(): the product 10 x of an angle within MAX_ANGLE is
+# off by less than 1e-13, so rint decides every value further from a half as round() does.
+TIE_MARGIN = 1e-6
 
 
 def sway(times: np.ndarray, seed: int, peak: float) -> np.ndarray:
@@ -42,31 +43,16 @@ def sway(times: np.ndarray, seed: int, peak: float) -> np.ndarray:
     return out
 
 
-def with_sway(states: Sequence[FaceState], fps: int, seed: int, peak: float) -> tuple[FaceState, ...]:
-    """`states` (frame i at i / fps s) with the sway of `seed` and `peak` degrees added to each pose.
+def rounded_angles(values: np.ndarray) -> np.ndarray:
+    """`values` (any shape, degrees) kept within +-MAX_ANGLE and rounded to 0.1 exactly as Python's
+    round(x, 1) does (the decimal value of x, half to even), without negative zero.
 
-    Angles are rounded to 0.1 degree and kept within +-MAX_ANGLE; identical
-    consecutive states stay equal (and are the same object).
+    rint(10 x) / 10 is that result wherever 10 x is not next to a half (its product's error is far
+    smaller than the margin); the few values next to one are rounded by round() itself.
     """
-    angles = sway(np.arange(len(states)) / fps, seed, peak)
-    out: list[FaceState] = []
-    previous: tuple | None = None
-    for state, (tilt, turn, roll) in zip(states, angles.tolist(), strict=True):
-        pose = state.pose
-        values = (
-            _angle(pose.tilt + tilt),
-            _angle(pose.turn + turn),
-            _angle(pose.roll + roll),
-        )
-        key = (state, values)
-        if out and key == previous:
-            out.append(out[-1])
-            continue
-        out.append(trusted_state(state, pose=trusted_pose(*values)))  # angles clamped and rounded: in range
-        previous = key
-    return tuple(out)
-
-
-def _angle(value: float) -> float:
-    """`value` degrees rounded to 0.1 and kept within +-MAX_ANGLE (no negative zero)."""
-    return round(min(max(value, -MAX_ANGLE), MAX_ANGLE), ANGLE_STEP) + 0.0
+    clamped = np.clip(values, -MAX_ANGLE, MAX_ANGLE)
+    scaled = clamped * 10**ANGLE_STEP
+    out = np.rint(scaled) / 10**ANGLE_STEP + 0.0
+    near_half = np.abs(scaled - np.floor(scaled) - 0.5) < TIE_MARGIN
+    out[near_half] = [round(value, ANGLE_STEP) + 0.0 for value in clamped[near_half].tolist()]
+    return out

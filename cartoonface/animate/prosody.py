@@ -58,26 +58,39 @@ def pitch_peaks(audio, alignment, track: tuple[np.ndarray, np.ndarray] | None = 
     if not len(voiced):
         return ()
     semitones = SEMITONES * np.log2(f0 / float(np.median(voiced)))
+    syllables = [syllable for sentence in alignment.sentences for syllable in sentence.syllables]
+    heights, whens = _tops(times, semitones, np.array([s.start for s in syllables], dtype=float),
+                           np.array([s.end for s in syllables], dtype=float))
     peaks = []
+    first = 0
     for sentence in alignment.sentences:
-        tops = [_top(times, semitones, syllable.start, syllable.end) for syllable in sentence.syllables]
-        heights = [height for height, _ in tops]
-        for i, (height, when) in enumerate(tops):
-            before = heights[i - 1] if i > 0 else -math.inf
-            after = heights[i + 1] if i + 1 < len(heights) else -math.inf
-            if height >= PEAK_MIN and height > before and height > after:
-                peaks.append(round(when, 3))
+        stop = first + len(sentence.syllables)
+        for i in range(first, stop):
+            before = heights[i - 1] if i > first else -math.inf
+            after = heights[i + 1] if i + 1 < stop else -math.inf
+            if heights[i] >= PEAK_MIN and heights[i] > before and heights[i] > after:
+                peaks.append(round(whens[i], 3))
+        first = stop
     return tuple(sorted(peaks))
 
 
-def _top(times: np.ndarray, semitones: np.ndarray, start: float, end: float) -> tuple[float, float]:
-    """(highest semitones, its time) among the voiced frames in [start, end) of `times` ((m,) s,
-    ascending) and `semitones` ((m,), NaN unvoiced); (-inf, start) if none. The frames are found by
-    bisection, so a recording's syllables cost O(n log m), not O(n m) (30 minutes: 1.7 s -> ms)."""
-    first, stop = np.searchsorted(times, (start, end), side="left")
-    inside = semitones[first:stop]
-    voiced = np.isfinite(inside)
-    if not voiced.any():
-        return -math.inf, start
-    index = first + int(np.argmax(np.where(voiced, inside, -np.inf)))
-    return float(semitones[index]), float(times[index])
+def _tops(times: np.ndarray, semitones: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> tuple[list[float], list[float]]:
+    """For each of n syllables [starts, ends) (s): the highest semitones among the voiced frames in it
+    and the time of the first frame reaching it, of `times` ((m,) s, ascending) and `semitones`
+    ((m,), NaN unvoiced); (-inf, start) without one. The frames are found by bisection and the
+    maxima taken over all syllables at once (30 minutes: O(n log m), no Python loop per syllable)."""
+    first = np.searchsorted(times, starts, side="left")
+    lengths = np.maximum(np.searchsorted(times, ends, side="left") - first, 0)
+    owner = np.repeat(np.arange(len(starts)), lengths)  # the syllable of each frame inside one
+    frame = np.arange(int(lengths.sum())) - np.repeat(np.cumsum(lengths) - lengths - first, lengths)
+    values = semitones[frame]
+    voiced = np.isfinite(values)
+    highest = np.full(len(starts), -np.inf)
+    np.maximum.at(highest, owner[voiced], values[voiced])
+    reached = voiced & (values == highest[owner])
+    top = np.full(len(starts), len(times))
+    np.minimum.at(top, owner[reached], frame[reached])
+    found = top < len(times)
+    index = np.minimum(top, len(times) - 1)
+    return (np.where(found, semitones[index], -np.inf).tolist(),
+            np.where(found, times[index], starts).tolist())

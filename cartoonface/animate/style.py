@@ -2,7 +2,7 @@
 
 `STYLES` maps a style name to a `Style`; `PAGE_STYLES` gives each page kind its
 default style (the announcer page the restrained one, the audio book the
-livelier one). behaviour.schedule, gaze.gaze_actions and idle.with_sway read
+livelier one). behaviour.schedule, gaze.gaze_actions and idle.sway read
 the factors. Every number here is our choice (docs/animation.md, "Styles"):
 `announcer` keeps thesis 002's announcer statistics (ch. 4) and adds calm
 gaze, rare smiles and a small sway; `storyteller` moves the head about 1.5x as
@@ -44,7 +44,7 @@ class Style:
 
     @property
     def sway_peak(self) -> float:
-        """Peak idle sway in degrees with the style's head factor applied (idle.with_sway's `peak`)."""
+        """Peak idle sway in degrees with the style's head factor applied (idle.sway's `peak`)."""
         return self.sway * self.head
 
 

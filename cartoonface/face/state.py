@@ -133,3 +133,13 @@ def trusted_state(state: FaceState, **changes: object) -> FaceState:
     new = object.__new__(FaceState)
     new.__dict__.update(state.__dict__, **changes)
     return new
+
+
+def trusted_face_state(pose: Pose, blink: float, smile: float, brow: float, mouth: tuple[tuple[str, float], ...],
+                       gaze_h: float, gaze_v: float, emotion: tuple[tuple[str, float], ...], lips: float) -> FaceState:
+    """`FaceState(pose, blink, ...)` of every field without its checks, for fields the program made in
+    range (a trusted_pose, numbers checked at once with numpy): frames.states_at makes one a frame."""
+    new = object.__new__(FaceState)
+    new.__dict__.update(pose=pose, blink=blink, smile=smile, brow=brow, mouth=mouth, gaze_h=gaze_h, gaze_v=gaze_v,
+                        emotion=emotion, lips=lips)
+    return new

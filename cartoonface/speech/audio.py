@@ -141,12 +141,16 @@ def load_audio(path: str | os.PathLike[str]) -> Audio:
             "split it into parts of at most 30 minutes"
         )
     # Float files may hold NaN or infinities (a broken encoder): read them as silence / full scale.
-    np.nan_to_num(samples, copy=False, nan=0.0, posinf=1.0, neginf=-1.0)
+    if not np.isfinite(samples).all():  # one pass to check; nan_to_num makes four
+        np.nan_to_num(samples, copy=False, nan=0.0, posinf=1.0, neginf=-1.0)
     offset = float(np.mean(samples, dtype=np.float64))
     if abs(offset) > DC_OFFSET:
         samples -= np.float32(offset)  # a DC offset is no sound: it would hide a silent file
-    np.clip(samples, -1.0, 1.0, out=samples)
-    peak = float(np.max(np.abs(samples)))
+    low, high = float(samples.min()), float(samples.max())
+    if low < -1.0 or high > 1.0:
+        np.clip(samples, -1.0, 1.0, out=samples)
+        low, high = max(low, -1.0), min(high, 1.0)
+    peak = max(high, -low)
     if peak < SILENT_PEAK:
         level = "digital silence" if peak == 0 else f"peak {20 * np.log10(peak):.0f} dBFS"
         raise AudioError(f"{file}: the recording is silent ({level}); expected audible speech")
@@ -158,26 +162,29 @@ def _read_soundfile(file: Path, head: bytes) -> tuple[np.ndarray, int]:
     if head[:4] == b"RIFF" and head[8:12] == b"WAVE":
         _check_wav_complete(file)
     try:
-        info = soundfile.info(str(file))
+        sound = soundfile.SoundFile(str(file))
     except (soundfile.LibsndfileError, RuntimeError) as exc:
         if head[:4] in (b"RIFF", b"RF64"):
             # A WAV codec libsndfile lacks (e.g. MP3 inside WAV): let ffmpeg try.
             return _read_ffmpeg(file)
         raise AudioError(f"{file}: not a readable audio file ({exc})") from None
-    if info.frames > (MAX_SECONDS + 1) * info.samplerate:
-        raise AudioError(
-            f"{file}: the recording lasts {info.frames / info.samplerate / 60:.1f} minutes; "
-            f"at most {MAX_SECONDS // 60} minutes are accepted"
-        )
-    try:
-        mono = np.empty(info.frames, dtype=np.float32)
-        filled = 0
-        for block in soundfile.blocks(str(file), blocksize=1 << 20, dtype="float32", always_2d=True):
-            mono[filled : filled + len(block)] = block.mean(axis=1)
-            filled += len(block)
-    except (soundfile.LibsndfileError, RuntimeError) as exc:
-        raise AudioError(f"{file}: corrupt audio data ({exc})") from None
-    return mono[:filled], info.samplerate
+    with sound:
+        if sound.frames > (MAX_SECONDS + 1) * sound.samplerate:
+            raise AudioError(
+                f"{file}: the recording lasts {sound.frames / sound.samplerate / 60:.1f} minutes; "
+                f"at most {MAX_SECONDS // 60} minutes are accepted"
+            )
+        try:
+            mono = np.empty(sound.frames, dtype=np.float32)
+            if sound.channels == 1:  # read in place: the mean of one channel is that channel
+                return sound.read(out=mono), sound.samplerate
+            filled = 0
+            for block in sound.blocks(blocksize=1 << 20, dtype="float32", always_2d=True):
+                mono[filled : filled + len(block)] = block.mean(axis=1)
+                filled += len(block)
+        except (soundfile.LibsndfileError, RuntimeError) as exc:
+            raise AudioError(f"{file}: corrupt audio data ({exc})") from None
+    return mono[:filled], sound.samplerate
 
 
 def _check_wav_complete(file: Path) -> None:

@@ -49,21 +49,26 @@ class Interval:
         check_times(self.start, self.end, f"interval {self.text!r}")
 
 
+# An interval to write: (start s, end s, text). Plain tuples, not Intervals: they are made from the
+# alignment's records, whose times are checked already, and thousands are made per minute (issue 16).
+Span = tuple[float, float, str]
+
+
 def write_textgrid(alignment: Alignment) -> str:
     """The alignment as a Praat TextGrid in the long text format; returns its text (UTF-8 to write)."""
-    sentences = [Interval(s.start, s.end, s.text) for s in alignment.sentences]
+    sentences = [(s.start, s.end, s.text) for s in alignment.sentences]
     syllables = []
-    shapes = []
+    shapes: list[Span] = []
     for sentence in alignment.sentences:
         for syllable in sentence.syllables:
-            syllables.append(Interval(syllable.start, syllable.end, _syllable_label(syllable)))
+            syllables.append((syllable.start, syllable.end, _syllable_label(syllable)))
             shapes += _shape_intervals(syllable)
-    duration = max([alignment.duration] + [s.end for s in sentences])
+    duration = max([alignment.duration] + [end for _, end, _ in sentences])
     if is_english(alignment):
         records = [s for sentence in alignment.sentences for s in sentence.syllables]
         words = _word_intervals(records)
-        phones = [Interval(s.start, s.end, s.pinyin) for s in records]
-        shapes = [Interval(s.start, s.end, s.shapes[0]) for s in records]  # one shape per phone (english.HELD)
+        phones = [(s.start, s.end, s.pinyin) for s in records]
+        shapes = [(s.start, s.end, s.shapes[0]) for s in records]  # one shape per phone (english.HELD)
         named = zip(ENGLISH_TIERS, (sentences, words, phones, shapes), strict=True)
     else:
         named = zip(TIERS, (sentences, syllables, shapes), strict=True)
@@ -87,12 +92,12 @@ def write_textgrid(alignment: Alignment) -> str:
             f"        xmax = {_number(duration)} ",
             f"        intervals: size = {len(intervals)} ",
         ]
-        for index, interval in enumerate(intervals, start=1):
+        for index, (start, end, text) in enumerate(intervals, start=1):
             lines += [
                 f"        intervals [{index}]:",
-                f"            xmin = {_number(interval.start)} ",
-                f"            xmax = {_number(interval.end)} ",
-                f"            text = {_quote(interval.text)} ",
+                f"            xmin = {_number(start)} ",
+                f"            xmax = {_number(end)} ",
+                f"            text = {_quote(text)} ",
             ]
     return "\n".join(lines) + "\n"
 
@@ -103,15 +108,15 @@ def is_english(alignment: Alignment) -> bool:
     return bool(records) and all(s.pinyin in PHONE_SHAPE for s in records)
 
 
-def _word_intervals(phones: list[Syllable]) -> list[Interval]:
+def _word_intervals(phones: list[Syllable]) -> list[Span]:
     """English words from phone records: a word starts at a record with text and ends with the last
     phone before the next word's."""
-    words: list[Interval] = []
+    words: list[Span] = []
     for phone in phones:
         if phone.text or not words:
-            words.append(Interval(phone.start, phone.end, phone.text))
+            words.append((phone.start, phone.end, phone.text))
         else:
-            words[-1] = Interval(words[-1].start, phone.end, words[-1].text)
+            words[-1] = (words[-1][0], phone.end, words[-1][2])
     return words
 
 
@@ -122,29 +127,32 @@ def _syllable_label(syllable: Syllable) -> str:
     return f"{syllable.text} {syllable.pinyin}"
 
 
-def _shape_intervals(syllable: Syllable) -> list[Interval]:
+def _shape_intervals(syllable: Syllable) -> list[Span]:
     """The syllable's mouth shapes as intervals starting at the onsets of thesis 002, 5.3."""
     if not syllable.shapes:
         return []
     length = syllable.end - syllable.start
     starts = [syllable.start + fraction * length for fraction in shape_onsets(len(syllable.shapes))]
     ends = starts[1:] + [syllable.end]
-    return [Interval(a, b, shape) for a, b, shape in zip(starts, ends, syllable.shapes, strict=True)]
+    return list(zip(starts, ends, syllable.shapes, strict=True))
 
 
-def _fill(items: list[Interval], duration: float) -> list[Interval]:
+def _fill(items: list[Span], duration: float) -> list[Span]:
     """Labelled intervals with empty ones between them, covering 0..duration without gaps."""
-    filled = []
+    filled: list[Span] = []
     position = 0.0
-    for item in items:
-        start = max(item.start, position)
-        if _rounded(start) > _rounded(position):
-            filled.append(Interval(position, start, ""))
-        if _rounded(item.end) > _rounded(start):
-            filled.append(Interval(start, item.end, item.text))
-            position = item.end
-    if _rounded(duration) > _rounded(position):
-        filled.append(Interval(position, duration, ""))
+    reached = 0.0  # _rounded(position)
+    for item_start, item_end, text in items:
+        start = max(item_start, position)
+        begun = _rounded(start)
+        if begun > reached:
+            filled.append((position, start, ""))
+        ended = _rounded(item_end)
+        if ended > begun:
+            filled.append((start, item_end, text))
+            position, reached = item_end, ended
+    if _rounded(duration) > reached:
+        filled.append((position, duration, ""))
     return filled
 
 
