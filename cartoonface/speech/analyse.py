@@ -58,6 +58,10 @@ MAX_JOINT = 60.0
 # Longer sentences are aligned in pieces of at most this many syllables (about 15 s of speech),
 # cut at commas where possible: one alignment call over minutes of speech would take minutes.
 MAX_PIECE = 60
+# Share of the "segment" stage done when the transcript is read: its first reading loads the lexicon
+# and OpenCC's tables, on the 25 s sample story about as long as the segmentation itself (the job's
+# page then moves between the two: tests/test_web_progress.py).
+READ_SHARE = 0.4
 
 
 def analyse(
@@ -99,6 +103,7 @@ def analyse(
     spoken = parse_transcript(transcript_text, source)  # every sentence has syllables
     for sentence in spoken:
         notes += sentence.notes
+    report("segment", READ_SHARE)
     filtered = high_passed(audio)  # the energy of the segmentation and of the reconciling's dips
     parts = find_speech_parts(audio, pause, filtered)
     if not parts:
