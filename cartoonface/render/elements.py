@@ -66,6 +66,24 @@ def attributes_text(attrs: Mapping[str, str]) -> str:
     return "".join(f' {name}="{html.escape(value)}"' for name, value in attrs.items())
 
 
+def markup(tag: str, attrs: Mapping[str, str], inner: str = "") -> str:
+    """The text of the SVG element `tag` with `attrs` (in order) holding the text `inner`, as lxml
+    writes it inside a document: `<g id="a"/>` when empty."""
+    attributes = "".join(f' {name}="{_attribute_value(value)}"' for name, value in attrs.items())
+    return f"<{tag}{attributes}>{inner}</{tag}>" if inner else f"<{tag}{attributes}/>"
+
+
+def _attribute_value(value: str) -> str:
+    """`value` escaped as lxml writes an attribute value (not html.escape's: "'" stays)."""
+    for plain, escaped in _LXML_ESCAPES:
+        value = value.replace(plain, escaped)
+    return value
+
+
+_LXML_ESCAPES = (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;"), ("\n", "&#10;"), ("\r", "&#13;"),
+                 ("\t", "&#9;"))
+
+
 def parse_elements(texts: Iterable[str]) -> list[etree._Element]:
     """Parse SVG element texts written without a namespace declaration (Part texts, in the SVG
     namespace); returns them as free elements, in order."""
