@@ -590,6 +590,13 @@ def start_tag(text: str) -> tuple[str, dict[str, str]]:
     return match.group(1), dict(_ATTRIBUTE.findall(match.group(2)))
 
 
+def _own_class(text: str) -> str | None:
+    """The class of the element `text` begins with (None: none), by two finds (a regex walks the
+    path data before it slower)."""
+    start = text.find(' class="', 0, text.find(">"))
+    return None if start < 0 else text[start + 8:text.index('"', start + 8)]
+
+
 def with_id(text: str, name: str) -> str:
     """The element `text` (without an id) with the id `name` after its attributes, as lxml's set writes it."""
     match = _START_TAG.match(text)
@@ -604,10 +611,10 @@ def merge_alike(elements: list[str], styles: dict[str, dict[str, str]],
     lie apart (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). A path data's extent is taken from `extents` (Writer.extents: read off its
     numbers) when it is there, else read (_extent)."""
-    tags = [start_tag(text) for text in elements]
-    labels = [attrs.get("class") for _, attrs in tags]
+    labels = [_own_class(text) for text in elements]
     if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
         return list(elements)  # only consecutive paths of one class join: none here (most drawings)
+    tags = [start_tag(text) for text in elements]
     known = extents or {}
     merged: list[str] = []
     boxes: list[Extent] = []

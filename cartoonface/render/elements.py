@@ -13,6 +13,7 @@ parsed with `parse_elements` only where a tree is needed.
 from __future__ import annotations
 
 import html
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -75,11 +76,14 @@ def markup(tag: str, attrs: Mapping[str, str], inner: str = "") -> str:
 
 def _attribute_value(value: str) -> str:
     """`value` escaped as lxml writes an attribute value (not html.escape's: "'" stays)."""
+    if not _SPECIAL.search(value):  # most values (ids, references, numbers): one look
+        return value
     for plain, escaped in _LXML_ESCAPES:
         value = value.replace(plain, escaped)
     return value
 
 
+_SPECIAL = re.compile('[&<>"\n\r\t]')
 _LXML_ESCAPES = (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;"), ("\n", "&#10;"), ("\r", "&#13;"),
                  ("\t", "&#9;"))
 
