@@ -16,7 +16,10 @@ part depends only on its skeleton, the text with its path data (numbered by thei
 forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
 tidied as lxml elements and the others' values are filled into its text. The style classes
 are renamed and the clip paths several drawings hold alike taken out on those texts, and the
-distinct tidy drawings are then parsed in one go. The drawing processes (render/animation.py)
+distinct tidy drawings stay texts (one per top-level element, as lxml writes it in the document):
+`share` and `merge_alike` work on those texts and render/animation.py writes the tracks around them
+as text, spliced into the document's bytes, so the drawings are never parsed nor serialized again
+("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
 (`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
 the drawings by those numbers (`Writer.collector`) and goes on from there, making again only the
