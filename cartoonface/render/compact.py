@@ -95,6 +95,7 @@ _FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
 # (short_id("k", its number); LOCAL while drawings are compared).
 _LOCAL_ID = re.compile(r'(id="|url\(#|href="#)c(\d+)')
 LOCAL = "c"
+SEPARATOR = "\x00"  # between the elements of a run in a template's piece: never in XML text
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
@@ -102,8 +103,8 @@ PROGRESS_PARTS = 1024
 @dataclass(frozen=True)
 class _Template:
     """A skeleton's tidy drawing as format strings (Writer._template): `form` the whole, `pieces`
-    the same cut into its top-level elements, each with whether it is a definition, `count`
-    its top-level elements."""
+    the same cut into its top-level definitions (True) and runs of other elements (False, SEPARATOR
+    between them), `count` its top-level elements."""
 
     form: str
     pieces: tuple[tuple[str, bool], ...]
@@ -264,7 +265,7 @@ class Writer:
         texts, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
                                            for piece, definition in forms[skeleton]]
                                           for number, (skeleton, values) in enumerate(distinct)])
-        return texts
+        return [SEPARATOR.join(kept).split(SEPARATOR) if kept else [] for kept in texts]
 
     def _short_classes(self, templates: dict[str, _Template],
                        uses: Counter[str]) -> dict[str, tuple[tuple[str, bool], ...]]:
@@ -299,8 +300,12 @@ class Writer:
             text = _FIELD.sub(lambda m: f'="{{{m.group(1) or distinct + int(m.group(2)) - SENTINEL}}}"',
                               text.replace("{", "{{").replace("}", "}}"))
             text = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), text)
-            pieces.append((text, node.tag in DEFINITIONS))
-        return _Template("".join(piece for piece, _ in pieces), tuple(pieces), len(elements))
+            definition = node.tag in DEFINITIONS
+            if pieces and not definition and not pieces[-1][1]:  # one format for a run (SEPARATOR between)
+                pieces[-1] = (pieces[-1][0] + SEPARATOR + text, False)
+            else:
+                pieces.append((text, definition))
+        return _Template("".join(piece for piece, _ in pieces).replace(SEPARATOR, ""), tuple(pieces), len(elements))
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
@@ -443,7 +448,7 @@ def _content(definition: str) -> bytes:
 def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], list[etree._Element]]:
     """Take the definitions that two or more of the tidy `drawings` (each its top-level definitions'
     texts (True) and other elements' (False), own ids "k5", "k5_", "k5-1", ...) hold alike out of
-    them, pointing their references at one shared copy. Returns each drawing's element texts left
+    them, pointing their references at one shared copy. Returns each drawing's pieces' texts left
     and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
     for its `<use>`s)."""
     keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
