@@ -616,7 +616,7 @@ def merge_alike(elements: list[str], styles: dict[str, dict[str, str]],
     lie apart (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). A path data's extent is taken from `extents` (Writer.extents: read off its
     numbers) when it is there, else read (_extent)."""
-    labels = [_own_class(text) for text in elements]
+    labels = [_own_class(text) for text in elements] if len(elements) > 1 else []
     if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
         return list(elements)  # only consecutive paths of one class join: none here (most drawings)
     tags = [start_tag(text) for text in elements]
