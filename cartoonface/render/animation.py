@@ -111,8 +111,8 @@ KEY_TIME_LEAD = 5
 KEY_TIME_MIN_LEAD = 0.01
 # The ids of the tracks' drawings: this letter and a number in base 36 (compact.short_id).
 FRAME_LETTER = "f"
-PARTS_ID = "cf-parts"
-SPLICE = "cf-text-"  # the comments animation_svg puts the texts of the tracks and shared parts in place of  # the <defs> of the parts several drawings show (compact.share)
+PARTS_ID = "cf-parts"  # the <defs> of the parts several drawings show (compact.share)
+SPLICE = "cf-text-"  # the comments animation_svg splices the texts of the tracks and shared parts in for
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
