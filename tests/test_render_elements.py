@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from cartoonface.render.elements import DECIMALS, SVG, element, svg_bytes, svg_root
+from cartoonface.render.elements import DECIMALS, SVG, element, markup, svg_bytes, svg_root
 from cartoonface.render.numbers import decimal_text
 
 
@@ -37,3 +37,14 @@ def test_a_document_has_svg_as_its_default_namespace() -> None:
     assert data.startswith(b"<?xml") and b'<svg xmlns="http://www.w3.org/2000/svg" width="10" height="20">' in data
     parsed = etree.fromstring(data)
     assert parsed[0].tag == f"{{{SVG}}}path" and parsed[0].get("d") == "M0 0"
+
+
+@pytest.mark.parametrize("inner", ["", '<path d="m1,2 3,4z"/>'])
+def test_markup_writes_what_lxml_writes_inside_a_document(inner):
+    """elements.markup (the tracks' holders written as text, render/animation.py) gives the bytes lxml
+    writes for the same element in an SVG document, escaping included."""
+    attrs = {"id": "f1", "data-shape": "h'", "title": 'a "b" <c> & d\n\te\r'}
+    expected = etree.Element(f"{{{SVG}}}svg", nsmap={None: SVG})
+    built = etree.SubElement(expected, f"{{{SVG}}}g", attrs)
+    built.extend(etree.fromstring(f'<g xmlns="{SVG}">{inner}</g>'))
+    assert etree.tostring(expected).decode() == f'<svg xmlns="{SVG}">{markup("g", attrs, inner)}</svg>'

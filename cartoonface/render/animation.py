@@ -53,6 +53,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import operator
+import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import reduce
@@ -66,8 +67,8 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id
-from cartoonface.render.elements import DECIMALS, Part, element, svg_root
+from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id, with_id
+from cartoonface.render.elements import DECIMALS, Part, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.pathdata import Compacted, merged
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
@@ -111,6 +112,7 @@ KEY_TIME_MIN_LEAD = 0.01
 # The ids of the tracks' drawings: this letter and a number in base 36 (compact.short_id).
 FRAME_LETTER = "f"
 PARTS_ID = "cf-parts"  # the <defs> of the parts several drawings show (compact.share)
+SPLICE = "cf-text-"  # the comments animation_svg splices the texts of the tracks and shared parts in for
 UID = "u"  # the one uid every state is drawn with; definitions are then renamed by content
 WIDE = 16 / 9  # the announcer's stage: a 16:9 picture with the face in the middle,
 STAGE_DEPTH = 1.3  # reaching this many canvas heights down, so the shoulders show under the chin
@@ -324,40 +326,31 @@ def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
     return new_tracks, new_reused, {number: reuse for number, reuse in moved.items() if number not in parts}
 
 
-def _track_group(parent: etree._Element, track: str, drawings: list[list[etree._Element]],
-                 keys: Sequence[int], fps: int, shapes: Sequence[str], names: Iterator[str],
-                 reused: dict[int, Reuse]) -> None:
-    """Write one track into `parent` as a `<g data-part>`: its drawing as is if it never changes,
-    else each distinct drawing once as a `<g id>` (ids from `names`) in the track's own `<defs>`
-    and one `<use>` whose `href` a discrete `<animate>` (_discrete) points at the drawing of
-    every run of frames. A drawing of one element (compact.bare) is that element with the id, no
-    `<g>` around it (one element fewer for the browser to build). The mouth track's drawings are
-    `<g>`s carrying `data-shape`."""
-    holder = element(parent, "g", data_part=track)
+def _track_group(track: str, drawings: list[list[str]], keys: Sequence[int], fps: int, shapes: Sequence[str],
+                 names: Iterator[str], reused: dict[int, Reuse]) -> str:
+    """The text of one track as a `<g data-part>` (`drawings`: each drawing's element texts): its drawing
+    as is if it never changes, else each distinct drawing once as a `<g id>` (ids from `names`) in the
+    track's own `<defs>` and one `<use>` whose `href` a discrete `<animate>` (_discrete) points at the
+    drawing of every run of frames. A drawing of one element (compact.bare) is that element with the
+    id, no `<g>` around it (one element fewer for the browser to build). The mouth track's drawings
+    are `<g>`s carrying `data-shape`. Written as lxml writes the elements (render/moved.py reads them)."""
     if len(set(keys)) == 1:
-        holder.extend(drawings[keys[0]])
-        return
-    store = element(holder, "defs")
+        return markup("g", {"data-part": track}, "".join(drawings[keys[0]]))
+    store = []
     ids = {number: next(names) for number in sorted(set(keys))}  # drawings no frame shows (_aliased) left out
     for number, name in ids.items():
         drawing = drawings[number]
+        shaped = {"data-shape": shapes[number]} if track == MOUTH_TRACK else {}
         if number in reused:
-            shown = element(store, "use", id=name, href=f"#{ids[reused[number].source]}")
-            if reused[number].matrix != IDENTITY:
-                shown.set("transform", f"matrix({reused[number].matrix})")
-            if track == MOUTH_TRACK:
-                shown.set("data-shape", shapes[number])
-            continue
-        if track != MOUTH_TRACK and bare(drawing):
-            drawing[0].set("id", name)
-            store.append(drawing[0])
-            continue
-        frame = element(store, "g", id=name)
-        if track == MOUTH_TRACK:
-            frame.set("data-shape", shapes[number])
-        frame.extend(drawing)
-    shown = element(holder, "use", href=f"#{ids[keys[0]]}")
-    element(shown, "animate", {"attributeName": "href", **_discrete(keys, fps, lambda key: f"#{ids[key]}")})
+            matrix = reused[number].matrix
+            moving = {"transform": f"matrix({matrix})"} if matrix != IDENTITY else {}
+            store.append(markup("use", {"id": name, "href": f"#{ids[reused[number].source]}", **moving, **shaped}))
+        elif track != MOUTH_TRACK and bare(drawing):
+            store.append(with_id(drawing[0], name))
+        else:
+            store.append(markup("g", {"id": name, **shaped}, "".join(drawing)))
+    animate = markup("animate", {"attributeName": "href", **_discrete(keys, fps, lambda key: f"#{ids[key]}")})
+    return markup("g", {"data-part": track}, markup("defs", {}, "".join(store)) + markup("use", {"href": f"#{ids[keys[0]]}"}, animate))
 
 
 def _steps(keys: Sequence[int], fps: int, kind: str, value: Callable[[int], str]) -> etree._Element:
@@ -588,14 +581,17 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     report(REUSED_SHARE)
     # the parts several drawings show get a <defs> of their own after the document's, which a page
     # can leave undisplayed as it does the tracks' (render/pages.inline_svg)
-    parts = element(None, "defs", id=PARTS_ID)
     visible = {name: set(track.keys) for name, track in tracks.items()}
-    elements = share({name: [[] if number in reused[name] or number not in visible[name] else drawing
-                             for number, drawing in enumerate(track.drawings)]
-                      for name, track in tracks.items()}, tidy, parts,
-                     {number: (reuse.source, reuse.matrix) for number, reuse in moved.items()})
-    if len(parts):
-        defs.addnext(parts)
+    elements, shared = share({name: [[] if number in reused[name] or number not in visible[name] else drawing
+                                     for number, drawing in enumerate(track.drawings)]
+                              for name, track in tracks.items()}, tidy,
+                             {number: (reuse.source, reuse.matrix) for number, reuse in moved.items()})
+    # the texts made without lxml (the tidy drawings' and what holds them) go in at the end in place of
+    # these comments: the drawings are neither parsed nor serialized again
+    texts = []
+    if shared:
+        texts.append(markup("defs", {"id": PARTS_ID}, shared))
+        defs.addnext(etree.Comment(f"{SPLICE}0"))
     classes = writer.classes()
     elements = {name: [merge_alike(drawing, classes, writer.extents) for drawing in drawings] for name, drawings in elements.items()}
     report(SHARED_SHARE)
@@ -612,12 +608,13 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     layer = element(root, "g", id="face")
     names = (short_id(FRAME_LETTER, number) for number in count())
     for number, (name, track) in enumerate(tracks.items(), 1):
-        _track_group(hair if name in HAIR_TRACKS else layer, name, elements[name], track.keys, fps, track.shapes, names,
-                     reused[name])
+        (hair if name in HAIR_TRACKS else layer).append(etree.Comment(f"{SPLICE}{len(texts)}"))
+        texts.append(_track_group(name, elements[name], track.keys, fps, track.shapes, names, reused[name]))
         report(SHARED_SHARE + (TRACKED_SHARE - SHARED_SHARE) * number / len(tracks))
     _roll((hair, layer), rolls, fps,
           f"{origin[0]:.6g} {origin[1]:.6g}")
     report(TRACKED_SHARE)
-    document = etree.tostring(root, xml_declaration=True, encoding="utf-8")
+    document = re.sub(rf"<!--{SPLICE}(\d+)-->".encode(), lambda match: texts[int(match.group(1))].encode(),
+                      etree.tostring(root, xml_declaration=True, encoding="utf-8"))
     report(1.0)
     return document

@@ -16,7 +16,10 @@ part depends only on its skeleton, the text with its path data (numbered by thei
 forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
 tidied as lxml elements and the others' values are filled into its text. The style classes
 are renamed and the clip paths several drawings hold alike taken out on those texts, and the
-distinct tidy drawings are then parsed in one go. The drawing processes (render/animation.py)
+distinct tidy drawings stay texts (one per top-level element, as lxml writes it in the document):
+`share` and `merge_alike` work on those texts and render/animation.py writes the tracks around them
+as text, spliced into the document's bytes, so the drawings are never parsed nor serialized again
+("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
 (`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
 the drawings by those numbers (`Writer.collector`) and goes on from there, making again only the
@@ -32,12 +35,11 @@ import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from itertools import islice
 from typing import NamedTuple
 
 from lxml import etree
 
-from cartoonface.render.elements import SVG, Part, element, parse_elements
+from cartoonface.render.elements import SVG, Part, element, markup, parse_elements
 from cartoonface.render.pathdata import Compacted, Extent, Tenths, compacted
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
@@ -73,6 +75,11 @@ MERGE_GAP = 1.0
 _START = re.compile(r"^[Mm][^A-Za-z]*")  # path data's first move (_kind)
 _MOVE = re.compile(rb' d="[Mm][^A-Za-z"]*')  # path data's first move in a definition's text (_hoist)
 _PATH_DATA = re.compile(r' d="([^"]*)"')
+# An element's text read without parsing it (the tidy drawings, as lxml wrote them: attribute values
+# in double quotes, ">" in them escaped): an attribute, any tag (closing "/"), the start of the first path.
+_ATTRIBUTE = re.compile(r' ([^\s=]+)="([^"]*)"')
+_ANY_TAG = re.compile(r'<(/?)[^>]*>')
+_FIRST_PATH = re.compile(r'<path[\s/>]')
 _CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's text (Writer._short_classes)
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
 # the attributes it takes out (path data and positions), a path data's token, and the
@@ -86,6 +93,7 @@ _FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
 # (short_id("k", its number); LOCAL while drawings are compared).
 _LOCAL_ID = re.compile(r'(id="|url\(#|href="#)c(\d+)')
 LOCAL = "c"
+SEPARATOR = "\x00"  # between the elements of a run in a template's piece: never in XML text
 # Writer.finish tells its progress every this many parts (~0.1 ms each: a report every ~0.1 s).
 PROGRESS_PARTS = 1024
 
@@ -93,8 +101,8 @@ PROGRESS_PARTS = 1024
 @dataclass(frozen=True)
 class _Template:
     """A skeleton's tidy drawing as format strings (Writer._template): `form` the whole, `pieces`
-    the same cut into its top-level definitions (True) and runs of other elements (False), `count`
-    its top-level elements."""
+    the same cut into its top-level definitions (True) and runs of other elements (False, SEPARATOR
+    between them), `count` its top-level elements."""
 
     form: str
     pieces: tuple[tuple[str, bool], ...]
@@ -242,22 +250,20 @@ class Writer:
         self._templates, self._distinct = templates, distinct
         return mapping
 
-    def drawings(self) -> list[list[etree._Element]]:
-        """The distinct tidy drawings of finish (each a list of elements), in their numbers' order.
+    def drawings(self) -> list[list[str]]:
+        """The distinct tidy drawings of finish (each a list of its top-level elements' texts, as lxml
+        writes them inside the document: no namespace declaration), in their numbers' order.
         A definition that several of them hold alike (an eye's clip path under different gazes) is
         taken out of them into `self.definitions` (ids "v0", "v1", ...: for the document's
         `<defs>`), which they refer to; the style classes are named by use (_short_classes)."""
         templates, distinct = self._templates, self._distinct
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
         # the local definitions' ids made the drawing's own: "k" and its number
-        texts, lost, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
-                                                 for piece, definition in forms[skeleton]]
-                                                for number, (skeleton, values) in enumerate(distinct)])
-        # one parse of all (5x faster than one per drawing); the elements stay in the parsed
-        # holder, which declares the namespace for all of them, until they go into the document
-        nodes = iter(etree.fromstring(f'<g xmlns="{SVG}">{"".join(texts)}</g>'))
-        return [list(islice(nodes, templates[skeleton].count - hoisted))
-                for (skeleton, _), hoisted in zip(distinct, lost, strict=True)]
+        # kept as text, which the document is written from (no parse, no serializing again)
+        texts, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
+                                           for piece, definition in forms[skeleton]]
+                                          for number, (skeleton, values) in enumerate(distinct)])
+        return [SEPARATOR.join(kept).split(SEPARATOR) if kept else [] for kept in texts]
 
     def _short_classes(self, templates: dict[str, _Template],
                        uses: Counter[str]) -> dict[str, tuple[tuple[str, bool], ...]]:
@@ -293,11 +299,11 @@ class Writer:
                               text.replace("{", "{{").replace("}", "}}"))
             text = _LOCAL_ID.sub(lambda m: m.group(1) + "{k}" + ("" if m.group(2) == "0" else f"-{m.group(2)}"), text)
             definition = node.tag in DEFINITIONS
-            if pieces and not definition and not pieces[-1][1]:
-                pieces[-1] = (pieces[-1][0] + text, False)
+            if pieces and not definition and not pieces[-1][1]:  # one format for a run (SEPARATOR between)
+                pieces[-1] = (pieces[-1][0] + SEPARATOR + text, False)
             else:
                 pieces.append((text, definition))
-        return _Template("".join(piece for piece, _ in pieces), tuple(pieces), len(elements))
+        return _Template("".join(piece for piece, _ in pieces).replace(SEPARATOR, ""), tuple(pieces), len(elements))
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact
@@ -437,11 +443,11 @@ def _content(definition: str) -> bytes:
     return _ID.sub(b"", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}'.encode())
 
 
-def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int], list[etree._Element]]:
+def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], list[etree._Element]]:
     """Take the definitions that two or more of the tidy `drawings` (each its top-level definitions'
     texts (True) and other elements' (False), own ids "k5", "k5_", "k5-1", ...) hold alike out of
-    them, pointing their references at one shared copy. Returns each drawing's text left, how many
-    definitions it lost, and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
+    them, pointing their references at one shared copy. Returns each drawing's pieces' texts left
+    and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
     for its `<use>`s)."""
     keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
     counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
@@ -453,8 +459,7 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int]
         copy.set("id", names[content])
         if len(copy) == 1:
             copy[0].set("id", names[content] + "_")
-    texts: list[str] = []
-    lost: list[int] = []
+    texts: list[list[str]] = []
     for pieces, drawing in zip(drawings, keys, strict=True):
         local: dict[str, str] = {}
         kept = []
@@ -465,12 +470,11 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[str], list[int]
             own = _OWN_ID.match(text)
             assert own is not None, text
             local[own.group(1)] = names[key]
-        joined = "".join(kept)
         for old, new in local.items():  # references by url() and a clip path's path's <use>
-            joined = joined.replace(f'="url(#{old})"', f'="url(#{new})"').replace(f' href="#{old}_"', f' href="#{new}_"')
-        texts.append(joined)
-        lost.append(len(pieces) - len(kept))
-    return texts, lost, shared
+            kept = [text.replace(f'="url(#{old})"', f'="url(#{new})"').replace(f' href="#{old}_"', f' href="#{new}_"')
+                    for text in kept]
+        texts.append(kept)
+    return texts, shared
 
 
 def _letters(number: int) -> str:
@@ -584,79 +588,123 @@ def _absolute_start(d: str) -> str:
 _ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
 
 
-def merge_alike(elements: list[etree._Element], styles: dict[str, dict[str, str]],
-                extents: Mapping[str, Extent] | None = None) -> list[etree._Element]:
-    """`elements` (a drawing's, in drawing order) with each run of consecutive paths of one opaque
-    style (only `d` and a `class` of `styles`, no paint server, no opacity) whose extents lie apart
-    (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
-    (the two brows). The first path of a run is changed in place. A path data's extent is taken
-    from `extents` (Writer.extents: read off its numbers) when it is there, else read (_extent)."""
-    labels = [node.get("class") for node in elements]
+def start_tag(text: str) -> tuple[str, dict[str, str]]:
+    """The tag (no namespace: "path") and attributes (values as written) of the element `text`
+    begins with."""
+    head = text[1:text.index(">")].rstrip("/")  # finds, not a regex: a regex walks long path data slower
+    return head.partition(" ")[0], dict(_ATTRIBUTE.findall(head))
+
+
+def _own_class(text: str) -> str | None:
+    """The class of the element `text` begins with (None: none), by two finds (a regex walks the
+    path data before it slower)."""
+    start = text.find(' class="', 0, text.find(">"))
+    return None if start < 0 else text[start + 8:text.index('"', start + 8)]
+
+
+def with_id(text: str, name: str) -> str:
+    """The element `text` (without an id) with the id `name` after its attributes, as lxml's set writes it."""
+    end = text.index(">")
+    end -= text[end - 1] == "/"
+    return f'{text[:end]} id="{name}"{text[end:]}'
+
+
+def merge_alike(elements: list[str], styles: dict[str, dict[str, str]],
+                extents: Mapping[str, Extent] | None = None) -> list[str]:
+    """`elements` (a drawing's element texts, in drawing order) with each run of consecutive paths of
+    one opaque style (only `d` and a `class` of `styles`, no paint server, no opacity) whose extents
+    lie apart (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
+    (the two brows). A path data's extent is taken from `extents` (Writer.extents: read off its
+    numbers) when it is there, else read (_extent)."""
+    labels = [_own_class(text) for text in elements] if len(elements) > 1 else []
     if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
         return list(elements)  # only consecutive paths of one class join: none here (most drawings)
+    tags = [start_tag(text) for text in elements]
     known = extents or {}
-    merged: list[etree._Element] = []
+    merged: list[str] = []
     boxes: list[Extent] = []
-    for node in elements:
-        style = styles.get(node.get("class", ""))
-        d = node.get("d", "")
-        extent = ((known.get(d) or _extent(d)) if node.tag == f"{{{SVG}}}path" and set(node.attrib) == {"d", "class"}
+    last_class: str | None = None
+    for text, (tag, attrs) in zip(elements, tags, strict=True):
+        label = attrs.get("class")
+        style = styles.get(label or "")
+        d = _text(attrs.get("d", ""))
+        extent = ((known.get(d) or _extent(d)) if tag == "path" and set(attrs) == {"d", "class"}
                   and style is not None and not any("url(" in v or "opacity" in k for k, v in style.items()) else None)
-        last = merged[-1] if merged else None
-        if extent is not None and last is not None and last.get("class") == node.get("class") and boxes:
+        if extent is not None and merged and last_class == label and boxes:
             pad = float((style or {}).get("stroke-width", "1")) + MERGE_GAP
             if all(a[2] + pad < extent[0] or extent[2] + pad < a[0] or a[3] + pad < extent[1] or extent[3] + pad < a[1]
                    for a in boxes):
-                last.set("d", last.get("d", "") + _absolute_start(d))
+                # the path before holds d and class only (it has an extent): its d extended
+                before = _PATH_DATA.search(merged[-1])
+                assert before is not None, merged[-1]
+                merged[-1] = f"{merged[-1][:before.end(1)]}{_absolute_start(d)}{merged[-1][before.end(1):]}"
                 boxes.append(extent)
                 continue
-        merged.append(node)
+        merged.append(text)
+        last_class = label
         boxes = [extent] if extent is not None else []
     return merged
 
 
-def bare(elements: Sequence[etree._Element]) -> bool:
-    """Whether the drawing `elements` is one element that can itself be the target of a `<use>`
-    in place of a `<g id>` around it: drawn (not a definition) and without an id of its own."""
-    return len(elements) == 1 and elements[0].tag not in DEFINITIONS and elements[0].get("id") is None
+def bare(elements: Sequence[str]) -> bool:
+    """Whether the drawing `elements` (element texts) is one element that can itself be the target of
+    a `<use>` in place of a `<g id>` around it: drawn (not a definition) and without an id of its own."""
+    if len(elements) != 1:
+        return False
+    tag, attrs = start_tag(elements[0])
+    return f"{{{SVG}}}{tag}" not in DEFINITIONS and "id" not in attrs
 
 
-def _kind(elements: Sequence[etree._Element]) -> tuple[str, str, int, int, str]:
+def _children(text: str) -> int:
+    """How many child elements the element `text` holds."""
+    depth = children = 0
+    for match in _ANY_TAG.finditer(text):
+        if match.group(1):
+            depth -= 1
+            continue
+        if depth == 1:
+            children += 1
+        if text[match.end() - 2] != "/":  # not an empty element
+            depth += 1
+    return children
+
+
+def _kind(elements: Sequence[str]) -> tuple[str, str, int, int, str]:
     """The order of the parts share puts into `<defs>`: parts of one kind (their first element's tag and
     class, how many elements) together, alike outlines side by side (the first path data's commands and
     numbers after its starting point): gzip finds their repeats within its window (32 KB)."""
     first = elements[0]
-    path = next((node.get("d", "") for node in first.iter(f"{{{SVG}}}path")), "")
-    return first.tag, first.get("class", ""), len(elements), len(first), _START.sub("", path, count=1)
+    tag, attrs = start_tag(first)
+    path = _FIRST_PATH.search(first)
+    d = _text(start_tag(first[path.start():])[1].get("d", "")) if path else ""
+    return tag, attrs.get("class", ""), len(elements), _children(first), _START.sub("", d, count=1)
 
 
-def share(drawings: dict[str, list[list[int]]], tidy: list[list[etree._Element]],
-          defs: etree._Element, moved: Mapping[int, tuple[int, str]] | None = None) -> dict[str, list[list[etree._Element]]]:
-    """The elements of every drawing of `drawings` (lists of tidy part numbers by group, as
-    Writer.finish numbered them into `tidy`): a part drawn in one drawing only is itself; a
-    part in several is put once into `defs` as `<g id="gN">` (a part of one element: that element
-    with the id, no `<g>`: bare) and each drawing shows it with `<use>`. A part of `moved` (part ->
-    an earlier part and the SVG matrix "a b c d e f" that shows it, render/reuse.py) is a
-    `<use transform="matrix(...)">` of that part, put into `defs` as shared. Returns the drawings'
-    element lists by group."""
+def share(drawings: dict[str, list[list[int]]], tidy: list[list[str]],
+          moved: Mapping[int, tuple[int, str]] | None = None) -> tuple[dict[str, list[list[str]]], str]:
+    """The element texts of every drawing of `drawings` (lists of tidy part numbers by group, as
+    Writer.finish numbered them into `tidy`: Writer.drawings'): a part drawn in one drawing only is
+    itself; a part in several is put once into the definitions as `<g id="gN">` (a part of one element:
+    that element with the id, no `<g>`: bare) and each drawing shows it with `<use>`. A part of `moved`
+    (part -> an earlier part and the SVG matrix "a b c d e f" that shows it, render/reuse.py) is a
+    `<use transform="matrix(...)">` of that part, put into the definitions as shared. Returns the
+    drawings' element texts by group and the definitions' text."""
     shown = moved or {}
     # a moved part counts as a use of its source (which its own drawing uses too: shared)
     uses = Counter(shown[part][0] if part in shown else part
                    for track in drawings.values() for drawing in track for part in drawing)
     names: dict[int, str] = {}
+    defs = []
     for part in sorted((part for part, count in uses.items() if count > 1), key=lambda part: _kind(tidy[part])):
         names[part] = short_id("g", len(names))
-        if bare(tidy[part]):
-            tidy[part][0].set("id", names[part])
-            defs.append(tidy[part][0])
-        else:
-            element(defs, "g", id=names[part]).extend(tidy[part])
+        defs.append(with_id(tidy[part][0], names[part]) if bare(tidy[part])
+                    else markup("g", {"id": names[part]}, "".join(tidy[part])))
 
-    def node(part: int) -> list[etree._Element]:
+    def node(part: int) -> list[str]:
         if part in shown:
             source, matrix = shown[part]
-            return [element(None, "use", href=f"#{names[source]}", transform=f"matrix({matrix})")]
-        return [element(None, "use", href=f"#{names[part]}")] if part in names else tidy[part]
+            return [markup("use", {"href": f"#{names[source]}", "transform": f"matrix({matrix})"})]
+        return [markup("use", {"href": f"#{names[part]}"})] if part in names else tidy[part]
 
-    return {track: [[child for part in drawing for child in node(part)] for drawing in track_drawings]
-            for track, track_drawings in drawings.items()}
+    return ({track: [[child for part in drawing for child in node(part)] for drawing in track_drawings]
+             for track, track_drawings in drawings.items()}, "".join(defs))

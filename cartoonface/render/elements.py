@@ -13,6 +13,7 @@ parsed with `parse_elements` only where a tree is needed.
 from __future__ import annotations
 
 import html
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -64,6 +65,27 @@ def attributes_text(attrs: Mapping[str, str]) -> str:
     """`attrs` as the text of attributes inside a start tag, each after a space, values escaped:
     {"fill": "#fff", "opacity": "0.5"} -> ' fill="#fff" opacity="0.5"'."""
     return "".join(f' {name}="{html.escape(value)}"' for name, value in attrs.items())
+
+
+def markup(tag: str, attrs: Mapping[str, str], inner: str = "") -> str:
+    """The text of the SVG element `tag` with `attrs` (in order) holding the text `inner`, as lxml
+    writes it inside a document: `<g id="a"/>` when empty."""
+    attributes = "".join(f' {name}="{_attribute_value(value)}"' for name, value in attrs.items())
+    return f"<{tag}{attributes}>{inner}</{tag}>" if inner else f"<{tag}{attributes}/>"
+
+
+def _attribute_value(value: str) -> str:
+    """`value` escaped as lxml writes an attribute value (not html.escape's: "'" stays)."""
+    if not _SPECIAL.search(value):  # most values (ids, references, numbers): one look
+        return value
+    for plain, escaped in _LXML_ESCAPES:
+        value = value.replace(plain, escaped)
+    return value
+
+
+_SPECIAL = re.compile('[&<>"\n\r\t]')
+_LXML_ESCAPES = (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;"), ("\n", "&#10;"), ("\r", "&#13;"),
+                 ("\t", "&#9;"))
 
 
 def parse_elements(texts: Iterable[str]) -> list[etree._Element]:
