@@ -163,8 +163,8 @@ def test_tab_switch_pauses_the_face_and_catches_up(page):
     assert page.evaluate(CLOCKS)["audio"] > hidden_at["audio"] + 0.4, "the audio plays on"
     page.evaluate(hide, False)
     assert not page.evaluate("document.getElementById('cf-face').animationsPaused()")
-    back = page.evaluate(CLOCKS)
-    assert abs(back["svg"] - back["audio"]) <= 0.5 / FPS
+    back = page.evaluate(CLOCKS_IN_FRAME)  # in a frame, after the page script's catch-up (a loaded machine's
+    assert abs(back["svg"] - back["audio"]) <= 0.5 / FPS  # read between the two drifted 19 ms once)
 
 
 def test_standalone_animation_plays_on_its_own(browser, site):
