@@ -102,11 +102,10 @@ PROGRESS_PARTS = 1024
 class _Template:
     """A skeleton's tidy drawing as format strings (Writer._template): `form` the whole, `pieces`
     the same cut into its top-level definitions (True) and runs of other elements (False, SEPARATOR
-    between them), `count` its top-level elements."""
+    between them)."""
 
     form: str
     pieces: tuple[tuple[str, bool], ...]
-    count: int
 
 
 class RawPart(NamedTuple):
@@ -303,7 +302,7 @@ class Writer:
                 pieces[-1] = (pieces[-1][0] + SEPARATOR + text, False)
             else:
                 pieces.append((text, definition))
-        return _Template("".join(piece for piece, _ in pieces).replace(SEPARATOR, ""), tuple(pieces), len(elements))
+        return _Template("".join(piece for piece, _ in pieces).replace(SEPARATOR, ""), tuple(pieces))
 
     def _tidy_part(self, texts: tuple[str, ...], compact: dict[str, str]) -> list[etree._Element]:
         """The part drawn by `texts` (the part's element, then its definitions) with compact

@@ -12,7 +12,6 @@ parsed with `parse_elements` only where a tree is needed.
 
 from __future__ import annotations
 
-import html
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -62,15 +61,15 @@ class Part:
 
 
 def attributes_text(attrs: Mapping[str, str]) -> str:
-    """`attrs` as the text of attributes inside a start tag, each after a space, values escaped:
-    {"fill": "#fff", "opacity": "0.5"} -> ' fill="#fff" opacity="0.5"'."""
-    return "".join(f' {name}="{html.escape(value)}"' for name, value in attrs.items())
+    """`attrs` as the text of attributes inside a start tag, each after a space, values escaped as
+    lxml escapes them: {"fill": "#fff", "opacity": "0.5"} -> ' fill="#fff" opacity="0.5"'."""
+    return "".join(f' {name}="{_attribute_value(value)}"' for name, value in attrs.items())
 
 
 def markup(tag: str, attrs: Mapping[str, str], inner: str = "") -> str:
     """The text of the SVG element `tag` with `attrs` (in order) holding the text `inner`, as lxml
     writes it inside a document: `<g id="a"/>` when empty."""
-    attributes = "".join(f' {name}="{_attribute_value(value)}"' for name, value in attrs.items())
+    attributes = attributes_text(attrs)
     return f"<{tag}{attributes}>{inner}</{tag}>" if inner else f"<{tag}{attributes}/>"
 
 
