@@ -127,6 +127,14 @@ def test_number_texts_writes_each_value_as_number_text(rng: np.random.Generator)
     assert number_texts(values) == tuple(number_text(v) for v in values.tolist())
 
 
+def test_number_texts_of_every_tenth_the_table_holds_are_number_text() -> None:
+    # number_texts reads a table of every tenth in +-3276.8 px, built apart from number_text
+    tenths = np.arange(-(1 << 15), 1 << 15)
+    texts = number_texts(tenths / 10)
+    assert texts == tuple(number_text(v / 10) for v in tenths.tolist())
+    assert all(round(float(text) * 10) == v for text, v in zip(texts, tenths.tolist(), strict=True))
+
+
 @pytest.mark.parametrize("template", ["%s", "M%s %sZ", "%s|%s", "M%s %sC%s %s %s %s %s %s|%s|", "x"])
 def test_a_filled_frame_is_the_percent_format(rng: np.random.Generator, template: str) -> None:
     texts = number_texts(rng.uniform(-99, 99, template.count("%s")))
