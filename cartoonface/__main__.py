@@ -1,5 +1,5 @@
 """`python -m cartoonface` is the same as the `cartoonface` command."""
 
-from cartoonface.cli import main
+from cartoonface.cli import command
 
-raise SystemExit(main())
+raise SystemExit(command())

@@ -59,7 +59,7 @@ def test_wheel_has_no_tests_bench_or_checkout_files(wheel):
 
 def test_wheel_declares_the_command(wheel):
     (entry_points,) = [n for n in wheel.namelist() if n.endswith(".dist-info/entry_points.txt")]
-    assert "cartoonface = cartoonface.cli:main" in wheel.read(entry_points).decode()
+    assert "cartoonface = cartoonface.cli:command" in wheel.read(entry_points).decode()
 
 
 @pytest.mark.parametrize("code", ["import cartoonface.cli",
