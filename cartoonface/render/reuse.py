@@ -210,11 +210,21 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple
     """The least-squares affines (M, 2, 3) mapping each of `sources` (M, F, 2; `inverses` their
     _inverses) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS); the
     largest change of scale of each (M,); and the largest distance (M,) px of a mapped source point
-    from its target."""
+    from its target, in single precision (within _single_slack of the one in double precision)."""
     matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
     matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
     matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
-    return matrices, _scale_change(matrices[:, :, :2]), np.max(_distances(sources, matrices, targets), axis=1)
+    single = np.max(_distances(sources, matrices.astype(np.float32), targets), axis=1)
+    return matrices, _scale_change(matrices[:, :, :2]), single
+
+
+def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
+    """How far (M,) px fit's largest distance in single precision may be from the one in double
+    precision, for `matrices` (M, 2, 3) and single precision points within `largest` px of 0: each
+    of the five roundings of a*x + c*y + e - t (a..f rounded to single too) and the distance's own
+    is within 2^-24 of |a||x| + |c||y| + |e| + |t|; 2^-19 is three times their sum."""
+    return 2.0 ** -19 * (np.sum(np.abs(matrices[:, :, :2]), axis=(1, 2)) * largest
+                         + np.sum(np.abs(matrices[:, :, 2]), axis=1) + 2 * largest + 1)
 
 
 def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Sequence[int]
@@ -361,8 +371,16 @@ def _choose(shapes: Sequence[Shape | None],
     # fitted FIT_PAIRS pairs at a time: all at once, a 30-minute recording's temporaries took ~1 GB
     fits = [fit(samples[earlier[start:start + FIT_PAIRS]], inverses[earlier[start:start + FIT_PAIRS]],
                 samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
-    matrices, scales, sampled = (np.concatenate(parts) for parts in zip(*fits, strict=True))
-    near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
+    matrices, scales, single = (np.concatenate(parts) for parts in zip(*fits, strict=True))
+    widened = scales * np.maximum(strokes[earlier], strokes[later]) / 2
+    # the pairs within the tolerance on the samples, measured in double precision where single
+    # precision cannot tell (the same pairs as measured in double precision throughout)
+    slack = _single_slack(matrices, float(np.max(np.abs(samples))))
+    near = widened + single <= tolerance - slack
+    unsure = np.flatnonzero(np.abs(widened + single - tolerance) < slack)
+    near[unsure] = widened[unsure] + np.max(_distances(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]),
+                                            axis=1) <= tolerance
+    near = np.flatnonzero(near)
     near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
     errors = _errors(group, earlier[near], matrices[near], later[near], scales[near]).tolist()
     written = np.ones(len(group), dtype=bool)
