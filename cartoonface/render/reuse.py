@@ -297,25 +297,27 @@ def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndar
     halves = np.array([max(shapes[target].stroke, shapes[source].stroke) for target, source, _, _ in chosen]) / 2
     for rows, sources, targets in _pair_points(shapes, [source for _, source, _, _ in chosen],
                                                [target for target, _, _, _ in chosen]):
-        fitted = matrices[rows, :, :2]  # (M, 2, 2)
-        strokes = halves[rows]
+        # x and y apart: reduced along the points, contiguous (reducing (M, N, 2) along N or 2 is slow)
+        (source_x, source_y), (target_x, target_y) = (np.moveaxis(points, 2, 0).copy() for points in (sources, targets))
+        left = np.arange(len(rows))  # the chunk's pairs no form fits yet
         for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
-            if not len(rows):
+            if not len(left):
                 break
             if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
-                linear = np.round(fitted, linear_decimals)
+                linear = np.round(matrices[rows[left], :, :2], linear_decimals)  # (M, 2, 2)
                 a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
-                residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
-                                               b * sources[..., 0] + d * sources[..., 1]], axis=2)
-                middle = (residual.max(axis=1) + residual.min(axis=1)) / 2  # (M, 2)
-                scale = _scale_change(linear) * strokes
+                x, y = source_x[left], source_y[left]
+                residual = (target_x[left] - (a * x + c * y), target_y[left] - (b * x + d * y))  # (M, N) each
+                middle = np.column_stack([(values.max(axis=1) + values.min(axis=1)) / 2 for values in residual])
+                scale = _scale_change(linear) * halves[rows[left]]
             shift = np.round(middle, shift_decimals)
-            within = np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1)) + scale
+            off_x, off_y = (values - shift[:, axis, None] for axis, values in enumerate(residual))
+            within = np.sqrt(np.max(off_x ** 2 + off_y ** 2, axis=1)) + scale
             fits = within <= tolerance
-            matrices[rows[fits]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
-            errors[rows[fits]] = within[fits]
-            rows, sources, targets, fitted, strokes, linear, residual, middle, scale = (
-                values[~fits] for values in (rows, sources, targets, fitted, strokes, linear, residual, middle, scale))
+            matrices[rows[left[fits]]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
+            errors[rows[left[fits]]] = within[fits]
+            left, linear, middle, scale = (values[~fits] for values in (left, linear, middle, scale))
+            residual = (residual[0][~fits], residual[1][~fits])
     texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
     return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
             for matrix, error in zip(matrices, errors.tolist(), strict=True)]
