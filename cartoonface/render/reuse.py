@@ -238,8 +238,14 @@ def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Seque
         step = max(1, PAIR_POINTS // count)
         for start in range(0, len(chosen), step):
             rows = chosen[start:start + step]
-            yield (rows, np.stack([shapes[sources[row]].points for row in rows.tolist()]),
-                   np.stack([shapes[targets[row]].points for row in rows.tolist()]))
+            yield rows, _stacked([shapes[sources[row]].points for row in rows.tolist()]), _stacked(
+                [shapes[targets[row]].points for row in rows.tolist()])
+
+
+def _stacked(points: Sequence[np.ndarray]) -> np.ndarray:
+    """`points`, arrays of one shape (N, 2), as one (M, N, 2): np.stack's, made at a fraction of its
+    cost per array."""
+    return np.concatenate(points).reshape(len(points), *points[0].shape)
 
 
 def _errors(group: Sequence[Shape], sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
@@ -345,11 +351,14 @@ def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.nd
 def _samples(group: Sequence[Shape]) -> np.ndarray:
     """FIT_POINTS points (F, 2) of each of `group`, spread over its points: (D, F, 2), single
     precision (1e-4 px)."""
-    spread: dict[int, np.ndarray] = {}  # FIT_POINTS indices spread over N points, by N
-    for shape in group:
-        if len(shape.points) not in spread:
-            spread[len(shape.points)] = np.linspace(0, len(shape.points) - 1, FIT_POINTS).round().astype(int)
-    return np.stack([shape.points[spread[len(shape.points)]] for shape in group]).astype(np.float32)
+    by_count: dict[int, list[int]] = {}  # the shapes of N points
+    for index, shape in enumerate(group):
+        by_count.setdefault(len(shape.points), []).append(index)
+    samples = np.empty((len(group), FIT_POINTS, 2), dtype=np.float32)
+    for count, indices in by_count.items():
+        spread = np.linspace(0, count - 1, FIT_POINTS).round().astype(int)  # FIT_POINTS of the N points
+        samples[indices] = _stacked([group[index].points for index in indices])[:, spread]
+    return samples
 
 
 def _choose(shapes: Sequence[Shape | None],
