@@ -40,6 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cartoonface.render.numbers import TENTHS
+from cartoonface.render.pathdata import Tenths
+
 
 # Largest distance (px) between a point of the earlier drawing as drawn, moved by the matrix as
 # written, and the same point of the drawing it stands for (0.35 / 0.5 / 0.7 measured:
@@ -102,13 +105,26 @@ class Reuse:
     error: float
 
 
-def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """How the V geometry numbers of a part (attributes `names` with `values`, in order; `rest` the
-    text around them) make its P points, x and y interleaved: a path's numbers in pairs (absolute
-    commands of point pairs: face_parts' M, L, C, Z), eight points on each circle or ellipse (a
-    centre plus a step times a radius). Returned as two columns (2P,) into the numbers and the
-    weight (2P,) of the second (point = numbers[first] + weight * numbers[second]; a path's
-    weight 0). None for a part with other path data, elements, a transform or a circle without its centre."""
+@dataclass(frozen=True)
+class _Layout:
+    """How the K geometry numbers of a skeleton's parts make their P points (_layout): x and y
+    interleaved, point = numbers[firsts] + weights * numbers[seconds] ((2P,) each; a path's weight
+    0); `counts`, the numbers in each of its V geometry values, and `paths`, which of them are path
+    data."""
+
+    firsts: np.ndarray
+    seconds: np.ndarray
+    weights: np.ndarray
+    counts: tuple[int, ...]
+    paths: tuple[bool, ...]
+
+
+def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> _Layout | None:
+    """How the geometry numbers of a part (attributes `names` with `values`, in order; `rest` the
+    text around them) make its points: a path's numbers in pairs (absolute commands of point
+    pairs: face_parts' M, L, C, Z), eight points on each circle or ellipse (a centre plus a step
+    times a radius). None for a part with other path data, elements, a transform or a circle
+    without its centre."""
     if not set(_TAG.findall(rest)) <= _READ or " transform=" in rest:
         return None
     firsts: list[int] = []
@@ -144,40 +160,69 @@ def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> tuple[np.
             circle[name] = column
         column += count
     close()
-    return None if unread else (np.array(firsts, dtype=int), np.array(seconds, dtype=int), np.array(weights))
+    return None if unread else _Layout(np.array(firsts, dtype=int), np.array(seconds, dtype=int), np.array(weights),
+                                       tuple(numbers), tuple(name == "d" for name in names))
 
 
-def shapes_of(parts: Sequence[Sequence[str]],
-              layouts: dict[str, tuple[np.ndarray, ...] | None]) -> list[Shape | None]:
+def shapes_of(parts: Sequence[Sequence[str]], layouts: dict[str, _Layout | None],
+              tenths: Tenths | None = None) -> list[Shape | None]:
     """The Shape of each of `parts` as render/svg.py's face_parts drew it (the texts of its element
     and of the definitions, clip paths, it refers to; coordinates in tenths of a pixel). None for
     a part holding an element or attribute this does not read (a transform, an arc, a rect, ...).
-    The numbers of all parts of one skeleton are read in one go and mapped to their points by
-    the skeleton's _layout; `layouts` caches _layout by
-    skeleton."""
-    members: dict[str, list[tuple[int, str]]] = {}  # by skeleton: (part's index, its numbers' text)
+    The numbers of all parts of one skeleton are read in one go (_numbers) and mapped to their
+    points by the skeleton's _layout; `layouts` caches _layout by skeleton. `tenths`
+    (render/pathdata.py's Tenths): the numbers of some of the path data as drawn, taken rather
+    than read again."""
+    members: dict[str, list[tuple[int, list[str]]]] = {}  # by skeleton: (part's index, its geometry values)
     for index, texts in enumerate(parts):
         pieces = _GEOMETRY.split("".join(texts))
         names, values = pieces[1::3], pieces[2::3]
-        joined_values = "\x01".join(values)
+        stripped = "\x01".join(values).translate(_NUMBER_CHARACTERS)
         rest = "\x02".join(pieces[0::3])
-        skeleton = f"{rest}\x03{'|'.join(names)}\x03{joined_values.translate(_NUMBER_CHARACTERS)}"
+        skeleton = f"{rest}\x03{'|'.join(names)}\x03{stripped}"
         if skeleton not in layouts:
             layouts[skeleton] = _layout(names, values, rest)
-        members.setdefault(skeleton, []).append((index, joined_values))
+        members.setdefault(skeleton, []).append((index, values))
     shapes: list[Shape | None] = [None] * len(parts)
     for skeleton, group in members.items():
         layout = layouts[skeleton]
         if layout is None:
             continue
-        firsts, seconds, weights = layout
-        text = " ".join(values for _, values in group).translate(_LETTERS_TO_SPACES)
-        numbers = np.array(text.split(), dtype=float).reshape(len(group), -1)
-        points = (numbers[:, firsts] + weights * numbers[:, seconds]).reshape(len(group), -1, 2)
+        numbers = _numbers([values for _, values in group], layout, tenths or {})
+        points = (numbers[:, layout.firsts] + layout.weights * numbers[:, layout.seconds]).reshape(len(group), -1, 2)
         widest = max(map(float, _STROKE.findall(skeleton.partition("\x03")[0])), default=0.0)
         for (index, _), own in zip(group, points, strict=True):
             shapes[index] = Shape(skeleton, own, widest)
     return shapes
+
+
+def _numbers(rows: Sequence[Sequence[str]], layout: _Layout, tenths: Tenths) -> np.ndarray:
+    """The geometry numbers (R, K) of parts of one skeleton (`rows`: each part's values, as its
+    `layout` reads them), value by value: a path data in `tenths` taken from there (tenths /
+    TENTHS is the double float() reads of the tenths' text, both the one nearest the decimal; a
+    zero is written "0", never "-0"), the others read from their texts (_read)."""
+    if not tenths or not any(layout.paths):
+        return _read(["\x01".join(values) for values in rows], sum(layout.counts))
+    columns = []
+    for slot, (count, path) in enumerate(zip(layout.counts, layout.paths, strict=True)):
+        values = [row[slot] for row in rows]
+        drawn = [tenths.get(value) for value in values] if path else [None] * len(values)
+        taken = [row for row, numbers in enumerate(drawn) if numbers is not None]
+        unread = [row for row, numbers in enumerate(drawn) if numbers is None]
+        column = np.empty((len(rows), count))
+        if taken:
+            column[taken if unread else slice(None)] = (np.concatenate([drawn[row] for row in taken]) / TENTHS
+                                                        ).reshape(len(taken), count)
+        if unread:
+            column[unread if taken else slice(None)] = _read([values[row] for row in unread], count)
+        columns.append(column)
+    return np.concatenate(columns, axis=1)
+
+
+def _read(texts: Sequence[str], count: int) -> np.ndarray:
+    """The numbers (R, `count`) of `texts` (R, each of `count` numbers between letters, commas and
+    whitespace), read in one go."""
+    return np.array(" ".join(texts).translate(_LETTERS_TO_SPACES).split(), dtype=float).reshape(len(texts), count)
 
 
 def joined(shapes: Sequence[Shape | None]) -> Shape | None:
