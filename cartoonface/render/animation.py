@@ -70,7 +70,7 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id, with_id
 from cartoonface.render.elements import DECIMALS, Part, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.pathdata import Compacted, Tenths, merged
+from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
@@ -251,7 +251,7 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts. `tenths` (pathdata.Tenths): the numbers
-    of the path data drawn in this process, which the points are taken from (reuse.shapes_of)."""
+    of the path data as drawn, which the points are taken from (reuse.shapes_of)."""
     if tolerance <= 0:
         return lambda: ({name: {} for name in tracks}, {})
     first: dict[int, int] = {}
@@ -500,19 +500,30 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState], progress: Call
     return numbered, drawn_parts(list(numbers), tenths)
 
 
+def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[tuple[Numbered, Drawn], PackedTenths]:
+    """_draw_compacted of `states` in a drawing helper, and the numbers of the path data it drew
+    packed to send back (pathdata.packed)."""
+    tenths: dict[str, np.ndarray] = {}
+    return _draw_compacted(face, states, None, tenths), packed(tenths)
+
+
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progress: Callable[[float], None],
               tenths: dict[str, np.ndarray] | None = None) -> list[tuple[Numbered, Drawn]]:
     """_draw_compacted of `states`, in order: in one go, or with `workers` 2 and at least
-    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool)
-    meanwhile. When the helper cannot be started, has not begun or fails, its half is drawn here
-    (workers.offloaded). `tenths` gets the numbers of the path data drawn in this process."""
+    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool,
+    _draw_sent) meanwhile. When the helper cannot be started, has not begun or fails, its half is
+    drawn here (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the
+    reuse search, render/reuse.shapes_of)."""
     if workers < 2 or len(states) < POOL_STATES:
         return [_draw_compacted(face, states, progress, tenths)]
     half = len(states) // 2
     with helper_pool(workers) as pool:
-        other = offloaded(pool, _draw_compacted, face, states[half:])
+        other = offloaded(pool, _draw_sent, face, states[half:])
         first = _draw_compacted(face, states[:half], lambda done: progress(done / 2), tenths)
-        return [first, other()]
+        second, sent = other()
+        if tenths is not None:
+            tenths.update(unpacked(sent))
+        return [first, second]
 
 
 def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
@@ -571,7 +582,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    tenths: dict[str, np.ndarray] = {}  # the path data's numbers as drawn here: the reuse search takes them
+    tenths: dict[str, np.ndarray] = {}  # the path data's numbers as drawn: the reuse search takes them
     raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), tenths))
     frames = [(distinct[number], raw[number]) for number in shown]
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
