@@ -266,8 +266,10 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple
 def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
     """How far (M,) px fit's largest distance in single precision may be from the one in double
     precision, for `matrices` (M, 2, 3) and single precision points within `largest` px of 0: each
-    of the five roundings of a*x + c*y + e - t (a..f rounded to single too) and the distance's own
-    is within 2^-24 of |a||x| + |c||y| + |e| + |t|; 2^-19 is three times their sum."""
+    of the eight roundings of a x + c y + e - t along an axis (a, c, e to single, two products, two
+    sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own
+    within 2^-24 of the two axes' sum: the distance within 9 * 2^-24 of that sum, 2^-19 over three
+    times it."""
     return 2.0 ** -19 * (np.sum(np.abs(matrices[:, :, :2]), axis=(1, 2)) * largest
                          + np.sum(np.abs(matrices[:, :, 2]), axis=1) + 2 * largest + 1)
 
@@ -433,7 +435,7 @@ def _choose(shapes: Sequence[Shape | None],
     # precision cannot tell (the same pairs as measured in double precision throughout)
     slack = _single_slack(matrices, float(np.max(np.abs(samples))))
     near = widened + single <= tolerance - slack
-    unsure = np.flatnonzero(np.abs(widened + single - tolerance) < slack)
+    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
     near[unsure] = widened[unsure] + np.max(_distances(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]),
                                             axis=1) <= tolerance
     near = np.flatnonzero(near)
