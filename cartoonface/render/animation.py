@@ -281,9 +281,9 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
             tenths: Tenths | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
     """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number)."""
     report = progress or (lambda fraction: None)
-    numbers = list(dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing))
-    parts = dict(zip(numbers, shapes_of([(writer.raw[first[number]].element, *writer.raw[first[number]].definitions)
-                                         for number in numbers], {}, tenths), strict=True))
+    raws = {number: writer.raw[first[number]]
+            for number in dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing)}
+    parts = dict(zip(raws, shapes_of([(raw.element, *raw.definitions) for raw in raws.values()], {}, tenths), strict=True))
     read, searched = REUSE_STEPS
     report(read)
     drawings = {}
@@ -292,12 +292,13 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
         report(read + (searched - read) * done / len(tracks))
     written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
                if number not in drawings[name]]
-    alone = list(dict.fromkeys(number for drawing in written for number in drawing
-                               if writer.raw[first[number]].element.startswith(ALONE + UNMOVED)))
+    beginnings = ALONE + UNMOVED
+    alone = [number for number in dict.fromkeys(number for drawing in written for number in drawing)
+             if raws[number].element.startswith(beginnings)]
     found = find_alike([parts[number] for number in alone], tolerance)
     return drawings, {alone[number]: Reuse(alone[reuse.source], reuse.matrix, reuse.error)
                       for number, reuse in found.items()
-                      if reuse.matrix == IDENTITY or writer.raw[first[alone[number]]].element.startswith(ALONE)}
+                      if reuse.matrix == IDENTITY or raws[alone[number]].element.startswith(ALONE)}
 
 
 def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
