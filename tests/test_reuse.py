@@ -5,6 +5,7 @@ the document's references resolve and the frames look as when every drawing is w
 from __future__ import annotations
 
 import io
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -14,12 +15,13 @@ from PIL import Image
 
 from cartoonface.face.lift import lift
 from cartoonface.face.model import load_face
-from cartoonface.face.pose import pose_face
+from cartoonface.face.pose import pose_face, pose_faces
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, find, find_alike, shapes_of
-from cartoonface.render.svg import face_parts
+from cartoonface.render.pathdata import packed, unpacked
+from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, _distances, _single_slack, find, find_alike, shapes_of
+from cartoonface.render.svg import all_face_parts, face_parts
 from tests.stills import frozen
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -134,6 +136,44 @@ def test_a_part_is_found_among_all_earlier_parts_of_its_skeleton_not_only_recent
     distances = np.hypot(*(apply(found[len(shapes) - 1].matrix, source.points) - target.points).T)
     assert distances.max() <= TOLERANCE
     assert all(reuse.error <= TOLERANCE for reuse in found.values())
+
+
+def test_the_points_taken_from_the_numbers_as_drawn_are_those_read_from_the_text_to_the_bit(face):
+    """The drawing hands the reuse search the numbers of its path data in tenths (pathdata.Tenths),
+    the drawing helper's packed and pickled (as sent back): the shapes are those read from the
+    parts' texts, each number to the bit, whether all, some or none of the path data are in it."""
+    tenths: dict[str, np.ndarray] = {}
+    drawn = all_face_parts(face, pose_faces(lift(face), nodding(12)), "u", tenths=tenths)
+    parts = [(part.text, *part.clips) for drawing in drawn for part in drawing]
+    sent = unpacked(pickle.loads(pickle.dumps(packed(dict(list(tenths.items())[::2])))))
+    assert sent.keys() < tenths.keys() and all(np.array_equal(sent[d], tenths[d]) for d in sent)
+    read = shapes_of(parts, {})
+    assert sum(shape is not None for shape in read) > len(parts) / 2
+    for given in (tenths, sent):
+        for shape, taken in zip(read, shapes_of(parts, {}, given), strict=True):
+            assert (shape is None) == (taken is None)
+            if shape is not None and taken is not None:
+                assert (taken.skeleton, taken.stroke) == (shape.skeleton, shape.stroke)
+                assert taken.points.tobytes() == shape.points.tobytes()
+
+
+def test_the_fit_measured_in_single_precision_is_within_its_slack_of_double_precision():
+    """reuse._choose takes the pairs near on the samples from single precision and measures in
+    double only those within _single_slack of the tolerance: the slack bounds the difference,
+    for matrices near the identity (the pairs that matter) and far from it, points far from 0."""
+    rng = np.random.default_rng(16)
+    count = 4096
+    sources = rng.uniform(-800, 1200, (count, 24, 2)).astype(np.float32)
+    linear = np.where(np.arange(count)[:, None, None] % 2, np.eye(2) + rng.normal(0, 0.01, (count, 2, 2)),
+                      rng.normal(0, 3, (count, 2, 2)))
+    matrices = np.round(np.concatenate([linear, rng.uniform(-500, 500, (count, 2, 1))], axis=2), 4)
+    targets = (np.einsum("mij,mnj->mni", matrices[:, :, :2], sources) + matrices[:, None, :, 2]
+               + rng.normal(0, 0.3, (count, 24, 2))).astype(np.float32)
+    double = np.max(_distances(sources, matrices, targets), axis=1)
+    single = np.max(_distances(sources, matrices.astype(np.float32), targets), axis=1)
+    largest = float(max(np.abs(sources).max(), np.abs(targets).max()))
+    assert np.all(np.abs(single - double) <= _single_slack(matrices, largest))
+    assert np.any(single != double), "single precision differs, within the slack"
 
 
 def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_reference_resolves(documents):

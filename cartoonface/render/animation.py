@@ -70,7 +70,7 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id, with_id
 from cartoonface.render.elements import DECIMALS, Part, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text
-from cartoonface.render.pathdata import Compacted, merged
+from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
@@ -236,7 +236,8 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
 
 
 def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
-           progress: Callable[[float], None], workers: int = 1) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
+           progress: Callable[[float], None], workers: int = 1,
+           tenths: Tenths | None = None) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
     """A getter of the drawings of each of `tracks` shown as a transform of an earlier drawing of
     their track within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing
     number; and of the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings
@@ -249,7 +250,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts) by a child forked now
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
-    the points, searched each of its tracks and its parts."""
+    the points, searched each of its tracks and its parts. `tenths` (pathdata.Tenths): the numbers
+    of the path data as drawn, which the points are taken from (reuse.shapes_of)."""
     if tolerance <= 0:
         return lambda: ({name: {} for name in tracks}, {})
     first: dict[int, int] = {}
@@ -262,10 +264,11 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
                    if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
                    else ([], range(len(names))))
     theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
-                    tolerance)
+                    tolerance, None, tenths)
 
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
-        drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress)
+        drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress,
+                                  tenths)
         other_drawings, other_moved = theirs()
         both = {**drawings, **other_drawings}
         return {name: both[name] for name in names}, {**moved, **other_moved}
@@ -274,12 +277,13 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
 
 
 def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], tolerance: float,
-            progress: Callable[[float], None] | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+            progress: Callable[[float], None] | None = None,
+            tenths: Tenths | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
     """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number)."""
     report = progress or (lambda fraction: None)
-    numbers = list(dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing))
-    parts = dict(zip(numbers, shapes_of([(writer.raw[first[number]].element, *writer.raw[first[number]].definitions)
-                                         for number in numbers], {}), strict=True))
+    raws = {number: writer.raw[first[number]]
+            for number in dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing)}
+    parts = dict(zip(raws, shapes_of([(raw.element, *raw.definitions) for raw in raws.values()], {}, tenths), strict=True))
     read, searched = REUSE_STEPS
     report(read)
     drawings = {}
@@ -288,12 +292,13 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
         report(read + (searched - read) * done / len(tracks))
     written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
                if number not in drawings[name]]
-    alone = list(dict.fromkeys(number for drawing in written for number in drawing
-                               if writer.raw[first[number]].element.startswith(ALONE + UNMOVED)))
+    beginnings = ALONE + UNMOVED
+    alone = [number for number in dict.fromkeys(number for drawing in written for number in drawing)
+             if raws[number].element.startswith(beginnings)]
     found = find_alike([parts[number] for number in alone], tolerance)
     return drawings, {alone[number]: Reuse(alone[reuse.source], reuse.matrix, reuse.error)
                       for number, reuse in found.items()
-                      if reuse.matrix == IDENTITY or writer.raw[first[alone[number]]].element.startswith(ALONE)}
+                      if reuse.matrix == IDENTITY or raws[alone[number]].element.startswith(ALONE)}
 
 
 def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
@@ -483,31 +488,43 @@ def _draw(face: FaceModel, states: Sequence[FaceState], progress: Callable[[floa
 Numbered = list[tuple[DrawingKey, tuple[int, ...]]]  # _draw's drawings, parts as numbers of a Drawn's parts
 
 
-def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
-                    progress: Callable[[float], None] | None = None) -> tuple[Numbered, Drawn]:
+def _draw_compacted(face: FaceModel, states: Sequence[FaceState], progress: Callable[[float], None] | None = None,
+                    tenths: dict[str, np.ndarray] | None = None) -> tuple[Numbered, Drawn]:
     """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
     for the Writer (compact.drawn_parts: their path data compacted, their skeletons): what a
-    drawing process does of compact.Writer.finish's work."""
-    tenths: dict[str, np.ndarray] = {}  # compacting takes the path data's numbers as drawn, not read again
+    drawing process does of compact.Writer.finish's work. `tenths`, when given, gets the numbers
+    of the path data as drawn (_draw's)."""
+    tenths = {} if tenths is None else tenths  # compacting takes the path data's numbers as drawn, not read again
     drawings = _draw(face, states, progress, tenths)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
     return numbered, drawn_parts(list(numbers), tenths)
 
 
-def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
-              progress: Callable[[float], None]) -> list[tuple[Numbered, Drawn]]:
+def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[tuple[Numbered, Drawn], PackedTenths]:
+    """_draw_compacted of `states` in a drawing helper, and the numbers of the path data it drew
+    packed to send back (pathdata.packed)."""
+    tenths: dict[str, np.ndarray] = {}
+    return _draw_compacted(face, states, None, tenths), packed(tenths)
+
+
+def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progress: Callable[[float], None],
+              tenths: dict[str, np.ndarray] | None = None) -> list[tuple[Numbered, Drawn]]:
     """_draw_compacted of `states`, in order: in one go, or with `workers` 2 and at least
-    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool)
-    meanwhile. When the helper cannot be started, has not begun or fails, its half is drawn here
-    (workers.offloaded)."""
+    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool,
+    _draw_sent) meanwhile. When the helper cannot be started, has not begun or fails, its half is
+    drawn here (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the
+    reuse search, render/reuse.shapes_of)."""
     if workers < 2 or len(states) < POOL_STATES:
-        return [_draw_compacted(face, states, progress)]
+        return [_draw_compacted(face, states, progress, tenths)]
     half = len(states) // 2
     with helper_pool(workers) as pool:
-        other = offloaded(pool, _draw_compacted, face, states[half:])
-        first = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
-        return [first, other()]
+        other = offloaded(pool, _draw_sent, face, states[half:])
+        first = _draw_compacted(face, states[:half], lambda done: progress(done / 2), tenths)
+        second, sent = other()
+        if tenths is not None:
+            tenths.update(unpacked(sent))
+        return [first, second]
 
 
 def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
@@ -566,13 +583,14 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done)))
+    tenths: dict[str, np.ndarray] = {}  # the path data's numbers as drawn: the reuse search takes them
+    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), tenths))
     frames = [(distinct[number], raw[number]) for number in shown]
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
     reuse = _reuse(tracks, writer, mapping, tolerance,
-                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers)
+                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers, tenths)
     tidy = writer.drawings()
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)

@@ -37,8 +37,12 @@ import functools
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+
+from cartoonface.render.numbers import TENTHS
+from cartoonface.render.pathdata import Tenths
 
 
 # Largest distance (px) between a point of the earlier drawing as drawn, moved by the matrix as
@@ -81,11 +85,11 @@ _LETTERS_TO_SPACES = str.maketrans({**{c: " " for c in "MLCSQTZHVAmlcsqtzhva,\x0
 _NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skeleton
 
 
-@dataclass(frozen=True)
-class Shape:
+class Shape(NamedTuple):
     """What a transform moves in a drawing (or one of its parts): `skeleton` (equal for drawings
     with the same elements, attributes and path commands), `points` (N, 2) px, and `stroke`,
-    the widest stroke width (px) in it."""
+    the widest stroke width (px) in it. (A named tuple: made at a third of a frozen dataclass's cost,
+    for ten thousand parts and drawings.)"""
 
     skeleton: str
     points: np.ndarray
@@ -102,13 +106,26 @@ class Reuse:
     error: float
 
 
-def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """How the V geometry numbers of a part (attributes `names` with `values`, in order; `rest` the
-    text around them) make its P points, x and y interleaved: a path's numbers in pairs (absolute
-    commands of point pairs: face_parts' M, L, C, Z), eight points on each circle or ellipse (a
-    centre plus a step times a radius). Returned as two columns (2P,) into the numbers and the
-    weight (2P,) of the second (point = numbers[first] + weight * numbers[second]; a path's
-    weight 0). None for a part with other path data, elements, a transform or a circle without its centre."""
+@dataclass(frozen=True)
+class _Layout:
+    """How the K geometry numbers of a skeleton's parts make their P points (_layout): x and y
+    interleaved, point = numbers[firsts] + weights * numbers[seconds] ((2P,) each; a path's weight
+    0); `counts`, the numbers in each of its V geometry values, and `paths`, which of them are path
+    data."""
+
+    firsts: np.ndarray
+    seconds: np.ndarray
+    weights: np.ndarray
+    counts: tuple[int, ...]
+    paths: tuple[bool, ...]
+
+
+def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> _Layout | None:
+    """How the geometry numbers of a part (attributes `names` with `values`, in order; `rest` the
+    text around them) make its points: a path's numbers in pairs (absolute commands of point
+    pairs: face_parts' M, L, C, Z), eight points on each circle or ellipse (a centre plus a step
+    times a radius). None for a part with other path data, elements, a transform or a circle
+    without its centre."""
     if not set(_TAG.findall(rest)) <= _READ or " transform=" in rest:
         return None
     firsts: list[int] = []
@@ -144,49 +161,78 @@ def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> tuple[np.
             circle[name] = column
         column += count
     close()
-    return None if unread else (np.array(firsts, dtype=int), np.array(seconds, dtype=int), np.array(weights))
+    return None if unread else _Layout(np.array(firsts, dtype=int), np.array(seconds, dtype=int), np.array(weights),
+                                       tuple(numbers), tuple(name == "d" for name in names))
 
 
-def shapes_of(parts: Sequence[Sequence[str]],
-              layouts: dict[str, tuple[np.ndarray, ...] | None]) -> list[Shape | None]:
+def shapes_of(parts: Sequence[Sequence[str]], layouts: dict[str, _Layout | None],
+              tenths: Tenths | None = None) -> list[Shape | None]:
     """The Shape of each of `parts` as render/svg.py's face_parts drew it (the texts of its element
     and of the definitions, clip paths, it refers to; coordinates in tenths of a pixel). None for
     a part holding an element or attribute this does not read (a transform, an arc, a rect, ...).
-    The numbers of all parts of one skeleton are read in one go and mapped to their points by
-    the skeleton's _layout; `layouts` caches _layout by
-    skeleton."""
-    members: dict[str, list[tuple[int, str]]] = {}  # by skeleton: (part's index, its numbers' text)
+    The numbers of all parts of one skeleton are read in one go (_numbers) and mapped to their
+    points by the skeleton's _layout; `layouts` caches _layout by skeleton. `tenths`
+    (render/pathdata.py's Tenths): the numbers of some of the path data as drawn, taken rather
+    than read again."""
+    members: dict[str, list[tuple[int, list[str]]]] = {}  # by skeleton: (part's index, its geometry values)
     for index, texts in enumerate(parts):
         pieces = _GEOMETRY.split("".join(texts))
         names, values = pieces[1::3], pieces[2::3]
-        joined_values = "\x01".join(values)
+        stripped = "\x01".join(values).translate(_NUMBER_CHARACTERS)
         rest = "\x02".join(pieces[0::3])
-        skeleton = f"{rest}\x03{'|'.join(names)}\x03{joined_values.translate(_NUMBER_CHARACTERS)}"
+        skeleton = f"{rest}\x03{'|'.join(names)}\x03{stripped}"
         if skeleton not in layouts:
             layouts[skeleton] = _layout(names, values, rest)
-        members.setdefault(skeleton, []).append((index, joined_values))
+        members.setdefault(skeleton, []).append((index, values))
     shapes: list[Shape | None] = [None] * len(parts)
     for skeleton, group in members.items():
         layout = layouts[skeleton]
         if layout is None:
             continue
-        firsts, seconds, weights = layout
-        text = " ".join(values for _, values in group).translate(_LETTERS_TO_SPACES)
-        numbers = np.array(text.split(), dtype=float).reshape(len(group), -1)
-        points = (numbers[:, firsts] + weights * numbers[:, seconds]).reshape(len(group), -1, 2)
+        numbers = _numbers([values for _, values in group], layout, tenths or {})
+        points = (numbers[:, layout.firsts] + layout.weights * numbers[:, layout.seconds]).reshape(len(group), -1, 2)
         widest = max(map(float, _STROKE.findall(skeleton.partition("\x03")[0])), default=0.0)
         for (index, _), own in zip(group, points, strict=True):
             shapes[index] = Shape(skeleton, own, widest)
     return shapes
 
 
+def _numbers(rows: Sequence[Sequence[str]], layout: _Layout, tenths: Tenths) -> np.ndarray:
+    """The geometry numbers (R, K) of parts of one skeleton (`rows`: each part's values, as its
+    `layout` reads them), value by value: a path data in `tenths` taken from there (tenths /
+    TENTHS is the double float() reads of the tenths' text, both the one nearest the decimal; a
+    zero is written "0", never "-0"), the others read from their texts (_read)."""
+    if not tenths or not any(layout.paths):
+        return _read(["\x01".join(values) for values in rows], sum(layout.counts))
+    columns = []
+    for slot, (count, path) in enumerate(zip(layout.counts, layout.paths, strict=True)):
+        values = [row[slot] for row in rows]
+        drawn = [tenths.get(value) for value in values] if path else [None] * len(values)
+        taken = [row for row, numbers in enumerate(drawn) if numbers is not None]
+        unread = [row for row, numbers in enumerate(drawn) if numbers is None]
+        column = np.empty((len(rows), count))
+        if taken:
+            column[taken if unread else slice(None)] = (np.concatenate([drawn[row] for row in taken]) / TENTHS
+                                                        ).reshape(len(taken), count)
+        if unread:
+            column[unread if taken else slice(None)] = _read([values[row] for row in unread], count)
+        columns.append(column)
+    return np.concatenate(columns, axis=1)
+
+
+def _read(texts: Sequence[str], count: int) -> np.ndarray:
+    """The numbers (R, `count`) of `texts` (R, each of `count` numbers between letters, commas and
+    whitespace), read in one go."""
+    return np.array(" ".join(texts).translate(_LETTERS_TO_SPACES).split(), dtype=float).reshape(len(texts), count)
+
+
 def joined(shapes: Sequence[Shape | None]) -> Shape | None:
     """The Shape of a drawing made of parts of `shapes` (None if any is)."""
-    if any(shape is None for shape in shapes):
-        return None
     present = [shape for shape in shapes if shape is not None]
-    return Shape("|".join(s.skeleton for s in present), np.concatenate([s.points for s in present]),
-                 max((s.stroke for s in present), default=0.0))
+    if len(present) < len(shapes):
+        return None
+    return Shape("|".join([shape.skeleton for shape in present]), np.concatenate([shape.points for shape in present]),
+                 max([shape.stroke for shape in present], default=0.0))
 
 
 def _inverses(points: np.ndarray) -> np.ndarray:
@@ -210,11 +256,23 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple
     """The least-squares affines (M, 2, 3) mapping each of `sources` (M, F, 2; `inverses` their
     _inverses) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS); the
     largest change of scale of each (M,); and the largest distance (M,) px of a mapped source point
-    from its target."""
+    from its target, in single precision (within _single_slack of the one in double precision)."""
     matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
     matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
     matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
-    return matrices, _scale_change(matrices[:, :, :2]), np.max(_distances(sources, matrices, targets), axis=1)
+    single = np.max(_distances(sources, matrices.astype(np.float32), targets), axis=1)
+    return matrices, _scale_change(matrices[:, :, :2]), single
+
+
+def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
+    """How far (M,) px fit's largest distance in single precision may be from the one in double
+    precision, for `matrices` (M, 2, 3) and single precision points within `largest` px of 0: each
+    of the eight roundings of a x + c y + e - t along an axis (a, c, e to single, two products, two
+    sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own
+    within 2^-24 of the two axes' sum: the distance within 9 * 2^-24 of that sum, 2^-19 over three
+    times it."""
+    return 2.0 ** -19 * (np.sum(np.abs(matrices[:, :, :2]), axis=(1, 2)) * largest
+                         + np.sum(np.abs(matrices[:, :, 2]), axis=1) + 2 * largest + 1)
 
 
 def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Sequence[int]
@@ -228,8 +286,14 @@ def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Seque
         step = max(1, PAIR_POINTS // count)
         for start in range(0, len(chosen), step):
             rows = chosen[start:start + step]
-            yield (rows, np.stack([shapes[sources[row]].points for row in rows.tolist()]),
-                   np.stack([shapes[targets[row]].points for row in rows.tolist()]))
+            yield rows, _stacked([shapes[sources[row]].points for row in rows.tolist()]), _stacked(
+                [shapes[targets[row]].points for row in rows.tolist()])
+
+
+def _stacked(points: Sequence[np.ndarray]) -> np.ndarray:
+    """`points`, arrays of one shape (N, 2), as one (M, N, 2): np.stack's, made at a fraction of its
+    cost per array."""
+    return np.concatenate(points).reshape(len(points), *points[0].shape)
 
 
 def _errors(group: Sequence[Shape], sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
@@ -287,25 +351,27 @@ def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndar
     halves = np.array([max(shapes[target].stroke, shapes[source].stroke) for target, source, _, _ in chosen]) / 2
     for rows, sources, targets in _pair_points(shapes, [source for _, source, _, _ in chosen],
                                                [target for target, _, _, _ in chosen]):
-        fitted = matrices[rows, :, :2]  # (M, 2, 2)
-        strokes = halves[rows]
+        # x and y apart: reduced along the points, contiguous (reducing (M, N, 2) along N or 2 is slow)
+        (source_x, source_y), (target_x, target_y) = (np.moveaxis(points, 2, 0).copy() for points in (sources, targets))
+        left = np.arange(len(rows))  # the chunk's pairs no form fits yet
         for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
-            if not len(rows):
+            if not len(left):
                 break
             if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
-                linear = np.round(fitted, linear_decimals)
+                linear = np.round(matrices[rows[left], :, :2], linear_decimals)  # (M, 2, 2)
                 a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
-                residual = targets - np.stack([a * sources[..., 0] + c * sources[..., 1],
-                                               b * sources[..., 0] + d * sources[..., 1]], axis=2)
-                middle = (residual.max(axis=1) + residual.min(axis=1)) / 2  # (M, 2)
-                scale = _scale_change(linear) * strokes
+                x, y = source_x[left], source_y[left]
+                residual = (target_x[left] - (a * x + c * y), target_y[left] - (b * x + d * y))  # (M, N) each
+                middle = np.column_stack([(values.max(axis=1) + values.min(axis=1)) / 2 for values in residual])
+                scale = _scale_change(linear) * halves[rows[left]]
             shift = np.round(middle, shift_decimals)
-            within = np.sqrt(np.max(np.sum((residual - shift[:, None]) ** 2, axis=2), axis=1)) + scale
+            off_x, off_y = (values - shift[:, axis, None] for axis, values in enumerate(residual))
+            within = np.sqrt(np.max(off_x ** 2 + off_y ** 2, axis=1)) + scale
             fits = within <= tolerance
-            matrices[rows[fits]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
-            errors[rows[fits]] = within[fits]
-            rows, sources, targets, fitted, strokes, linear, residual, middle, scale = (
-                values[~fits] for values in (rows, sources, targets, fitted, strokes, linear, residual, middle, scale))
+            matrices[rows[left[fits]]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
+            errors[rows[left[fits]]] = within[fits]
+            left, linear, middle, scale = (values[~fits] for values in (left, linear, middle, scale))
+            residual = (residual[0][~fits], residual[1][~fits])
     texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
     return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
             for matrix, error in zip(matrices, errors.tolist(), strict=True)]
@@ -333,11 +399,14 @@ def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.nd
 def _samples(group: Sequence[Shape]) -> np.ndarray:
     """FIT_POINTS points (F, 2) of each of `group`, spread over its points: (D, F, 2), single
     precision (1e-4 px)."""
-    spread: dict[int, np.ndarray] = {}  # FIT_POINTS indices spread over N points, by N
-    for shape in group:
-        if len(shape.points) not in spread:
-            spread[len(shape.points)] = np.linspace(0, len(shape.points) - 1, FIT_POINTS).round().astype(int)
-    return np.stack([shape.points[spread[len(shape.points)]] for shape in group]).astype(np.float32)
+    by_count: dict[int, list[int]] = {}  # the shapes of N points
+    for index, shape in enumerate(group):
+        by_count.setdefault(len(shape.points), []).append(index)
+    samples = np.empty((len(group), FIT_POINTS, 2), dtype=np.float32)
+    for count, indices in by_count.items():
+        spread = np.linspace(0, count - 1, FIT_POINTS).round().astype(int)  # FIT_POINTS of the N points
+        samples[indices] = _stacked([group[index].points for index in indices])[:, spread]
+    return samples
 
 
 def _choose(shapes: Sequence[Shape | None],
@@ -361,8 +430,16 @@ def _choose(shapes: Sequence[Shape | None],
     # fitted FIT_PAIRS pairs at a time: all at once, a 30-minute recording's temporaries took ~1 GB
     fits = [fit(samples[earlier[start:start + FIT_PAIRS]], inverses[earlier[start:start + FIT_PAIRS]],
                 samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
-    matrices, scales, sampled = (np.concatenate(parts) for parts in zip(*fits, strict=True))
-    near = np.flatnonzero(scales * np.maximum(strokes[earlier], strokes[later]) / 2 + sampled <= tolerance)
+    matrices, scales, single = (np.concatenate(parts) for parts in zip(*fits, strict=True))
+    widened = scales * np.maximum(strokes[earlier], strokes[later]) / 2
+    # the pairs within the tolerance on the samples, measured in double precision where single
+    # precision cannot tell (the same pairs as measured in double precision throughout)
+    slack = _single_slack(matrices, float(np.max(np.abs(samples))))
+    near = widened + single <= tolerance - slack
+    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
+    near[unsure] = widened[unsure] + np.max(_distances(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]),
+                                            axis=1) <= tolerance
+    near = np.flatnonzero(near)
     near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
     errors = _errors(group, earlier[near], matrices[near], later[near], scales[near]).tolist()
     written = np.ones(len(group), dtype=bool)
