@@ -67,12 +67,14 @@ def helper_pool(workers: int) -> Iterator[Executor | None]:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Callable[[], T]:
+def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object,
+              here: Callable[[], T] | None = None) -> Callable[[], T]:
     """fn(*args) queued in `pool`; returns a function giving its result. Computed in this
     process when the pool has not begun it by then (so a caller done with its own share takes
     over the queued rest, asking for the last first), or when `pool` is None or cannot run it
-    (fork or thread start failed, broken pool). An exception raised by `fn` itself is raised by
-    the getter."""
+    (fork or thread start failed, broken pool): by `here()` when given (the same result from what
+    this process holds, where the pool is sent less), else fn(*args). An exception raised by `fn`
+    itself is raised by the getter."""
     future = None
     if pool is not None:
         try:
@@ -86,7 +88,7 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Cal
                 return future.result()
             except (BrokenProcessPool, OSError, MemoryError):
                 pass
-        return fn(*args)
+        return fn(*args) if here is None else here()
 
     return result
 

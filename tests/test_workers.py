@@ -67,6 +67,9 @@ def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):
         while not flag.exists() and time.monotonic() < deadline:  # a loaded machine may start it late
             time.sleep(0.01)
         queued = [offloaded(pool, _pid_and_square, x) for x in range(6)]
+        spared: list[float] = []  # what `here` computed: the pool's job (a smaller argument) is not run
+        spare = offloaded(pool, _pid_and_square, 7.0, here=lambda: spared.append(7.0) or _pid_and_square(7.0))
+        assert spare() == (os.getpid(), 49.0) and spared == [7.0]
         # not begun there (at most two are handed to the process ahead of time): done here, the same
         assert queued[-1]() == (os.getpid(), 25)
         pid, value = begun()
@@ -119,7 +122,7 @@ def test_analyse_with_a_helper_gives_the_one_process_alignment():
 
 
 def test_generate_with_its_helper_makes_what_one_process_makes(tmp_path, monkeypatch):
-    """The helper decodes the recording itself for the pitch track and aligns half the parts: the
+    """The helper decodes the recording itself for the pitch track and aligns parts: the
     page folder is the one a single process (a web job's) makes, byte for byte."""
     from cartoonface import pipeline
 
