@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.workers import collector_paused, forked, helper_pool, offloaded, shares
+from cartoonface.workers import collector_paused, forked, from_both_ends, helper_pool, offloaded, shares
 from tests.conftest import ROOT
 from tests.synthetic import synthetic_talk
 
@@ -67,9 +68,6 @@ def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):
         while not flag.exists() and time.monotonic() < deadline:  # a loaded machine may start it late
             time.sleep(0.01)
         queued = [offloaded(pool, _pid_and_square, x) for x in range(6)]
-        spared: list[float] = []  # what `here` computed: the pool's job (a smaller argument) is not run
-        spare = offloaded(pool, _pid_and_square, 7.0, here=lambda: spared.append(7.0) or _pid_and_square(7.0))
-        assert spare() == (os.getpid(), 49.0) and spared == [7.0]
         # not begun there (at most two are handed to the process ahead of time): done here, the same
         assert queued[-1]() == (os.getpid(), 25)
         pid, value = begun()
@@ -78,6 +76,29 @@ def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):
     with helper_pool(1) as none:
         assert none is None
         assert offloaded(none, _pid_and_square, 1.5)() == (os.getpid(), 2.25)
+
+
+def test_jobs_from_both_ends_meet_once_each_in_order():
+    """The pool's jobs are a run from the front, this process's the rest from the back, whatever the
+    timing; each job once, the results in the jobs' order."""
+    values = [float(x) for x in range(12)]
+    jobs = [(_pid_and_square, (x, 0.02), partial(_pid_and_square, x, 0.02)) for x in values]
+    with helper_pool(2) as pool:
+        assert pool is not None
+        pool.submit(time.sleep, 0.1)  # busy first, as the analysis helper with its pitch track
+        fractions: list[float] = []
+        results = from_both_ends(pool, jobs, fractions.append)
+    assert [value for _, value in results] == [x * x for x in values]
+    there = [pid != os.getpid() for pid, _ in results]
+    assert there == sorted(there, reverse=True)  # a run from the front (maybe none), then this process's
+    assert not there[-1] and fractions == sorted(fractions) and fractions[-1] < 1.0
+    assert from_both_ends(None, jobs) == [(os.getpid(), x * x) for x in values]
+
+
+def test_jobs_of_a_lost_helper_are_done_here():
+    jobs = [(_dies_in_a_child, (os.getpid(),), partial(_dies_in_a_child, os.getpid())) for _ in range(4)]
+    with helper_pool(2) as pool:
+        assert from_both_ends(pool, jobs) == [os.getpid()] * 4
 
 
 def test_a_lost_helper_is_done_here():

@@ -38,7 +38,7 @@ from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts, high_passed
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, FALLBACK_NOTE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
-from cartoonface.workers import offloaded
+from cartoonface.workers import from_both_ends
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
 # is far longer than the recording (an error); more than FAST_RATE or fewer than MIN_RATE is aligned
@@ -214,23 +214,21 @@ def word_lengths(texts: Sequence[str]) -> list[int]:
 
 def _align_jobs(audio: Audio, jobs: list[tuple[list[SentenceText], Span]], pool: Executor | None,
                 report: Callable[[str, float], None]) -> list[list[tuple[Sentence, tuple[float, ...]]]]:
-    """`_aligned` of each job (sentences, span), in order; with a `pool`, shared with it as they go:
-    every job is queued there, the costliest first (by seconds times syllables: the aligner's cost,
-    docs/BENCHMARKS.md "Analysis in parallel"), and this process takes the queue's cheapest end, each
-    job the pool has not begun, until the two meet; then neither waits for the other longer than the
-    last jobs, the cheapest, take (the pool, busy first with the pitch track, joins late by a time a
-    fixed split could not know). `report("align", fraction)` as the jobs are done."""
+    """`_aligned` of each job (sentences, span), in order; with a `pool`, shared with it as they go
+    (workers.from_both_ends): the pool takes the costliest first (by seconds times syllables: the
+    aligner's cost, docs/BENCHMARKS.md "Analysis in parallel") and is sent only the samples each
+    reads, this process the cheapest, until they meet; the pool, busy first with the pitch track,
+    joins late by a time a split made beforehand could not know. `report("align", fraction)` as
+    the jobs are done."""
     costs = [span.duration * sum(len(text.syllables) for text in texts) for texts, span in jobs]
     order = sorted(range(len(jobs)), key=lambda k: -costs[k])  # stable: equal costs in the jobs' order
     # The words of every job found here: the pool's process, forked before the transcript was read,
     # then needs no lexicon (speech/lexicon.py, ~35 ms to read).
     words = [[n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])] for texts, _ in jobs]
-    later = {k: offloaded(pool, _aligned_part, *_part_samples(audio, jobs[k][1]), *jobs[k], words[k],
-                          here=partial(_aligned, audio, *jobs[k], words[k])) for k in order}
-    done: dict[int, list[tuple[Sentence, tuple[float, ...]]]] = {}
-    for k in reversed(order):  # a job the pool has not begun is done here (workers.offloaded)
-        report("align", len(done) / len(jobs))
-        done[k] = later[k]()
+    timed = from_both_ends(pool, [(_aligned_part, (*_part_samples(audio, jobs[k][1]), *jobs[k], words[k]),
+                                   partial(_aligned, audio, *jobs[k], words[k])) for k in order],
+                           lambda done: report("align", done))
+    done = dict(zip(order, timed))
     return [done[k] for k in range(len(jobs))]
 
 
