@@ -248,10 +248,10 @@ def generate(
     marks = () if text is None else emotion_marks(text, source)
     clip = None if video is None else video_input(video, text)
     report("decode")
-    # A forked helper (workers.py) computes the pitch track and aligns about half the parts during
-    # the analysis (none for a web job: its CPU-time limit counts per process). The page's compressed
-    # audio is made by ffmpeg in a thread once the frames are drawn (the pool is left, waiting for
-    # ffmpeg, before its folder is removed).
+    # A forked helper (workers.py) computes the pitch track, then aligns parts as this process does
+    # (none for a web job: its CPU-time limit counts per process). The page's compressed audio is
+    # made by ffmpeg in a thread once the frames are drawn (the pool is left, waiting for ffmpeg,
+    # before its folder is removed).
     with (helper_pool(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None

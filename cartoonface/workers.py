@@ -6,7 +6,8 @@ whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)`
 returns a getter of its result that computes it here instead when the pool has not begun it, is
 None, could not start, or broke (no memory, a killed child); `forked(workers, fn, *args)` runs
 `fn(*args)` in a child forked there and then, which inherits the arguments instead of receiving
-them pickled (work on a large state built in this process); `shares(costs)` splits work in two.
+them pickled (work on a large state built in this process); `from_both_ends(pool, jobs)` shares a
+list of jobs with the pool as they go; `shares(costs)` splits work in two.
 The results are the same either way: the child is a fork of this process running the same code.
 `collector_paused()` keeps Python's cycle collector from running during a job (and its children).
 """
@@ -17,13 +18,18 @@ import gc
 import multiprocessing
 import os
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from multiprocessing.connection import Connection
 from typing import TypeVar
 
 T = TypeVar("T")
+# Jobs `from_both_ends` keeps given to the pool and not done: one under way and one waiting, so the
+# pool goes on while this process is busy with a job of its own; each more is a job this process
+# may wait for at the end (a ProcessPoolExecutor hands a waiting job to its process at once, and
+# it can no longer be taken back).
+AHEAD = 2
 
 
 def processes() -> int:
@@ -89,6 +95,42 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Cal
         return fn(*args)
 
     return result
+
+
+def from_both_ends(pool: Executor | None, jobs: Sequence[tuple[Callable[..., T], tuple[object, ...], Callable[[], T]]],
+                   progress: Callable[[float], None] | None = None) -> list[T]:
+    """The result of each of `jobs` (fn, args, here), in order, the jobs given costliest first: the
+    pool runs fn(*args) of the jobs from the front, given AHEAD at a time (topped up each time this
+    process is between jobs), and this process computes here() (the same result, from what it
+    holds: the pool may be sent less) of the jobs from the back, until the two meet; then it waits
+    for the pool's last ones. Whatever one process's share of other work before (the pool's first
+    job may be long), neither waits for the other much longer than a cheap job takes. With no pool,
+    or one that cannot run them (fork failed, broken pool), the jobs are done here. An exception
+    raised by a job is raised here. `progress(fraction)`: the share of the jobs done, before each
+    job done here."""
+    results: dict[int, T] = {}
+    given: dict[int, Future[T]] = {}
+    front, back = 0, len(jobs)
+    while front < back:
+        while pool is not None and front < back and sum(not f.done() for f in given.values()) < AHEAD:
+            fn, args, _ = jobs[front]
+            try:
+                given[front] = pool.submit(fn, *args)
+            except (BrokenProcessPool, OSError, RuntimeError):
+                pool = None  # the rest is done here
+                break
+            front += 1
+        if front < back:
+            if progress is not None:
+                progress((len(jobs) - back + sum(f.done() for f in given.values())) / len(jobs))
+            back -= 1
+            results[back] = jobs[back][2]()
+    for k, future in given.items():
+        try:
+            results[k] = future.result()
+        except (BrokenProcessPool, OSError, MemoryError):  # the pool's process was lost: done here
+            results[k] = jobs[k][2]()
+    return [results[k] for k in range(len(jobs))]
 
 
 def forked(workers: int, fn: Callable[..., T], *args: object) -> Callable[[], T]:

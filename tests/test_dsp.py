@@ -58,6 +58,30 @@ def test_sos_filter_each_filters_every_piece_from_rest(speech: tuple[np.ndarray,
             np.testing.assert_allclose(mine, signal.sosfilt(sos, piece), rtol=0, atol=1e-7)
 
 
+def test_sos_filter_each_is_the_same_to_the_bit_however_many_blocks_go_at_a_time(
+        speech: tuple[np.ndarray, int], monkeypatch: pytest.MonkeyPatch) -> None:
+    samples, rate = speech  # 8 s: about ten blocks
+    sos = dsp.butter_highpass(2, 80.0, rate)
+    pieces = [samples, samples[rate : 2 * rate]]
+    outputs = []
+    for group in (1, 3, 64):  # one block at a time, groups with a last one short, all at once
+        monkeypatch.setattr(dsp, "GROUP", group)
+        outputs.append([piece.tobytes() for piece in dsp.sos_filter_each(sos, pieces, np.float32)])
+    assert outputs[1] == outputs[0] and outputs[2] == outputs[0]
+
+
+def test_power_spectra_are_the_same_to_the_bit_however_many_frames_go_at_a_time(
+        speech: tuple[np.ndarray, int], monkeypatch: pytest.MonkeyPatch) -> None:
+    samples, rate = speech
+    clip = features.to_rate(samples, rate)[: 3 * 16000 + 77]  # 3 s: 299 frames, the last batch short
+    spectra = []
+    for rows in (1, 64, 10_000):
+        monkeypatch.setattr(features, "SPECTRUM_ROWS", rows)
+        spectra.append(features.power_spectrum(clip))
+    assert spectra[0].shape == (1 + (len(clip) - features.WINDOW) // 160, features.NFFT // 2 + 1)
+    assert spectra[1].tobytes() == spectra[0].tobytes() and spectra[2].tobytes() == spectra[0].tobytes()
+
+
 @pytest.mark.parametrize("up,down", [(1, 2), (1, 5), (160, 441), (16000, 22050), (3, 2), (2, 2)])
 def test_resample_poly_is_scipys(speech: tuple[np.ndarray, int], monkeypatch: pytest.MonkeyPatch, up: int, down: int) -> None:
     samples, _ = speech

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cartoonface.speech import reconcile
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.textgrid import read_tiers
@@ -130,3 +131,23 @@ def test_espeak_at_two_rates_without_a_pause_is_split_at_the_join(tmp_path, spee
     join = spans[0][1]
     assert abs(result.sentences[0].end - join) <= SPLIT_TOLERANCE, (result.sentences[0].end, join)
     assert abs(result.sentences[2].start - spans[2][0]) <= SPLIT_TOLERANCE
+
+
+def test_the_cuts_are_the_same_however_many_sentence_lengths_are_tried_at_once(monkeypatch):
+    """STEPS 1 is the programme one sentence length at a time; ties (whole-second lengths and
+    costs) go to the shorter sentence either way, and the search's window grows alike."""
+    rng = np.random.default_rng(0)
+    for trial in range(40):
+        count = int(rng.integers(2, 90))
+        sentences = int(rng.integers(1, count))
+        left = np.sort(np.round(rng.uniform(0, 60, count)))
+        right = left + rng.choice([0.0, 0.3], count)
+        cost = rng.choice([0.0, 2.0, 8.0], count)
+        pauses = np.cumsum(rng.integers(0, 2, count))
+        expected = np.round(rng.uniform(0.5, 10, sentences))
+        chosen = []
+        for steps in (1, 5, 64):
+            monkeypatch.setattr(reconcile, "STEPS", steps)
+            chosen.append(reconcile._best_cuts(left, right, cost, pauses, expected))
+        assert chosen[0][0] == 0 and chosen[0][-1] == count - 1 and len(chosen[0]) == sentences + 1
+        assert chosen[1] == chosen[0] and chosen[2] == chosen[0], trial

@@ -10,8 +10,9 @@ import pytest
 
 from cartoonface.errors import OptionError
 from cartoonface.speech.audio import Audio, load_audio
+from cartoonface.speech import sentences
 from cartoonface.speech.sentences import Span, dips, find_speech_parts, learn_pause
-from tests.conftest import speak
+from tests.conftest import ROOT, speak
 from tests.synthetic import RATE, noisy, recording
 
 
@@ -134,6 +135,17 @@ def test_dips_prefer_a_real_pause():
     longest = max(found, key=lambda item: item[1])
     assert truth[0].end - 0.03 < longest[0] < truth[1].start + 0.03
     assert all(0.25 <= time <= audio.duration - 0.25 for time, _ in found)
+
+
+def test_voicing_is_the_same_however_many_windows_go_at_a_time(monkeypatch):
+    audio = load_audio(ROOT / "samples" / "speech" / "story.wav")
+    groups = [(0, 300), (450, 900), (1000, 1003)]  # 10 ms frames: three ranges, one of two windows
+    found = []
+    for chunk in (1, 37, 4096):  # a window at a time, blocks with a short last one, all at once
+        monkeypatch.setattr(sentences, "VOICING_CHUNK", chunk)
+        found.append([flags.tolist() for flags in sentences._voiced_frames(audio, groups)])
+    assert any(any(flags) for flags in found[0]) and not all(all(flags) for flags in found[0])  # voiced and not
+    assert found[1] == found[0] and found[2] == found[0]
 
 
 def espeak(text: str, path: Path) -> Path:

@@ -15,7 +15,7 @@ from cartoonface.animate.frames import sample_frames
 from cartoonface.animate.timeline import REST, build_timeline
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import Audio, digital_silence, load_audio, quantum
+from cartoonface.speech.audio import GRID_CHUNK, GRID_PROBE, Audio, digital_silence, load_audio, quantum
 from tests.conftest import speak
 
 pytestmark = pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency (scripts/setup.sh)")
@@ -164,3 +164,13 @@ def test_quantum_names_the_coarsest_integer_grid_the_samples_lie_on():
     for bits in (8, 12, 16):
         samples = rng.integers(-(2 ** (bits - 1)), 2 ** (bits - 1), 4000) * (2 / 2**bits) + 0.003
         assert quantum(samples) == 2 / 2**bits
+
+
+def test_one_sample_off_the_grid_anywhere_makes_it_no_grid():
+    rng = np.random.default_rng(4)
+    samples = rng.integers(-2048, 2048, 3 * GRID_CHUNK) * (2 / 4096)  # a 12-bit grid
+    assert quantum(samples) == 2 / 4096
+    for where in (0, GRID_PROBE - 1, GRID_PROBE, GRID_CHUNK + 5, samples.size - 1):  # first samples, chunks, end
+        off = samples.copy()
+        off[where] += 0.3 * 2 / 4096  # between two steps of every finer grid too
+        assert quantum(off) == 0.0, where

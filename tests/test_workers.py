@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.workers import collector_paused, forked, helper_pool, offloaded, shares
+from cartoonface.workers import collector_paused, forked, from_both_ends, helper_pool, offloaded, shares
 from tests.conftest import ROOT
 from tests.synthetic import synthetic_talk
 
@@ -77,6 +78,29 @@ def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):
         assert offloaded(none, _pid_and_square, 1.5)() == (os.getpid(), 2.25)
 
 
+def test_jobs_from_both_ends_meet_once_each_in_order():
+    """The pool's jobs are a run from the front, this process's the rest from the back, whatever the
+    timing; each job once, the results in the jobs' order."""
+    values = [float(x) for x in range(12)]
+    jobs = [(_pid_and_square, (x, 0.02), partial(_pid_and_square, x, 0.02)) for x in values]
+    with helper_pool(2) as pool:
+        assert pool is not None
+        pool.submit(time.sleep, 0.1)  # busy first, as the analysis helper with its pitch track
+        fractions: list[float] = []
+        results = from_both_ends(pool, jobs, fractions.append)
+    assert [value for _, value in results] == [x * x for x in values]
+    there = [pid != os.getpid() for pid, _ in results]
+    assert there == sorted(there, reverse=True)  # a run from the front (maybe none), then this process's
+    assert not there[-1] and fractions == sorted(fractions) and fractions[-1] < 1.0
+    assert from_both_ends(None, jobs) == [(os.getpid(), x * x) for x in values]
+
+
+def test_jobs_of_a_lost_helper_are_done_here():
+    jobs = [(_dies_in_a_child, (os.getpid(),), partial(_dies_in_a_child, os.getpid())) for _ in range(4)]
+    with helper_pool(2) as pool:
+        assert from_both_ends(pool, jobs) == [os.getpid()] * 4
+
+
 def test_a_lost_helper_is_done_here():
     with helper_pool(2) as pool:
         assert offloaded(pool, _dies_in_a_child, os.getpid())() == os.getpid()
@@ -119,7 +143,7 @@ def test_analyse_with_a_helper_gives_the_one_process_alignment():
 
 
 def test_generate_with_its_helper_makes_what_one_process_makes(tmp_path, monkeypatch):
-    """The helper decodes the recording itself for the pitch track and aligns half the parts: the
+    """The helper decodes the recording itself for the pitch track and aligns parts: the
     page folder is the one a single process (a web job's) makes, byte for byte."""
     from cartoonface import pipeline
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import replace
+from functools import partial
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 
@@ -37,7 +38,7 @@ from cartoonface.speech.records import Alignment, Sentence, Syllable
 from cartoonface.speech.sentences import Span, find_speech_parts, high_passed
 from cartoonface.speech.stretches import FALLBACK_CONFIDENCE, FALLBACK_NOTE, spread_over_peaks, stretches, unfit
 from cartoonface.speech.transcript import HAN_RE, SentenceText, parse_transcript
-from cartoonface.workers import offloaded, shares
+from cartoonface.workers import from_both_ends
 
 # Mandarin is read at about 3-7 syllables per second of speech. More than MAX_RATE means the transcript
 # is far longer than the recording (an error); more than FAST_RATE or fewer than MIN_RATE is aligned
@@ -83,7 +84,7 @@ def analyse(
     fraction)` is called with stage "segment" then "align" and the fraction
     0..1 done of that stage. `source` names the transcript in messages.
     `transcript_text` None (no transcript): the lip sync from the audio alone (audio_only.py).
-    `pool`: a one-process pool (workers.helper_pool) that aligns about half the parts meanwhile.
+    `pool`: a one-process pool (workers.helper_pool) that aligns parts meanwhile, as many as it gets to.
     Raises TranscriptError for an empty transcript, one in another language
     (more Latin words than Chinese characters), one with no Mandarin
     syllables (from parse_transcript), or one far longer than the speech
@@ -213,21 +214,21 @@ def word_lengths(texts: Sequence[str]) -> list[int]:
 
 def _align_jobs(audio: Audio, jobs: list[tuple[list[SentenceText], Span]], pool: Executor | None,
                 report: Callable[[str, float], None]) -> list[list[tuple[Sentence, tuple[float, ...]]]]:
-    """`_aligned` of each job (sentences, span), in order; with a `pool`, about half the work (by
-    seconds times syllables: the aligner's cost, docs/BENCHMARKS.md "Analysis in parallel") done
-    there meanwhile. `report("align", fraction)` as this process's share goes on."""
+    """`_aligned` of each job (sentences, span), in order; with a `pool`, shared with it as they go
+    (workers.from_both_ends): the pool takes the costliest first (by seconds times syllables: the
+    aligner's cost, docs/BENCHMARKS.md "Analysis in parallel") and is sent only the samples each
+    reads, this process the cheapest, until they meet; the pool, busy first with the pitch track,
+    joins late by a time a split made beforehand could not know. `report("align", fraction)` as
+    the jobs are done."""
     costs = [span.duration * sum(len(text.syllables) for text in texts) for texts, span in jobs]
-    here, there = shares(costs) if pool is not None else (list(range(len(jobs))), [])
+    order = sorted(range(len(jobs)), key=lambda k: -costs[k])  # stable: equal costs in the jobs' order
     # The words of every job found here: the pool's process, forked before the transcript was read,
     # then needs no lexicon (speech/lexicon.py, ~35 ms to read).
     words = [[n for sentence in texts for n in word_lengths([s.text for s in sentence.syllables])] for texts, _ in jobs]
-    later = {k: offloaded(pool, _aligned_part, *_part_samples(audio, jobs[k][1]), *jobs[k], words[k]) for k in there}
-    done: dict[int, list[tuple[Sentence, tuple[float, ...]]]] = {}
-    for number, k in enumerate(here):
-        report("align", number / len(here))
-        done[k] = _aligned(audio, *jobs[k], words[k])
-    for k in reversed(there):  # the pool's last jobs first: those it has not begun are done here
-        done[k] = later[k]()
+    timed = from_both_ends(pool, [(_aligned_part, (*_part_samples(audio, jobs[k][1]), *jobs[k], words[k]),
+                                   partial(_aligned, audio, *jobs[k], words[k])) for k in order],
+                           lambda done: report("align", done))
+    done = dict(zip(order, timed))
     return [done[k] for k in range(len(jobs))]
 
 

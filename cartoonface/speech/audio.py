@@ -45,6 +45,7 @@ GRID_BITS = range(8, 17)
 QUANTUM_STEPS = 2
 GRID_TOLERANCE = 0.01  # share of a step a sample may lie off the grid (float32 rounding)
 GRID_CHUNK = 1 << 16   # samples checked at a time
+GRID_PROBE = 1 << 10   # samples checked first: float audio is off every grid within them
 # A mean (DC offset) larger than this (-60 dBFS) is subtracted from the samples when reading:
 # a faulty converter or sound card adds it; smaller means are what speech itself averages to.
 DC_OFFSET = 1e-3
@@ -94,10 +95,12 @@ def quantum(samples: np.ndarray) -> float:
     if x.size < 2:
         return 0.0
     origin = float(x[0])
+    # chunk by chunk, a short one first: float audio fails on its first samples (each of GRID_BITS
+    # tried), and no copy of a long file is made
+    edges = [0, *range(GRID_PROBE, x.size, GRID_CHUNK), x.size]
     for bits in GRID_BITS:
         step = 2.0 / 2**bits
-        # chunk by chunk: float audio fails on its first chunk, and no copy of a long file is made
-        if all(_on_grid(x[k : k + GRID_CHUNK], origin, step) for k in range(0, x.size, GRID_CHUNK)):
+        if all(_on_grid(x[a:b], origin, step) for a, b in zip(edges, edges[1:])):
             return step
     return 0.0
 

@@ -29,6 +29,9 @@ DIP_PLATEAU = 0.15  # seconds: a dip this long costs half of DIP_COST
 FORCED_COST = 8.0  # cutting at an evenly spaced point with no dip (only when nothing else fits)
 DIPS_PER_SECOND = 1.0  # longest dips kept per second of a part (at least MIN_DIPS)
 MIN_DIPS = 3
+# Sentence lengths (in cuts) whose costs are computed at once: the tables stay small (STEPS x cuts)
+# however far a long sentence needs the search's window to grow.
+STEPS = 64
 
 
 @dataclass(frozen=True)
@@ -114,30 +117,31 @@ def _best_cuts(
     count = len(at_left)
     sentences = len(expected)
     window = min(count - 1, max(64, 4 * count // sentences))
+    ends = np.arange(1, count)
     while True:
         table = np.full((sentences + 1, count), np.inf)
         choice = np.zeros((sentences + 1, count), dtype=np.int64)
         table[0, 0] = 0.0
         for k in range(1, sentences + 1):
-            best = np.full(count, np.inf)
-            arg = np.zeros(count, dtype=np.int64)
-            ends = np.arange(1, count)
-            for step in range(1, window + 1):
-                b = ends[ends >= step]
-                a = b - step
-                speech = np.maximum(at_left[b] - at_right[a], 1e-3)
-                total = (
-                    table[k - 1, a]
-                    + (np.log(speech / expected[k - 1]) / SIGMA) ** 2
-                    + MERGE_COST * (pauses_before[b - 1] - pauses_before[a])
-                    + np.where(b < count - 1, cost[b], 0.0)
-                )
-                better = total < best[b]
-                best[b[better]] = total[better]
-                arg[b[better]] = a[better]
+            best = table[k, 1:]  # views: the sentence k ending at each cut b = 1 .. count - 1
+            arg = choice[k, 1:]
+            for first in range(1, window + 1, STEPS):
+                # the sentence from cut b - step to cut b for STEPS steps at once: row j is step first + j
+                a = ends[None, :] - np.arange(first, min(first + STEPS, window + 1))[:, None]
+                inside = a >= 0
+                a = np.where(inside, a, 0)
+                speech = np.maximum(at_left[ends] - at_right[a], 1e-3)
+                total = np.where(inside, table[k - 1, a]
+                                 + (np.log(speech / expected[k - 1]) / SIGMA) ** 2
+                                 + MERGE_COST * (pauses_before[ends - 1] - pauses_before[a])
+                                 + np.where(ends < count - 1, cost[ends], 0.0), np.inf)
+                step = total.argmin(axis=0)  # the shortest step of the least cost, as one step at a time
+                least = total[step, ends - 1]
+                better = least < best  # a tie keeps the shorter step of an earlier block
+                best[better] = least[better]
+                arg[better] = a[step, ends - 1][better]
             if k < sentences:
-                best[count - 1] = np.inf
-            table[k], choice[k] = best, arg
+                table[k, count - 1] = np.inf
         if np.isfinite(table[sentences, count - 1]) or window >= count - 1:
             break
         window = min(count - 1, window * 2)
