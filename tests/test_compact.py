@@ -142,7 +142,7 @@ def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
 
 
 def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
-    """Writer.collector takes the skeletons each drawing process made of its own parts
+    """Writer.collected takes the skeletons each drawing process made of its own parts
     (compact.drawn_parts): halves cut anywhere, their path data compacted apart (another first
     path data chooses the points kept), drawings left out (a state whose key an earlier drawing
     has) among them the one holding a first path data, give the tidy drawings, numbers and style
@@ -171,10 +171,8 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
             done = reduce(merged, (half.done for _, half in halves))
             writer = Writer(track_of)
             for offset, (numbered, half) in zip((0, cut), halves, strict=True):
-                collect = writer.collector(half, done)
-                for index, (_, numbers) in enumerate(numbered, offset):
-                    if index not in left_out:
-                        collect(numbers)
+                writer.collected(half, done, [numbers for index, (_, numbers) in enumerate(numbered, offset)
+                                              if index not in left_out])
             assert writer.finish(None, done) == expected
             assert writer.drawings() == drawings
             assert writer.style_sheet() == reference.style_sheet()

@@ -198,27 +198,52 @@ class _Track:
     shapes: list[str] = field(default_factory=list)
 
 
-def _tracks(frames: Sequence[tuple[FaceState, tuple[int, ...]]], raw_tracks: Sequence[str],
-            mapping: Sequence[int]) -> dict[str, _Track]:
-    """Group each frame's raw parts (track names `raw_tracks`, tidy numbers `mapping`) into
-    tracks, in drawing order; equal drawings of a track get one number."""
+def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: Sequence[int],
+            raw_tracks: Sequence[str], mapping: Sequence[int]) -> dict[str, _Track]:
+    """Group the raw parts of each distinct drawing `raw` (of `states`; track names `raw_tracks`,
+    tidy numbers `mapping`) into tracks, in drawing order; equal drawings of a track get one
+    number. Frame i shows drawing `shown[i]` (the drawings numbered in the order frames first show
+    them, so numbering them in order numbers the tracks' drawings in frame order)."""
     tracks: dict[str, _Track] = {}
     numbers: dict[str, dict[tuple[int, ...], int]] = {}
-    for state, parts in frames:
-        by_track: dict[str, list[int]] = {}
-        for raw in parts:
-            by_track.setdefault(raw_tracks[raw], []).append(mapping[raw])
-        for name, tidy_parts in by_track.items():
-            track = tracks.setdefault(name, _Track())
-            known = numbers.setdefault(name, {})
-            number = known.get(tuple(tidy_parts))
+    columns: dict[str, list[int]] = {}  # each track's drawing number in every drawing (-1: not in it)
+    layouts: dict[tuple[str, ...], list[tuple[str, Callable[[list[int]], tuple[int, ...]]]]] = {}
+    for index, (state, parts) in enumerate(zip(states, raw, strict=True)):
+        names = tuple(map(raw_tracks.__getitem__, parts))
+        layout = layouts.get(names) or layouts.setdefault(names, _layout(names))
+        tidy = list(map(mapping.__getitem__, parts))
+        for name, pick in layout:
+            tidy_parts = pick(tidy)
+            known = numbers.get(name)
+            if known is None:
+                known = numbers[name] = {}
+                tracks[name], columns[name] = _Track(), [-1] * len(raw)
+            number = known.get(tidy_parts)
             if number is None:
-                number = known[tuple(tidy_parts)] = len(track.drawings)
-                track.drawings.append(tidy_parts)
+                track = tracks[name]
+                number = known[tidy_parts] = len(track.drawings)
+                track.drawings.append(list(tidy_parts))
                 if name == MOUTH_TRACK:
                     track.shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
-            track.keys.append(number)
+            columns[name][index] = number
+    for name, track in tracks.items():
+        keys = np.asarray(columns[name])[np.asarray(shown, dtype=np.intp)]
+        track.keys = keys[keys >= 0].tolist()
     return tracks
+
+
+def _layout(names: tuple[str, ...]) -> list[tuple[str, Callable[[list[int]], tuple[int, ...]]]]:
+    """The tracks of a drawing whose parts are in the tracks `names`, in drawing order, each with a
+    picker of its parts' numbers (a tuple) from the drawing's numbers."""
+    places: dict[str, list[int]] = {}
+    for place, name in enumerate(names):
+        places.setdefault(name, []).append(place)
+    return [(name, operator.itemgetter(*at) if len(at) > 1 else _alone(at[0])) for name, at in places.items()]
+
+
+def _alone(place: int) -> Callable[[list[int]], tuple[int, ...]]:
+    """_layout's picker of the one part at `place` (itemgetter of one place gives no tuple)."""
+    return lambda numbers: (numbers[place],)
 
 
 def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dict[str, str]:
@@ -496,30 +521,34 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
-              progress: Callable[[float], None]) -> list[tuple[Numbered, Drawn]]:
+              progress: Callable[[float], None], writer: Writer) -> list[tuple[Numbered, Drawn]]:
     """_draw_compacted of `states`, in order: in one go, or with `workers` 2 and at least
     POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool)
     meanwhile. When the helper cannot be started, has not begun or fails, its half is drawn here
-    (workers.offloaded)."""
+    (workers.offloaded). `writer` prepares the first half's templates (Writer.prepare) before the
+    second half is taken in (while it comes)."""
     if workers < 2 or len(states) < POOL_STATES:
         return [_draw_compacted(face, states, progress)]
     half = len(states) // 2
     with helper_pool(workers) as pool:
         other = offloaded(pool, _draw_compacted, face, states[half:])
         first = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
+        writer.prepare(first[1])
         return [first, other()]
 
 
 def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
     """The raw part numbers of each drawing of `halves` (_drawings'), collected by `writer` in
-    order (Writer.collector), and the halves' path data compacted together (pathdata.merged). A
+    order (Writer.collected), and the halves' path data compacted together (pathdata.merged). A
     drawing whose key an earlier one has is that one's. (The halves are let go on return.)"""
     done = reduce(merged, (parts.done for _, parts in halves))
-    drawn: dict[DrawingKey, tuple[int, ...]] = {}
-    raw = []
+    where: dict[DrawingKey, int] = {}  # the first drawing of each key
+    raw: list[tuple[int, ...]] = []
     for drawings, parts in halves:
-        collect = writer.collector(parts, done)
-        raw += [drawn.get(key) or drawn.setdefault(key, collect(numbers)) for key, numbers in drawings]
+        firsts = [where.setdefault(key, index) for index, (key, _) in enumerate(drawings, len(raw))]
+        own = [index for index, first in enumerate(firsts, len(raw)) if first == index]
+        mine = dict(zip(own, writer.collected(parts, done, (drawings[index - len(raw)][1] for index in own))))
+        raw += [mine[first] if first in mine else raw[first] for first in firsts]
     return raw, done
 
 
@@ -566,10 +595,9 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done)))
-    frames = [(distinct[number], raw[number]) for number in shown]
+    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer))
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
-    tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
+    tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
     reuse = _reuse(tracks, writer, mapping, tolerance,
                    lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers)

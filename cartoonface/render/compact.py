@@ -22,7 +22,7 @@ as text, spliced into the document's bytes, so the drawings are never parsed nor
 ("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
 (`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
-the drawings by those numbers (`Writer.collector`) and goes on from there, making again only the
+the drawings by those numbers (`Writer.collected`) and goes on from there, making again only the
 skeletons whose path data the other process's first path data changed ("Finishing in parallel",
 "The SVG stage's middle").
 """
@@ -121,7 +121,7 @@ class RawPart(NamedTuple):
 
 @dataclass(frozen=True)
 class Drawn:
-    """The distinct parts one drawing process drew, made ready for Writer.collector by that process
+    """The distinct parts one drawing process drew, made ready for Writer.collected by that process
     (drawn_parts): `parts`, distinct, each as (name, text, clips) (elements.Part's fields: plain
     tuples unpickle six times as fast); `done`, all their path data compacted; per
     part its skeleton and values (_skeleton's with done.compact) as `forms` (the number of its
@@ -164,12 +164,14 @@ class Writer:
 
     def __init__(self, label_of: Callable[[str], str]) -> None:
         self.label_of = label_of
+        self._labels: dict[str, str] = {}  # label_of's, by name
         self.raw_ids: dict[tuple[str, tuple[str, ...]], int] = {}
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
         self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
         self._templates: dict[str, _Template] = {}  # by skeleton, and the distinct tidy drawings'
+        self._ahead: dict[str, _Template] = {}  # made by prepare, for finish
         self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
         self._forms: list[tuple[str, list[str]] | None] = []  # per raw part, when a drawing process made them
         self._held: set[str] = set()  # the path data of drawn_parts' Drawn.holds the collected parts hold
@@ -179,37 +181,42 @@ class Writer:
         in drawing order."""
         return tuple(self._number((part.name, part.text, part.clips), None) for part in parts)
 
-    def collector(self, drawn: Drawn, done: Compacted) -> Callable[[Sequence[int]], tuple[int, ...]]:
-        """A `collect` of drawings whose parts are given by their numbers in `drawn` (a drawing
-        process's, drawn_parts): each part is looked at once. A part's skeleton and values are
-        taken from `drawn` when `done` (the path data of all the processes compacted together,
-        pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
-        # the compact forms another process's first path data changed (pathdata.merged): the
-        # skeletons holding them are made again
-        changed = set() if done is drawn.done else {form for d, form in drawn.done.compact.items()
-                                                     if done.compact[d] != form}
+    def collected(self, drawn: Drawn, done: Compacted, drawings: Iterable[Sequence[int]]) -> list[tuple[int, ...]]:
+        """`collect` of each of `drawings`, whose parts are given by their numbers in `drawn` (a
+        drawing process's, drawn_parts), in order: the raw part numbers of each. A part's skeleton
+        and values are taken from `drawn` when `done` (the path data of all the processes compacted
+        together, pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
+        # the compact forms another process's first path data changed (pathdata.merged compacts the
+        # members of a skeleton whose first differs again, and no other path data): the skeletons
+        # holding them are made again
+        changed = {form for skeleton, first in drawn.done.firsts.items() if done.firsts.get(skeleton) != first
+                   for d in drawn.done.members[skeleton] if done.compact[d] != (form := drawn.done.compact[d])}
+        drawings = list(drawings)
         raws = [-1] * len(drawn.parts)
+        # each part numbered once, in the order the drawings first show it (mostly its own number's)
+        for number in dict.fromkeys(number for numbers in drawings for number in numbers):
+            skeleton, values = drawn.forms[number]
+            raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
+                                        if not changed or changed.isdisjoint(values) else None)
+        self._held.update(d for number, held in drawn.holds.items() if raws[number] >= 0 for d in held)
+        return [tuple([raws[number] for number in numbers]) for numbers in drawings]
 
-        def collect(numbers: Sequence[int]) -> tuple[int, ...]:
-            for number in [number for number in numbers if raws[number] < 0]:
-                skeleton, values = drawn.forms[number]
-                raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
-                                            if changed.isdisjoint(values) else None)
-                if number in drawn.holds:
-                    self._held.update(drawn.holds[number])
-            return tuple([raws[number] for number in numbers])
-
-        return collect
+    def prepare(self, drawn: Drawn) -> None:
+        """Make the templates of the skeletons of `drawn` (a drawing process's, drawn_parts) ahead of
+        finish (in a drawing process's idle time: while the other one's parts come), which takes those
+        of the skeletons its parts have (a part whose skeleton finish makes again may not)."""
+        for skeleton in drawn.skeletons:
+            if skeleton not in self._ahead:
+                self._ahead[skeleton] = self._template(skeleton)
 
     def _number(self, part: tuple[str, str, tuple[str, ...]], form: tuple[str, list[str]] | None) -> int:
         """The raw part number of `part` (name, text, clips), a new one when its text and clips are
         new, which then keeps `form`: its skeleton and values (_skeleton's) or None (finish makes them)."""
         name, text, clips = part
-        key = (text, clips)
-        number = self.raw_ids.get(key)
-        if number is None:
-            number = self.raw_ids[key] = len(self.raw)
-            self.raw.append(RawPart(self.label_of(name), text, clips))
+        number = self.raw_ids.setdefault((text, clips), len(self.raw))
+        if number == len(self.raw):
+            label = self._labels.get(name) or self._labels.setdefault(name, self.label_of(name))
+            self.raw.append(RawPart(label, text, clips))
             self._forms.append(form)
         return number
 
@@ -219,7 +226,7 @@ class Writer:
         (`drawings()` then makes them). `progress(fraction)`, when given, is
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. `done`: path data
         compacted already (the drawing processes', drawn_parts and pathdata.merged, whose parts
-        `collector` took), which may hold more than the parts collected."""
+        `collected` took), which may hold more than the parts collected."""
         forms, self._forms = self._forms, []  # let go when finish returns
         if done is None or not self._held.issuperset(done.firsts.values()):
             # the first path data of a skeleton (whose points are kept in all) came from a drawing
@@ -239,14 +246,20 @@ class Writer:
             skeleton, values = form or _skeleton((part.element, *part.definitions), compact)
             template = templates.get(skeleton)
             if template is None:
-                template = templates[skeleton] = self._template(skeleton)
+                template = templates[skeleton] = (self._ahead.pop(skeleton) if skeleton in self._ahead else self._template(skeleton))
             text = template.form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
             number = tidy_ids.get(text)
             if number is None:
                 number = tidy_ids[text] = len(distinct)
                 distinct.append((skeleton, values))
             mapping.append(number)
-        self._templates, self._distinct = templates, distinct
+        self._templates, self._distinct, self._ahead = templates, distinct, {}
+        # the style classes in the order the templates made in this order make them (a template
+        # makes its new ones in the order its text holds them), those of templates made ahead
+        # and not taken left out: the style sheet's order
+        style = {label: key for key, label in self.styles.items()}
+        self.styles = {style[label]: label
+                       for label in dict.fromkeys(label for template in templates.values() for label in _CLASS.findall(template.form))}
         return mapping
 
     def drawings(self) -> list[list[str]]:
