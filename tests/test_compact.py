@@ -145,7 +145,8 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
     """Writer.collected takes the skeletons each drawing process made of its own parts
     (compact.drawn_parts): halves cut anywhere, their path data compacted apart (another first
     path data chooses the points kept), drawings left out (a state whose key an earlier drawing
-    has) among them the one holding a first path data, give the tidy drawings, numbers and style
+    has) among them the one holding a first path data, templates made ahead (Writer.prepare) of
+    the second half, give the tidy drawings, each drawing's tidy part numbers and the style
     classes of one process collecting the same drawings."""
     from functools import reduce
 
@@ -161,19 +162,21 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
     assert everything.firsts and holding
     for left_out in (set(), {min(holding)} | set(range(5, 90, 11))):
         reference = Writer(track_of)
-        for index, (_, numbers) in enumerate(whole):
-            if index not in left_out:
-                reference.collect([Part(*drawn.parts[number]) for number in numbers])
-        expected = reference.finish()
+        reference_raw = [reference.collect([Part(*drawn.parts[number]) for number in numbers])
+                         for index, (_, numbers) in enumerate(whole) if index not in left_out]
+        mapping = reference.finish()
+        expected = [[mapping[number] for number in numbers] for numbers in reference_raw]
         drawings = reference.drawings()
         for cut in (7, 45, 80):
             halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:])]
             done = reduce(merged, (half.done for _, half in halves))
             writer = Writer(track_of)
-            for offset, (numbered, half) in zip((0, cut), halves, strict=True):
-                writer.collected(half, done, [numbers for index, (_, numbers) in enumerate(numbered, offset)
-                                              if index not in left_out])
-            assert writer.finish(None, done) == expected
+            writer.prepare(halves[1][1])  # templates made ahead, out of order: the same style classes
+            raw = [numbers for offset, (numbered, half) in zip((0, cut), halves, strict=True)
+                   for numbers in writer.collected(half, done, [numbers for index, (_, numbers) in enumerate(numbered, offset)
+                                                                if index not in left_out])]
+            mapping = writer.finish(None, done)
+            assert [[mapping[number] for number in numbers] for numbers in raw] == expected
             assert writer.drawings() == drawings
             assert writer.style_sheet() == reference.style_sheet()
 

@@ -34,6 +34,7 @@ import html
 import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from itertools import repeat
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -164,7 +165,6 @@ class Writer:
 
     def __init__(self, label_of: Callable[[str], str]) -> None:
         self.label_of = label_of
-        self._labels: dict[str, str] = {}  # label_of's, by name
         self.raw_ids: dict[tuple[str, tuple[str, ...]], int] = {}
         self.raw: list[RawPart] = []
         self.styles: dict[tuple[tuple[str, str], ...], str] = {}
@@ -179,25 +179,38 @@ class Writer:
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
         in drawing order."""
-        return tuple(self._number((part.name, part.text, part.clips), None) for part in parts)
+        numbers = []
+        for part in parts:
+            key = (part.text, part.clips)
+            number = self.raw_ids.get(key)
+            if number is None:  # a new part: finish makes its skeleton
+                number = self.raw_ids[key] = len(self.raw)
+                self.raw.append(RawPart(self.label_of(part.name), part.text, part.clips))
+                self._forms.append(None)
+            numbers.append(number)
+        return tuple(numbers)
 
     def collected(self, drawn: Drawn, done: Compacted, drawings: Iterable[Sequence[int]]) -> list[tuple[int, ...]]:
         """`collect` of each of `drawings`, whose parts are given by their numbers in `drawn` (a
-        drawing process's, drawn_parts), in order: the raw part numbers of each. A part's skeleton
-        and values are taken from `drawn` when `done` (the path data of all the processes compacted
-        together, pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
+        drawing process's, drawn_parts), in order: the raw part numbers of each. Each part of
+        `drawn` they show is a new raw part (a part that another process's drawings show too is two:
+        finish gives them one tidy drawing, numbered at the first). A part's skeleton and values are
+        taken from `drawn` when `done` (the path data of all the processes compacted together,
+        pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
         # the compact forms another process's first path data changed (pathdata.merged compacts the
         # members of a skeleton whose first differs again, and no other path data): the skeletons
         # holding them are made again
         changed = {form for skeleton, first in drawn.done.firsts.items() if done.firsts.get(skeleton) != first
                    for d in drawn.done.members[skeleton] if done.compact[d] != (form := drawn.done.compact[d])}
         drawings = list(drawings)
+        order = list(dict.fromkeys(number for numbers in drawings for number in numbers))  # as first shown
         raws = [-1] * len(drawn.parts)
-        # each part numbered once, in the order the drawings first show it (mostly its own number's)
-        for number in dict.fromkeys(number for numbers in drawings for number in numbers):
-            skeleton, values = drawn.forms[number]
-            raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
-                                        if not changed or changed.isdisjoint(values) else None)
+        for raw, number in enumerate(order, len(self.raw)):
+            raws[number] = raw
+        labels = {name: self.label_of(name) for name in {drawn.parts[number][0] for number in order}}
+        self.raw += [RawPart(labels[name], text, clips) for name, text, clips in map(drawn.parts.__getitem__, order)]
+        self._forms += [(drawn.skeletons[skeleton], values) if not changed or changed.isdisjoint(values) else None
+                        for skeleton, values in map(drawn.forms.__getitem__, order)]
         self._held.update(d for number, held in drawn.holds.items() if raws[number] >= 0 for d in held)
         return [tuple([raws[number] for number in numbers]) for numbers in drawings]
 
@@ -208,17 +221,6 @@ class Writer:
         for skeleton in drawn.skeletons:
             if skeleton not in self._ahead:
                 self._ahead[skeleton] = self._template(skeleton)
-
-    def _number(self, part: tuple[str, str, tuple[str, ...]], form: tuple[str, list[str]] | None) -> int:
-        """The raw part number of `part` (name, text, clips), a new one when its text and clips are
-        new, which then keeps `form`: its skeleton and values (_skeleton's) or None (finish makes them)."""
-        name, text, clips = part
-        number = self.raw_ids.setdefault((text, clips), len(self.raw))
-        if number == len(self.raw):
-            label = self._labels.get(name) or self._labels.setdefault(name, self.label_of(name))
-            self.raw.append(RawPart(label, text, clips))
-            self._forms.append(form)
-        return number
 
     def finish(self, progress: Callable[[float], None] | None = None,
                done: Compacted | None = None) -> list[int]:
@@ -239,20 +241,22 @@ class Writer:
         templates: dict[str, _Template] = {}
         tidy_ids: dict[str, int] = {}
         distinct: list[tuple[str, list[str]]] = []  # skeleton and values of each distinct tidy drawing
-        mapping = []
-        for index, (part, form) in enumerate(zip(self.raw, forms, strict=True)):
-            if progress is not None and index % PROGRESS_PARTS == 0:
-                progress(index / len(self.raw))
-            skeleton, values = form or _skeleton((part.element, *part.definitions), compact)
-            template = templates.get(skeleton)
-            if template is None:
-                template = templates[skeleton] = (self._ahead.pop(skeleton) if skeleton in self._ahead else self._template(skeleton))
-            text = template.form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
-            number = tidy_ids.get(text)
-            if number is None:
-                number = tidy_ids[text] = len(distinct)
-                distinct.append((skeleton, values))
-            mapping.append(number)
+        mapping: list[int] = []
+        for start in range(0, len(self.raw), PROGRESS_PARTS):
+            if progress is not None:
+                progress(start / len(self.raw))
+            end = start + PROGRESS_PARTS
+            chunk = [form or _skeleton((part.element, *part.definitions), compact)
+                     for part, form in zip(self.raw[start:end], forms[start:end], strict=True)]
+            for skeleton in dict.fromkeys(skeleton for skeleton, _ in chunk):  # made in the order first used
+                if skeleton not in templates:
+                    templates[skeleton] = self._ahead.pop(skeleton) if skeleton in self._ahead else self._template(skeleton)
+            # alike drawings alike, with the local ids; numbered as they first come
+            mapping += [tidy_ids.setdefault(text, len(tidy_ids))
+                        for text in [templates[skeleton].form.format(*values, k=LOCAL) for skeleton, values in chunk]]
+            for form, number in zip(chunk, mapping[start:], strict=True):
+                if number == len(distinct):  # its first
+                    distinct.append(form)
         self._templates, self._distinct, self._ahead = templates, distinct, {}
         # the style classes in the order the templates made in this order make them (a template
         # makes its new ones in the order its text holds them), those of templates made ahead
@@ -272,9 +276,8 @@ class Writer:
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
         # the local definitions' ids made the drawing's own: "k" and its number
         # kept as text, which the document is written from (no parse, no serializing again)
-        texts, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
-                                           for piece, definition in forms[skeleton]]
-                                          for number, (skeleton, values) in enumerate(distinct)])
+        texts, self.definitions = _hoist([[(piece.format(*values, k=own), definition) for piece, definition in forms[skeleton]]
+                                          for (skeleton, values), own in zip(distinct, map(short_id, repeat("k"), range(len(distinct))))])
         return [SEPARATOR.join(kept).split(SEPARATOR) if kept else [] for kept in texts]
 
     def _short_classes(self, templates: dict[str, _Template],
@@ -473,6 +476,9 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], lis
             copy[0].set("id", names[content] + "_")
     texts: list[list[str]] = []
     for pieces, drawing in zip(drawings, keys, strict=True):
+        if not any(drawing):  # no definition (most drawings)
+            texts.append([text for text, _ in pieces])
+            continue
         local: dict[str, str] = {}
         kept = []
         for (text, _), key in zip(pieces, drawing, strict=True):
