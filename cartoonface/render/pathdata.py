@@ -318,8 +318,13 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
             continue
         if one != other:  # the later side's members compacted again from their rows, after the earlier first's
             earlier, later = (first, second) if one < other else (second, first)
-            _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done,
-                           rounded=np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64))
+            rows = np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64)
+            done.firsts[skeleton] = earlier.firsts[skeleton]
+            commands = _commands(skeleton, rows.shape[1])
+            assert commands is not None, skeleton  # rows are kept of compacted members only
+            spans = _spans(commands)
+            if _kept(commands, spans, rows[0]) != _kept(commands, spans, rows[1]):  # else the same forms
+                _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done, rounded=rows)
         done.members[skeleton], done.rows[skeleton] = first.members[skeleton], first.rows[skeleton]
         _join(skeleton, (second.members[skeleton], second.rows[skeleton]), done)
     return done
