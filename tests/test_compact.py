@@ -173,8 +173,8 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
             writer = Writer(track_of)
             writer.prepare(halves[1][1])  # templates made ahead, out of order: the same style classes
             raw = [numbers for offset, (numbered, half) in zip((0, cut), halves, strict=True)
-                   for numbers in writer.collected(half, done, [numbers for index, (_, numbers) in enumerate(numbered, offset)
-                                                                if index not in left_out])]
+                   for numbers in writer.collected(half, [numbers for index, (_, numbers) in enumerate(numbered, offset)
+                                                  if index not in left_out])]
             mapping = writer.finish(None, done)
             assert [[mapping[number] for number in numbers] for numbers in raw] == expected
             assert writer.drawings() == drawings

@@ -56,7 +56,6 @@ import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from functools import reduce
 from itertools import count
 
 import numpy as np
@@ -521,35 +520,38 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
-              progress: Callable[[float], None], writer: Writer) -> list[tuple[Numbered, Drawn]]:
-    """_draw_compacted of `states`, in order: in one go, or with `workers` 2 and at least
-    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool)
-    meanwhile. When the helper cannot be started, has not begun or fails, its half is drawn here
-    (workers.offloaded). `writer` prepares the first half's templates (Writer.prepare) before the
-    second half is taken in (while it comes)."""
+              progress: Callable[[float], None], writer: Writer) -> tuple[list[tuple[int, ...]], Compacted]:
+    """_draw_compacted of `states` collected by `writer` in order (_collected): the raw part
+    numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In one
+    go, or with `workers` 2 and at least POOL_STATES states in two halves, the second drawn by a
+    forked helper (workers.helper_pool) meanwhile; the first half is collected and its templates
+    made (Writer.prepare) while the second comes. When the helper cannot be started, has not begun
+    or fails, its half is drawn here (workers.offloaded)."""
+    where: dict[DrawingKey, int] = {}
     if workers < 2 or len(states) < POOL_STATES:
-        return [_draw_compacted(face, states, progress)]
+        numbered, drawn = _draw_compacted(face, states, progress)
+        return _collected(writer, numbered, drawn, where, []), drawn.done
     half = len(states) // 2
     with helper_pool(workers) as pool:
         other = offloaded(pool, _draw_compacted, face, states[half:])
-        first = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
-        writer.prepare(first[1])
-        return [first, other()]
+        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
+        raw = _collected(writer, numbered, drawn, where, [])
+        writer.prepare(drawn)
+        done = drawn.done
+        numbered, drawn = other()
+    return _collected(writer, numbered, drawn, where, raw), merged(done, drawn.done)
 
 
-def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
-    """The raw part numbers of each drawing of `halves` (_drawings'), collected by `writer` in
-    order (Writer.collected), and the halves' path data compacted together (pathdata.merged). A
-    drawing whose key an earlier one has is that one's. (The halves are let go on return.)"""
-    done = reduce(merged, (parts.done for _, parts in halves))
-    where: dict[DrawingKey, int] = {}  # the first drawing of each key
-    raw: list[tuple[int, ...]] = []
-    for drawings, parts in halves:
-        firsts = [where.setdefault(key, index) for index, (key, _) in enumerate(drawings, len(raw))]
-        own = [index for index, first in enumerate(firsts, len(raw)) if first == index]
-        mine = dict(zip(own, writer.collected(parts, done, (drawings[index - len(raw)][1] for index in own))))
-        raw += [mine[first] if first in mine else raw[first] for first in firsts]
-    return raw, done
+def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[DrawingKey, int],
+               raw: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+    """`raw` (the raw part numbers of the drawings collected before) and those of the `drawings` of
+    one drawing process (_draw_compacted's, with `drawn`) collected by `writer` (Writer.collected).
+    A drawing whose key an earlier one has (`where`: the first drawing of each key, filled) is
+    that one's."""
+    firsts = [where.setdefault(key, index) for index, (key, _) in enumerate(drawings, len(raw))]
+    own = [index for index, first in enumerate(firsts, len(raw)) if first == index]
+    mine = dict(zip(own, writer.collected(drawn, (drawings[index - len(raw)][1] for index in own))))
+    return raw + [mine[first] if first in mine else raw[first] for first in firsts]
 
 
 @collector_paused()  # its containers hold no cycles (workers.collector_paused; also for callers but generate)
@@ -595,7 +597,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer))
+    raw, done = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer)
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here

@@ -41,7 +41,7 @@ from typing import NamedTuple
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, markup, parse_elements
-from cartoonface.render.pathdata import Compacted, Extent, Tenths, compacted
+from cartoonface.render.pathdata import Compacted, Extent, Tenths, changed_forms, compacted
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -175,6 +175,7 @@ class Writer:
         self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
         self._forms: list[tuple[str, list[str]] | None] = []  # per raw part, when a drawing process made them
         self._held: set[str] = set()  # the path data of drawn_parts' Drawn.holds the collected parts hold
+        self._collected: list[tuple[Compacted, int, int]] = []  # by collected: each Drawn's path data, its raw parts
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
@@ -190,27 +191,22 @@ class Writer:
             numbers.append(number)
         return tuple(numbers)
 
-    def collected(self, drawn: Drawn, done: Compacted, drawings: Iterable[Sequence[int]]) -> list[tuple[int, ...]]:
+    def collected(self, drawn: Drawn, drawings: Iterable[Sequence[int]]) -> list[tuple[int, ...]]:
         """`collect` of each of `drawings`, whose parts are given by their numbers in `drawn` (a
         drawing process's, drawn_parts), in order: the raw part numbers of each. Each part of
         `drawn` they show is a new raw part (a part that another process's drawings show too is two:
-        finish gives them one tidy drawing, numbered at the first). A part's skeleton and values are
-        taken from `drawn` when `done` (the path data of all the processes compacted together,
-        pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
-        # the compact forms another process's first path data changed (pathdata.merged compacts the
-        # members of a skeleton whose first differs again, and no other path data): the skeletons
-        # holding them are made again
-        changed = {form for skeleton, first in drawn.done.firsts.items() if done.firsts.get(skeleton) != first
-                   for d in drawn.done.members[skeleton] if done.compact[d] != (form := drawn.done.compact[d])}
+        finish gives them one tidy drawing, numbered at the first). A part keeps its skeleton and
+        values from `drawn` (finish makes them again where the path data of all the processes
+        compacted together write its path data otherwise)."""
         drawings = list(drawings)
         order = list(dict.fromkeys(number for numbers in drawings for number in numbers))  # as first shown
         raws = [-1] * len(drawn.parts)
         for raw, number in enumerate(order, len(self.raw)):
             raws[number] = raw
+        self._collected.append((drawn.done, len(self.raw), len(self.raw) + len(order)))
         labels = {name: self.label_of(name) for name in {drawn.parts[number][0] for number in order}}
         self.raw += [RawPart(labels[name], text, clips) for name, text, clips in map(drawn.parts.__getitem__, order)]
-        self._forms += [(drawn.skeletons[skeleton], values) if not changed or changed.isdisjoint(values) else None
-                        for skeleton, values in map(drawn.forms.__getitem__, order)]
+        self._forms += [(drawn.skeletons[skeleton], values) for skeleton, values in map(drawn.forms.__getitem__, order)]
         self._held.update(d for number, held in drawn.holds.items() if raws[number] >= 0 for d in held)
         return [tuple([raws[number] for number in numbers]) for numbers in drawings]
 
@@ -228,7 +224,8 @@ class Writer:
         (`drawings()` then makes them). `progress(fraction)`, when given, is
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. `done`: path data
         compacted already (the drawing processes', drawn_parts and pathdata.merged, whose parts
-        `collected` took), which may hold more than the parts collected."""
+        `collected` took), which may hold more than the parts collected; a part collected keeps
+        its skeleton and values unless `done` writes a compact form of them otherwise."""
         forms, self._forms = self._forms, []  # let go when finish returns
         if done is None or not self._held.issuperset(done.firsts.values()):
             # the first path data of a skeleton (whose points are kept in all) came from a drawing
@@ -236,6 +233,11 @@ class Writer:
             # skeleton made here
             done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
             forms = [None] * len(self.raw)
+        for own, start, end in self._collected:  # the forms another process's first path data changed: made again
+            changed = changed_forms(own, done)
+            if changed:
+                forms[start:end] = [form if form is None or changed.isdisjoint(form[1]) else None for form in forms[start:end]]
+        self._collected = []
         compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
         templates: dict[str, _Template] = {}

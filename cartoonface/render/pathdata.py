@@ -330,6 +330,14 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
     return done
 
 
+def changed_forms(own: Compacted, done: Compacted) -> set[str]:
+    """The compact forms of `own` that `done` (`merged` of it and others) writes otherwise: those
+    of the members of a skeleton whose first path data another side has earlier (`merged`
+    compacts them again; no other path data changes)."""
+    return {form for skeleton, first in own.firsts.items() if done.firsts.get(skeleton) != first
+            for d in own.members[skeleton] if done.compact[d] != (form := own.compact[d])}
+
+
 def _join(skeleton: str, other: tuple[list[str], np.ndarray], done: Compacted) -> None:
     """Add the members `other` (sorted path data and their rows, Compacted's) of `skeleton` to
     those of `done` (kept sorted, each once)."""
