@@ -52,6 +52,10 @@ DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", 
 POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
 KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
                   "offset", "id"))
+# KEPT sizes (not rounded) that change from state to state (a mouth's gloss and tongue, the cheeks'
+# blush): taken out of a part's skeleton as written, as positions are, so that parts differing only
+# in them are tidied by one template (a fifth as many skeletons: docs/BENCHMARKS.md, "mid").
+SIZES = frozenset(("r", "rx", "ry", "width", "height"))
 # Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
 # with no other attribute can be dissolved into its children. Not opacity, which applies to
 # the group as a whole.
@@ -83,11 +87,11 @@ _ANY_TAG = re.compile(r'<(/?)[^>]*>')
 _FIRST_PATH = re.compile(r'<path[\s/>]')
 _CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's text (Writer._short_classes)
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
-# the attributes it takes out (path data and positions), a path data's token, and the
-# placeholder positions (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
-_VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS))})="([^"]*)"')
+# the attributes it takes out (path data, positions and sizes), a path data's token, and the
+# placeholder positions and sizes (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
+_VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS | SIZES))})="([^"]*)"')
 _TOKEN = re.compile(r'="@(\d+)@"')
-SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions
+SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions and sizes
 _FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
 # A local definition's id ("c0", "c1_") where a tidy drawing's text names it: as an id, in a
 # url() reference or a <use>'s href. Writer.finish writes the drawing's own prefix in its place
@@ -390,9 +394,10 @@ def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, lis
     """A part's `texts` (its element, then its definitions) with the values that tidying only
     passes on taken out: each path data as "@k@", k numbering its distinct compact forms
     (`compact`, a Compacted's) in order, so paths alike after compacting stay alike (an
-    outline and its clip path); each position (POSITIONS) as SENTINEL + j, j counting them.
-    Returns the text and the values: the distinct compact path data, then the positions
-    rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
+    outline and its clip path); each position (POSITIONS) and each size (SIZES, a plain number)
+    as SENTINEL + j, j counting them. Returns the text and the values: the distinct compact path
+    data, then the positions rounded to whole pixels and the sizes as written, in the order of the
+    text. Parts with one skeleton are tidied alike (Writer._template)."""
     return _skeleton_of(_VALUE.split("".join(texts)), compact)
 
 
@@ -405,9 +410,11 @@ def _skeleton_of(cut: list[str], compact: dict[str, str]) -> tuple[str, list[str
         name, value = cut[index], cut[index + 1]
         if name == "d":
             cut[index] = _path_token(distinct.setdefault(compact[_text(value)], len(distinct)))
-        else:
+        elif name in POSITIONS or value.replace(".", "", 1).isdigit():
             cut[index] = _position_token(name, len(positions))
-            positions.append(_whole(value))
+            positions.append(_whole(value) if name in POSITIONS else _as_written(value))
+        else:  # a size that is not a plain number stays in the skeleton
+            cut[index] = f' {name}="{value}"'
         cut[index + 1] = ""
     return "".join(cut), [*distinct, *positions]
 
@@ -421,7 +428,7 @@ def _path_token(number: int) -> str:
 
 @functools.cache
 def _position_token(name: str, number: int) -> str:
-    """_skeleton's attribute `name` (POSITIONS) holding its placeholder position `number`."""
+    """_skeleton's attribute `name` (POSITIONS, SIZES) holding its placeholder position `number`."""
     return f' {name}="{SENTINEL + number}"'
 
 
@@ -430,6 +437,12 @@ def _whole(value: str) -> str:
     """A position's text `value` rounded to whole pixels, as text (the drawings repeat a few
     thousand positions over and over)."""
     return str(round(float(value)))
+
+
+@functools.lru_cache(maxsize=1 << 12)
+def _as_written(value: str) -> str:
+    """A size's text `value`, one object for equal texts (sent pickled once per drawing process)."""
+    return value
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
