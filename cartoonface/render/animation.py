@@ -201,48 +201,37 @@ def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: 
             raw_tracks: Sequence[str], mapping: Sequence[int]) -> dict[str, _Track]:
     """Group the raw parts of each distinct drawing `raw` (of `states`; track names `raw_tracks`,
     tidy numbers `mapping`) into tracks, in drawing order; equal drawings of a track get one
-    number. Frame i shows drawing `shown[i]` (the drawings numbered in the order frames first show
-    them, so numbering them in order numbers the tracks' drawings in frame order)."""
-    tracks: dict[str, _Track] = {}
-    numbers: dict[str, dict[tuple[int, ...], int]] = {}
-    columns: dict[str, list[int]] = {}  # each track's drawing number in every drawing (-1: not in it)
-    layouts: dict[tuple[str, ...], list[tuple[str, Callable[[list[int]], tuple[int, ...]]]]] = {}
-    for index, (state, parts) in enumerate(zip(states, raw, strict=True)):
-        names = tuple(map(raw_tracks.__getitem__, parts))
-        layout = layouts.get(names) or layouts.setdefault(names, _layout(names))
-        tidy = list(map(mapping.__getitem__, parts))
-        for name, pick in layout:
-            tidy_parts = pick(tidy)
-            known = numbers.get(name)
-            if known is None:
-                known = numbers[name] = {}
-                tracks[name], columns[name] = _Track(), [-1] * len(raw)
-            number = known.get(tidy_parts)
-            if number is None:
-                track = tracks[name]
-                number = known[tidy_parts] = len(track.drawings)
-                track.drawings.append(list(tidy_parts))
-                if name == MOUTH_TRACK:
-                    track.shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
-            columns[name][index] = number
-    for name, track in tracks.items():
-        keys = np.asarray(columns[name])[np.asarray(shown, dtype=np.intp)]
-        track.keys = keys[keys >= 0].tolist()
-    return tracks
-
-
-def _layout(names: tuple[str, ...]) -> list[tuple[str, Callable[[list[int]], tuple[int, ...]]]]:
-    """The tracks of a drawing whose parts are in the tracks `names`, in drawing order, each with a
-    picker of its parts' numbers (a tuple) from the drawing's numbers."""
+    number, in the order frames first show them (frame i shows drawing `shown[i]`; the drawings
+    are numbered in the order frames first show them). Every drawing has its parts in the same
+    tracks in the same order (render/svg.py's face_parts): numpy over all drawings at once."""
+    if not len(raw):
+        return {}
+    parts = np.asarray(raw)  # (drawings, parts)
+    names = [raw_tracks[number] for number in raw[0]]
+    assert (np.asarray(raw_tracks)[parts] == np.asarray(names)).all(), "drawings with their parts in other tracks"
+    tidy = np.asarray(mapping)[parts]
     places: dict[str, list[int]] = {}
     for place, name in enumerate(names):
         places.setdefault(name, []).append(place)
-    return [(name, operator.itemgetter(*at) if len(at) > 1 else _alone(at[0])) for name, at in places.items()]
+    tracks = {}
+    frames = np.asarray(shown, dtype=np.intp)
+    for name, at in places.items():
+        numbers, firsts = _numbered_rows(tidy[:, at])
+        shapes = [max(states[index].mouth, key=operator.itemgetter(1))[0] for index in firsts.tolist()] if name == MOUTH_TRACK else []
+        tracks[name] = _Track(tidy[firsts][:, at].tolist(), numbers[frames].tolist(), shapes)
+    return tracks
 
 
-def _alone(place: int) -> Callable[[list[int]], tuple[int, ...]]:
-    """_layout's picker of the one part at `place` (itemgetter of one place gives no tuple)."""
-    return lambda numbers: (numbers[place],)
+def _numbered_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of `rows` (n, k) integers numbered in the order they first come: the number
+    of each row (n,), and the index of each number's first row (distinct,). Rows compared as bytes
+    by one np.unique (as pathdata's _alike_rows)."""
+    keys = np.ascontiguousarray(rows).view(f"V{rows.shape[1] * rows.itemsize}").ravel()
+    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # the distinct rows by their first
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[which.reshape(-1)], first[order]
 
 
 def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dict[str, str]:
