@@ -145,8 +145,8 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
     """Writer.collected takes the skeletons each drawing process made of its own parts
     (compact.drawn_parts): halves cut anywhere, their path data compacted apart (another first
     path data chooses the points kept), drawings left out (a state whose key an earlier drawing
-    has) among them the one holding a first path data, templates made ahead (Writer.prepare) of
-    the second half, give the tidy drawings, each drawing's tidy part numbers and the style
+    has) among them the one holding a first path data, templates and tidy texts made ahead
+    (Writer.prepare), give the tidy drawings, each drawing's tidy part numbers and the style
     classes of one process collecting the same drawings."""
     from functools import reduce
 
@@ -171,10 +171,11 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
             halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:])]
             done = reduce(merged, (half.done for _, half in halves))
             writer = Writer(track_of)
-            writer.prepare(halves[1][1])  # templates made ahead, out of order: the same style classes
-            raw = [numbers for offset, (numbered, half) in zip((0, cut), halves, strict=True)
-                   for numbers in writer.collected(half, [numbers for index, (_, numbers) in enumerate(numbered, offset)
-                                                  if index not in left_out])]
+            raw = []
+            for offset, (numbered, half) in zip((0, cut), halves, strict=True):
+                raw += writer.collected(half, [numbers for index, (_, numbers) in enumerate(numbered, offset)
+                                               if index not in left_out])
+                writer.prepare()  # templates and tidy texts made ahead (some parts' made again by finish)
             mapping = writer.finish(None, done)
             assert [[mapping[number] for number in numbers] for numbers in raw] == expected
             assert writer.drawings() == drawings

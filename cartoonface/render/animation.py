@@ -514,7 +514,7 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
     numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In one
     go, or with `workers` 2 and at least POOL_STATES states in two halves, the second drawn by a
     forked helper (workers.helper_pool) meanwhile; the first half is collected and its templates
-    made (Writer.prepare) while the second comes. When the helper cannot be started, has not begun
+    and tidy texts made (Writer.prepare) while the second comes. When the helper cannot be started, has not begun
     or fails, its half is drawn here (workers.offloaded)."""
     where: dict[DrawingKey, int] = {}
     if workers < 2 or len(states) < POOL_STATES:
@@ -525,7 +525,7 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
         other = offloaded(pool, _draw_compacted, face, states[half:])
         numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
         raw = _collected(writer, numbered, drawn, where, [])
-        writer.prepare(drawn)
+        writer.prepare()
         done = drawn.done
         numbered, drawn = other()
     return _collected(writer, numbered, drawn, where, raw), merged(done, drawn.done)

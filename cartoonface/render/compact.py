@@ -176,6 +176,7 @@ class Writer:
         self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
         self._templates: dict[str, _Template] = {}  # by skeleton, and the distinct tidy drawings'
         self._ahead: dict[str, _Template] = {}  # made by prepare, for finish
+        self._texts: list[str | None] = []  # prepare's tidy texts of the first raw parts (finish's)
         self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
         self._forms: list[tuple[str, list[str]] | None] = []  # per raw part, when a drawing process made them
         self._held: set[str] = set()  # the path data of drawn_parts' Drawn.holds the collected parts hold
@@ -214,13 +215,15 @@ class Writer:
         self._held.update(d for number, held in drawn.holds.items() if raws[number] >= 0 for d in held)
         return [tuple([raws[number] for number in numbers]) for numbers in drawings]
 
-    def prepare(self, drawn: Drawn) -> None:
-        """Make the templates of the skeletons of `drawn` (a drawing process's, drawn_parts) ahead of
-        finish (in a drawing process's idle time: while the other one's parts come), which takes those
-        of the skeletons its parts have (a part whose skeleton finish makes again may not)."""
-        for skeleton in drawn.skeletons:
+    def prepare(self) -> None:
+        """Make ahead of finish (in a drawing process's idle time: while the other one's parts
+        come) the templates of the skeletons of the parts `collected` since, and their tidy texts,
+        which finish takes (a part whose skeleton finish makes again does not)."""
+        forms = self._forms[len(self._texts):]
+        for skeleton in dict.fromkeys(form[0] for form in forms if form is not None):
             if skeleton not in self._ahead:
                 self._ahead[skeleton] = self._template(skeleton)
+        self._texts += [None if form is None else self._ahead[form[0]].form.format(*form[1], k=LOCAL) for form in forms]
 
     def finish(self, progress: Callable[[float], None] | None = None,
                done: Compacted | None = None) -> list[int]:
@@ -242,6 +245,8 @@ class Writer:
             if changed:
                 forms[start:end] = [form if form is None or changed.isdisjoint(form[1]) else None for form in forms[start:end]]
         self._collected = []
+        made, self._texts = self._texts, []  # prepare's, of the parts whose forms stand
+        made += [None] * (len(self.raw) - len(made))
         compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
         templates: dict[str, _Template] = {}
@@ -258,8 +263,9 @@ class Writer:
                 if skeleton not in templates:
                     templates[skeleton] = self._ahead.pop(skeleton) if skeleton in self._ahead else self._template(skeleton)
             # alike drawings alike, with the local ids; numbered as they first come
-            mapping += [tidy_ids.setdefault(text, len(tidy_ids))
-                        for text in [templates[skeleton].form.format(*values, k=LOCAL) for skeleton, values in chunk]]
+            texts = [text if text is not None and form is not None else templates[skeleton].form.format(*values, k=LOCAL)
+                     for text, form, (skeleton, values) in zip(made[start:end], forms[start:end], chunk, strict=True)]
+            mapping += [tidy_ids.setdefault(text, len(tidy_ids)) for text in texts]
             for form, number in zip(chunk, mapping[start:], strict=True):
                 if number == len(distinct):  # its first
                     distinct.append(form)
