@@ -382,9 +382,9 @@ def _compact_group(skeleton: str, members: list[str], done: Compacted,
     if "L" in skeleton:
         done.firsts[skeleton] = members[0]
         done.members[skeleton] = members
-        # kept in 32 bits where they fit: half the bytes a drawing process sends (Drawn.done)
-        fits = np.abs(rounded).max(initial=0) < 1 << 31
-        done.rows[skeleton] = rounded.astype(np.int32) if fits else rounded
+        # kept in as few bits as they fit in (16 on a canvas): a quarter of the bytes a drawing process sends
+        bound = np.abs(rounded).max(initial=0)
+        done.rows[skeleton] = rounded.astype(np.int16 if bound < 1 << 15 else np.int32 if bound < 1 << 31 else np.int64)
     spans = _spans(commands)
     kept = _kept(commands, spans, rounded[0])
     smooth = _smooth(commands, spans, kept, rounded)
