@@ -266,7 +266,7 @@ class Compacted:
     sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
     all of them (_kept), and `members` all the path data of each such skeleton compacted with it
     (sorted; what `merged` compacts again where another first comes earlier), `rows` their numbers
-    rounded to whole pixels ((n, 2P) int64, a row per member: `merged` compacts them again without
+    rounded to whole pixels ((n, 2P) integers, int16 where they fit, a row per member: `merged` compacts them again without
     reading their text). Paths compacted in two processes are put together by `merged`."""
 
     compact: dict[str, str]
