@@ -66,7 +66,7 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_ID = re.compile(rb' id="[^"]*"')  # an id attribute in serialized SVG (_content)
+_ID = re.compile(r' id="[^"]*"')  # an id attribute in serialized SVG (_content)
 _TAG = re.compile(r"<[^\s/>]+")  # an element's start tag up to its name
 _OWN_ID = re.compile(r'<[^>]*? id="([^"]*)"')  # the id in an element's start tag
 # Path data read by _extent: a command letter and its numbers.
@@ -288,7 +288,12 @@ class Writer:
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
         # the local definitions' ids made the drawing's own: "k" and its number
         # kept as text, which the document is written from (no parse, no serializing again)
-        texts, self.definitions = _hoist([[(piece.format(*values, k=own), definition) for piece, definition in forms[skeleton]]
+        # a definition's key made by formatting its piece's _content (no regex per drawing)
+        contents = {skeleton: [(piece, _content(piece) if definition else None) for piece, definition in pieces]
+                    for skeleton, pieces in forms.items()}
+        texts, self.definitions = _hoist([[(piece.format(*values, k=own),
+                                            None if content is None else content.format(*values, k=own).encode())
+                                           for piece, content in contents[skeleton]]
                                           for (skeleton, values), own in zip(distinct, map(short_id, repeat("k"), range(len(distinct))))])
         return [SEPARATOR.join(kept).split(SEPARATOR) if kept else [] for kept in texts]
 
@@ -471,22 +476,23 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
         elements[index] = use
 
 
-def _content(definition: str) -> bytes:
+def _content(definition: str) -> str:
     """The text of a `definition` as lxml serializes it on its own (the namespace declared) and
-    without the ids of its nodes: equal for definitions that define alike."""
+    without the ids of its nodes: equal for definitions that define alike. Of a template's piece
+    (a format string) too: formatting it gives the content of the piece formatted (no value holds an id)."""
     name = _TAG.match(definition)
     assert name is not None, definition
-    return _ID.sub(b"", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}'.encode())
+    return _ID.sub("", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}')
 
 
-def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], list[etree._Element]]:
+def _hoist(drawings: list[list[tuple[str, bytes | None]]]) -> tuple[list[list[str]], list[etree._Element]]:
     """Take the definitions that two or more of the tidy `drawings` (each its top-level definitions'
-    texts (True) and other elements' (False), own ids "k5", "k5_", "k5-1", ...) hold alike out of
-    them, pointing their references at one shared copy. Returns each drawing's pieces' texts left
-    and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
-    for its `<use>`s)."""
-    keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
-    counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
+    texts with their _content as UTF-8 and other elements' texts with None, own ids "k5", "k5_",
+    "k5-1", ...) hold alike out of them, pointing their references at one shared copy. Returns each
+    drawing's pieces' texts left and the shared copies, ids "v0", "v1", ... (a clip path's only
+    path "v0_", for its `<use>`s)."""
+    held = [{key for _, key in pieces if key is not None} for pieces in drawings]
+    counts = Counter(key for keys in held for key in keys)
     # named and written alike outlines side by side (their path data after its first move), for gzip
     order = sorted((content for content, count in counts.items() if count > 1), key=lambda content: _MOVE.sub(b"", content))
     names = {key: short_id("v", number) for number, key in enumerate(order)}
@@ -496,13 +502,13 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], lis
         if len(copy) == 1:
             copy[0].set("id", names[content] + "_")
     texts: list[list[str]] = []
-    for pieces, drawing in zip(drawings, keys, strict=True):
-        if not any(drawing):  # no definition (most drawings)
+    for pieces, keys in zip(drawings, held, strict=True):
+        if not keys:  # no definition (most drawings)
             texts.append([text for text, _ in pieces])
             continue
         local: dict[str, str] = {}
         kept = []
-        for (text, _), key in zip(pieces, drawing, strict=True):
+        for text, key in pieces:
             if key is None or counts[key] < 2:
                 kept.append(text)
                 continue
