@@ -497,15 +497,15 @@ Numbered = list[tuple[DrawingKey, tuple[int, ...]]]  # _draw's drawings, parts a
 
 
 def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
-                    progress: Callable[[float], None] | None = None) -> tuple[Numbered, Drawn]:
+                    progress: Callable[[float], None] | None = None, sent: bool = False) -> tuple[Numbered, Drawn]:
     """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
-    for the Writer (compact.drawn_parts: their path data compacted, their skeletons): what a
-    drawing process does of compact.Writer.finish's work."""
+    for the Writer (compact.drawn_parts: their path data compacted, their skeletons; `sent`: for
+    another process): what a drawing process does of compact.Writer.finish's work."""
     tenths: dict[str, np.ndarray] = {}  # compacting takes the path data's numbers as drawn, not read again
     drawings = _draw(face, states, progress, tenths)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
-    return numbered, drawn_parts(list(numbers), tenths)
+    return numbered, drawn_parts(list(numbers), tenths, sent)
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
@@ -522,7 +522,7 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
         return _collected(writer, numbered, drawn, where, []), drawn.done
     half = len(states) // 2
     with helper_pool(workers) as pool:
-        other = offloaded(pool, _draw_compacted, face, states[half:])
+        other = offloaded(pool, _draw_compacted, face, states[half:], None, True)
         numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
         raw = _collected(writer, numbered, drawn, where, [])
         writer.prepare()

@@ -29,6 +29,7 @@ skeletons whose path data the other process's first path data changed ("Finishin
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import html
 import re
@@ -128,7 +129,8 @@ class RawPart(NamedTuple):
 class Drawn:
     """The distinct parts one drawing process drew, made ready for Writer.collected by that process
     (drawn_parts): `parts`, distinct, each as (name, text, clips) (elements.Part's fields: plain
-    tuples unpickle six times as fast); `done`, all their path data compacted; per
+    tuples unpickle six times as fast); `done`, all their path data compacted (for a Drawn to be
+    sent, done.compact only of the parts holding a member of done.members: see drawn_parts); per
     part its skeleton and values (_skeleton's with done.compact) as `forms` (the number of its
     skeleton in `skeletons`, a few hundred for ten thousand parts, and the values); `holds`: the
     parts holding a first path data of done.firsts (part number -> those path data), which
@@ -141,9 +143,14 @@ class Drawn:
     holds: dict[int, tuple[str, ...]]
 
 
-def drawn_parts(parts: list[Part], tenths: Tenths | None = None) -> Drawn:
+def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = False) -> Drawn:
     """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts); `tenths`: the
-    numbers of some of their path data as written (pathdata.Tenths), not read again."""
+    numbers of some of their path data as written (pathdata.Tenths), not read again. `sent`: the
+    Drawn goes to another process, which needs the compact forms only of the parts whose forms
+    another process's first path data may change (pathdata.changed_forms: those holding a member
+    of a skeleton with a first; Writer.finish makes them again), so done.compact keeps only theirs
+    (~a fifth of the bytes sent less; were every part's needed again, Writer.finish compacts them
+    from their text)."""
     fields = [(part.name, part.text, part.clips) for part in parts]
     # each part's text cut at its values once (_VALUE), for its path data and its skeleton; its
     # elements end in ">": a path data in two cannot match
@@ -160,6 +167,10 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None) -> Drawn:
         held = {d for d in part_paths_ if d in rank}
         if held:
             holds[number] = tuple(sorted(held, key=rank.__getitem__))
+    if sent:
+        members = {d for skeleton_members in done.members.values() for d in skeleton_members}
+        done = dataclasses.replace(done, compact={d: done.compact[d] for part_paths_ in paths
+                                                  if not members.isdisjoint(part_paths_) for d in part_paths_})
     return Drawn(fields, list(numbers), forms, done, holds)
 
 
