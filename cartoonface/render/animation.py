@@ -200,9 +200,9 @@ class _Track:
 def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: Sequence[int],
             raw_tracks: Sequence[str], mapping: Sequence[int]) -> dict[str, _Track]:
     """Group the raw parts of each distinct drawing `raw` (of `states`; track names `raw_tracks`,
-    tidy numbers `mapping`) into tracks, in drawing order; equal drawings of a track get one
-    number, in the order frames first show them (frame i shows drawing `shown[i]`; the drawings
-    are numbered in the order frames first show them). Every drawing has its parts in the same
+    tidy numbers `mapping`) into tracks, in drawing order, for the frames (frame i shows drawing
+    `shown[i]`; the drawings numbered as frames first show them); equal drawings of a track get
+    one number, in the order frames first show them. Every drawing has its parts in the same
     tracks in the same order (render/svg.py's face_parts): numpy over all drawings at once."""
     if not len(raw):
         return {}
@@ -217,7 +217,8 @@ def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: 
     frames = np.asarray(shown, dtype=np.intp)
     for name, at in places.items():
         numbers, firsts = _numbered_rows(tidy[:, at])
-        shapes = [max(states[index].mouth, key=operator.itemgetter(1))[0] for index in firsts.tolist()] if name == MOUTH_TRACK else []
+        shapes = ([max(states[index].mouth, key=operator.itemgetter(1))[0] for index in firsts.tolist()]
+                  if name == MOUTH_TRACK else [])
         tracks[name] = _Track(tidy[firsts][:, at].tolist(), numbers[frames].tolist(), shapes)
     return tracks
 
@@ -511,11 +512,11 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState],
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
               progress: Callable[[float], None], writer: Writer) -> tuple[list[tuple[int, ...]], Compacted]:
     """_draw_compacted of `states` collected by `writer` in order (_collected): the raw part
-    numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In one
-    go, or with `workers` 2 and at least POOL_STATES states in two halves, the second drawn by a
-    forked helper (workers.helper_pool) meanwhile; the first half is collected and its templates
-    and tidy texts made (Writer.prepare) while the second comes. When the helper cannot be started, has not begun
-    or fails, its half is drawn here (workers.offloaded)."""
+    numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In
+    one go, or with `workers` 2 and at least POOL_STATES states in two halves, the second drawn by
+    a forked helper (workers.helper_pool) meanwhile; the first half is collected and its templates
+    and tidy texts made (Writer.prepare) while the second comes. When the helper cannot be
+    started, has not begun or fails, its half is drawn here (workers.offloaded)."""
     where: dict[DrawingKey, int] = {}
     if workers < 2 or len(states) < POOL_STATES:
         numbered, drawn = _draw_compacted(face, states, progress)

@@ -13,7 +13,7 @@ browser to build (docs/BENCHMARKS.md, "Fewer elements").
 
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
-forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
+forms, so alike ones stay alike), positions and sizes taken out; so one part of each skeleton is
 tidied as lxml elements and the others' values are filled into its text. The style classes
 are renamed and the clip paths several drawings hold alike taken out on those texts, and the
 distinct tidy drawings stay texts (one per top-level element, as lxml writes it in the document):
@@ -21,22 +21,22 @@ distinct tidy drawings stay texts (one per top-level element, as lxml writes it 
 as text, spliced into the document's bytes, so the drawings are never parsed nor serialized again
 ("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
-(`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
-the drawings by those numbers (`Writer.collected`) and goes on from there, making again only the
-skeletons whose path data the other process's first path data changed ("Finishing in parallel",
-"The SVG stage's middle").
+(`drawn_parts`); the parent collects the drawings by those numbers (`Writer.collected`: its own
+half's, with their templates and tidy texts, `Writer.prepare`, while the helper's half comes),
+puts the path data together (render/pathdata.py's merged) and goes on from there, making again
+only the skeletons whose path data the other process's first path data changed ("Finishing in
+parallel", "The SVG stage's middle", "The SVG stage's middle, halved").
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import html
 import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, replace
 from itertools import repeat
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from lxml import etree
@@ -55,7 +55,7 @@ KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path"
                   "offset", "id"))
 # KEPT sizes (not rounded) that change from state to state (a mouth's gloss and tongue, the cheeks'
 # blush): taken out of a part's skeleton as written, as positions are, so that parts differing only
-# in them are tidied by one template (a fifth as many skeletons: docs/BENCHMARKS.md, "mid").
+# in them are tidied by one template (a fifth as many: docs/BENCHMARKS.md, "The SVG stage's middle, halved").
 SIZES = frozenset(("r", "rx", "ry", "width", "height"))
 # Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
 # with no other attribute can be dissolved into its children. Not opacity, which applies to
@@ -169,8 +169,8 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = Fa
             holds[number] = tuple(sorted(held, key=rank.__getitem__))
     if sent:
         members = {d for skeleton_members in done.members.values() for d in skeleton_members}
-        done = dataclasses.replace(done, compact={d: done.compact[d] for part_paths_ in paths
-                                                  if not members.isdisjoint(part_paths_) for d in part_paths_})
+        done = replace(done, compact={d: done.compact[d] for part_paths_ in paths
+                                       if not members.isdisjoint(part_paths_) for d in part_paths_})
     return Drawn(fields, list(numbers), forms, done, holds)
 
 
@@ -191,7 +191,7 @@ class Writer:
         self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
         self._forms: list[tuple[str, list[str]] | None] = []  # per raw part, when a drawing process made them
         self._held: set[str] = set()  # the path data of drawn_parts' Drawn.holds the collected parts hold
-        self._collected: list[tuple[Compacted, int, int]] = []  # by collected: each Drawn's path data, its raw parts
+        self._sources: list[tuple[Compacted, int, int]] = []  # by collected: each Drawn's path data, its raw parts
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
@@ -219,7 +219,7 @@ class Writer:
         raws = [-1] * len(drawn.parts)
         for raw, number in enumerate(order, len(self.raw)):
             raws[number] = raw
-        self._collected.append((drawn.done, len(self.raw), len(self.raw) + len(order)))
+        self._sources.append((drawn.done, len(self.raw), len(self.raw) + len(order)))
         labels = {name: self.label_of(name) for name in {drawn.parts[number][0] for number in order}}
         self.raw += [RawPart(labels[name], text, clips) for name, text, clips in map(drawn.parts.__getitem__, order)]
         self._forms += [(drawn.skeletons[skeleton], values) for skeleton, values in map(drawn.forms.__getitem__, order)]
@@ -251,11 +251,11 @@ class Writer:
             # skeleton made here
             done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
             forms = [None] * len(self.raw)
-        for own, start, end in self._collected:  # the forms another process's first path data changed: made again
+        for own, start, end in self._sources:  # the forms another process's first path data changed: made again
             changed = changed_forms(own, done)
             if changed:
                 forms[start:end] = [form if form is None or changed.isdisjoint(form[1]) else None for form in forms[start:end]]
-        self._collected = []
+        self._sources = []
         made, self._texts = self._texts, []  # prepare's, of the parts whose forms stand
         made += [None] * (len(self.raw) - len(made))
         compact, self.extents = done.compact, done.extents
@@ -297,9 +297,9 @@ class Writer:
         `<defs>`), which they refer to; the style classes are named by use (_short_classes)."""
         templates, distinct = self._templates, self._distinct
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
-        # the local definitions' ids made the drawing's own: "k" and its number
-        # kept as text, which the document is written from (no parse, no serializing again)
-        # a definition's key made by formatting its piece's _content (no regex per drawing)
+        # the local definitions' ids made the drawing's own: "k" and its number; kept as text, which
+        # the document is written from (no parse, no serializing again); a definition's key for
+        # _hoist made by formatting its piece's _content (no regex per drawing)
         contents = {skeleton: [(piece, _content(piece) if definition else None) for piece, definition in pieces]
                     for skeleton, pieces in forms.items()}
         texts, self.definitions = _hoist([[(piece.format(*values, k=own),

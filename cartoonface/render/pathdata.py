@@ -266,8 +266,9 @@ class Compacted:
     sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
     all of them (_kept), and `members` all the path data of each such skeleton compacted with it
     (sorted; what `merged` compacts again where another first comes earlier), `rows` their numbers
-    rounded to whole pixels ((n, 2P) integers, int16 where they fit, a row per member: `merged` compacts them again without
-    reading their text). Paths compacted in two processes are put together by `merged`."""
+    rounded to whole pixels ((n, 2P) integers, int16 where they fit, a row per member: `merged`
+    compacts them again without reading their text). Paths compacted in two processes are put
+    together by `merged`."""
 
     compact: dict[str, str]
     extents: dict[str, Extent]
@@ -320,14 +321,21 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
             earlier, later = (first, second) if one < other else (second, first)
             rows = np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64)
             done.firsts[skeleton] = earlier.firsts[skeleton]
-            commands = _commands(skeleton, rows.shape[1])
-            assert commands is not None, skeleton  # rows are kept of compacted members only
-            spans = _spans(commands)
-            if _kept(commands, spans, rows[0]) != _kept(commands, spans, rows[1]):  # else the same forms
+            if not _same_kept(skeleton, rows[0], rows[1]):  # else the later side's forms stand
                 _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done, rounded=rows)
         done.members[skeleton], done.rows[skeleton] = first.members[skeleton], first.rows[skeleton]
         _join(skeleton, (second.members[skeleton], second.rows[skeleton]), done)
     return done
+
+
+def _same_kept(skeleton: str, first: np.ndarray, other: np.ndarray) -> bool:
+    """Whether Douglas-Peucker keeps the same points of `skeleton`'s path data from the rounded
+    numbers `first` (2P,) as from `other` (2P,) (_kept): then every member is compacted alike
+    after either as its first."""
+    commands = _commands(skeleton, len(first))
+    assert commands is not None, skeleton  # rows are kept of compacted members only
+    spans = _spans(commands)
+    return _kept(commands, spans, first) == _kept(commands, spans, other)
 
 
 def changed_forms(own: Compacted, done: Compacted) -> set[str]:
