@@ -299,3 +299,15 @@ def test_paths_alike_lying_apart_are_one_path_with_the_same_pixels(second):
 def test_paths_that_could_draw_otherwise_stay_apart(second, style):
     drawing = [f'<path d="{d}" class="n"/>' for d in ("m10,20c5-6,15-6,20,0l-20,4z", second)]
     assert merge_alike(drawing, {"n": style}) == drawing
+
+
+def test_short_ids_count_in_base_36():
+    """short_ids gives the ids short_id makes, in order, past every change of width: each the
+    letter and its number in base 36 (read back by int(..., 36))."""
+    from itertools import islice
+
+    from cartoonface.render.compact import short_id, short_ids
+
+    ids = list(islice(short_ids("k"), 36 ** 3 + 40))
+    assert [int(name[1:], 36) for name in ids] == list(range(len(ids)))
+    assert all(name == short_id("k", number) and name[0] == "k" for number, name in enumerate(ids))

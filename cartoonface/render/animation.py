@@ -56,7 +56,6 @@ import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from itertools import count
 
 import numpy as np
 from lxml import etree
@@ -66,7 +65,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id, with_id
+from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_ids, with_id
 from cartoonface.render.elements import DECIMALS, Part, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.pathdata import Compacted, merged
@@ -626,7 +625,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     if desk is not None:
         root.append(desk)
     layer = element(root, "g", id="face")
-    names = (short_id(FRAME_LETTER, number) for number in count())
+    names = short_ids(FRAME_LETTER)
     for number, (name, track) in enumerate(tracks.items(), 1):
         (hair if name in HAIR_TRACKS else layer).append(etree.Comment(f"{SPLICE}{len(texts)}"))
         texts.append(_track_group(name, elements[name], track.keys, fps, track.shapes, names, reused[name]))
