@@ -130,6 +130,12 @@ MIN_BATCH = 32
 # each to draw; starting the process and sending the drawings back take ~0.1 s), and searches the
 # reused drawings in two (_reuse) from this many distinct drawings of all tracks.
 POOL_STATES = 400
+# The share of the distinct states this process draws when a helper draws the rest (_drawings): the
+# helper's part must also be pickled, sent and unpickled (~0.1 s for the 2,400 of the 190 s bench
+# book) while this process only collects its own (Writer.prepare). Halves left this process waiting
+# 0.10 s for the helper's (median of 6 runs), 0.53 0.04 s, 0.56 none (the helper waiting then):
+# docs/BENCHMARKS.md, "The SVG stage's middle, halved".
+FIRST_SHARE = 0.53
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
 # when the shared parts are found and when the tracks are written; the rest makes the document's
@@ -512,18 +518,18 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int,
               progress: Callable[[float], None], writer: Writer) -> tuple[list[tuple[int, ...]], Compacted]:
     """_draw_compacted of `states` collected by `writer` in order (_collected): the raw part
     numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In
-    one go, or with `workers` 2 and at least POOL_STATES states in two halves, the second drawn by
-    a forked helper (workers.helper_pool) meanwhile; the first half is collected and its templates
-    and tidy texts made (Writer.prepare) while the second comes. When the helper cannot be
-    started, has not begun or fails, its half is drawn here (workers.offloaded)."""
+    one go, or with `workers` 2 and at least POOL_STATES states in two parts (FIRST_SHARE of them
+    first), the second drawn by a forked helper (workers.helper_pool) meanwhile; the first is
+    collected and its templates and tidy texts made (Writer.prepare) while the second comes. When
+    the helper cannot be started, has not begun or fails, its part is drawn here (workers.offloaded)."""
     where: dict[DrawingKey, int] = {}
     if workers < 2 or len(states) < POOL_STATES:
         numbered, drawn = _draw_compacted(face, states, progress)
         return _collected(writer, numbered, drawn, where, []), drawn.done
-    half = len(states) // 2
+    half = round(len(states) * FIRST_SHARE)
     with helper_pool(workers) as pool:
         other = offloaded(pool, _draw_compacted, face, states[half:], None, True)
-        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done / 2))
+        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE))
         raw = _collected(writer, numbered, drawn, where, [])
         writer.prepare()
         done = drawn.done
