@@ -311,3 +311,36 @@ def test_short_ids_count_in_base_36():
     ids = list(islice(short_ids("k"), 36 ** 3 + 40))
     assert [int(name[1:], 36) for name in ids] == list(range(len(ids)))
     assert all(name == short_id("k", number) and name[0] == "k" for number, name in enumerate(ids))
+
+
+def test_parts_differing_in_sizes_share_a_skeleton_and_tidy_as_one_by_one():
+    """A part's sizes (compact.SIZES) as plain numbers leave its skeleton, as its positions do, so
+    parts differing only in them share one skeleton (one template); a size that is no plain number
+    stays in it. Tidied by that skeleton, each part is what tidying it alone gives."""
+    from cartoonface.render.compact import Writer, _skeleton
+    from cartoonface.render.pathdata import compacted
+
+    def part(rx: str, width: str) -> str:
+        return (f'<g class="gloss"><ellipse cx="10.4" cy="20.6" rx="{rx}" ry="2" fill="#fff" opacity="0.2"/>'
+                f'<rect x="1" y="2" width="{width}" height="4.5" fill="#000"/><path d="M1 2L30.4 40.6" stroke="#111"/></g>')
+
+    texts = [part("6", "3"), part("7.5", "3"), part("6", "50%"), part("7.5", "50%")]
+    compact = compacted(["M1 2L30.4 40.6"]).compact
+    skeletons = [_skeleton((text,), compact)[0] for text in texts]
+    assert skeletons[0] == skeletons[1] != skeletons[2] == skeletons[3]
+    assert 'width="50%"' in skeletons[2] and 'rx="6"' not in skeletons[0]
+    together = Writer(lambda name: name)
+    numbers = [together.collect([Part("gloss", text)]) for text in texts]
+    mapping = together.finish()
+    tidy = together.drawings()
+    alone = Writer(lambda name: name)
+    for text, (raw,) in zip(texts, numbers, strict=True):
+        written = etree.fromstring(f'<g xmlns="http://www.w3.org/2000/svg">{"".join(tidy[mapping[raw]])}</g>')
+        assert _unclassed(list(written)) == _unclassed(alone._tidy_part((text,), compact))
+
+
+def _unclassed(elements: list[etree._Element]) -> list[tuple[str, dict[str, str]]]:
+    """Every node of `elements`: its tag and attributes but its class (the Writers name their style
+    classes apart)."""
+    return [(node.tag, {name: value for name, value in node.attrib.items() if name != "class"})
+            for element in elements for node in element.iter()]
