@@ -142,10 +142,11 @@ def test_parts_tidied_by_skeleton_equal_parts_tidied_one_by_one(face):
 
 
 def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
-    """Writer.collector takes the skeletons each drawing process made of its own parts
+    """Writer.collected takes the skeletons each drawing process made of its own parts
     (compact.drawn_parts): halves cut anywhere, their path data compacted apart (another first
     path data chooses the points kept), drawings left out (a state whose key an earlier drawing
-    has) among them the one holding a first path data, give the tidy drawings, numbers and style
+    has) among them the one holding a first path data, templates and tidy texts made ahead
+    (Writer.prepare), give the tidy drawings, each drawing's tidy part numbers and the style
     classes of one process collecting the same drawings."""
     from functools import reduce
 
@@ -161,21 +162,23 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
     assert everything.firsts and holding
     for left_out in (set(), {min(holding)} | set(range(5, 90, 11))):
         reference = Writer(track_of)
-        for index, (_, numbers) in enumerate(whole):
-            if index not in left_out:
-                reference.collect([Part(*drawn.parts[number]) for number in numbers])
-        expected = reference.finish()
+        reference_raw = [reference.collect([Part(*drawn.parts[number]) for number in numbers])
+                         for index, (_, numbers) in enumerate(whole) if index not in left_out]
+        mapping = reference.finish()
+        expected = [[mapping[number] for number in numbers] for numbers in reference_raw]
         drawings = reference.drawings()
         for cut in (7, 45, 80):
-            halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:])]
+            # the second half as a helper sends it (its compact forms only of the parts that may change)
+            halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:], None, True)]
             done = reduce(merged, (half.done for _, half in halves))
             writer = Writer(track_of)
+            raw = []
             for offset, (numbered, half) in zip((0, cut), halves, strict=True):
-                collect = writer.collector(half, done)
-                for index, (_, numbers) in enumerate(numbered, offset):
-                    if index not in left_out:
-                        collect(numbers)
-            assert writer.finish(None, done) == expected
+                raw += writer.collected(half, [numbers for index, (_, numbers) in enumerate(numbered, offset)
+                                               if index not in left_out])
+                writer.prepare()  # templates and tidy texts made ahead (some parts' made again by finish)
+            mapping = writer.finish(None, done)
+            assert [[mapping[number] for number in numbers] for numbers in raw] == expected
             assert writer.drawings() == drawings
             assert writer.style_sheet() == reference.style_sheet()
 
@@ -296,3 +299,48 @@ def test_paths_alike_lying_apart_are_one_path_with_the_same_pixels(second):
 def test_paths_that_could_draw_otherwise_stay_apart(second, style):
     drawing = [f'<path d="{d}" class="n"/>' for d in ("m10,20c5-6,15-6,20,0l-20,4z", second)]
     assert merge_alike(drawing, {"n": style}) == drawing
+
+
+def test_short_ids_count_in_base_36():
+    """short_ids gives the ids short_id makes, in order, past every change of width: each the
+    letter and its number in base 36 (read back by int(..., 36))."""
+    from itertools import islice
+
+    from cartoonface.render.compact import short_id, short_ids
+
+    ids = list(islice(short_ids("k"), 36 ** 3 + 40))
+    assert [int(name[1:], 36) for name in ids] == list(range(len(ids)))
+    assert all(name == short_id("k", number) and name[0] == "k" for number, name in enumerate(ids))
+
+
+def test_parts_differing_in_sizes_share_a_skeleton_and_tidy_as_one_by_one():
+    """A part's sizes (compact.SIZES) as plain numbers leave its skeleton, as its positions do, so
+    parts differing only in them share one skeleton (one template); a size that is no plain number
+    stays in it. Tidied by that skeleton, each part is what tidying it alone gives."""
+    from cartoonface.render.compact import Writer, _skeleton
+    from cartoonface.render.pathdata import compacted
+
+    def part(rx: str, width: str) -> str:
+        return (f'<g class="gloss"><ellipse cx="10.4" cy="20.6" rx="{rx}" ry="2" fill="#fff" opacity="0.2"/>'
+                f'<rect x="1" y="2" width="{width}" height="4.5" fill="#000"/><path d="M1 2L30.4 40.6" stroke="#111"/></g>')
+
+    texts = [part("6", "3"), part("7.5", "3"), part("6", "50%"), part("7.5", "50%")]
+    compact = compacted(["M1 2L30.4 40.6"]).compact
+    skeletons = [_skeleton((text,), compact)[0] for text in texts]
+    assert skeletons[0] == skeletons[1] != skeletons[2] == skeletons[3]
+    assert 'width="50%"' in skeletons[2] and 'rx="6"' not in skeletons[0]
+    together = Writer(lambda name: name)
+    numbers = [together.collect([Part("gloss", text)]) for text in texts]
+    mapping = together.finish()
+    tidy = together.drawings()
+    alone = Writer(lambda name: name)
+    for text, (raw,) in zip(texts, numbers, strict=True):
+        written = etree.fromstring(f'<g xmlns="http://www.w3.org/2000/svg">{"".join(tidy[mapping[raw]])}</g>')
+        assert _unclassed(list(written)) == _unclassed(alone._tidy_part((text,), compact))
+
+
+def _unclassed(elements: list[etree._Element]) -> list[tuple[str, dict[str, str]]]:
+    """Every node of `elements`: its tag and attributes but its class (the Writers name their style
+    classes apart)."""
+    return [(node.tag, {name: value for name, value in node.attrib.items() if name != "class"})
+            for element in elements for node in element.iter()]

@@ -56,8 +56,6 @@ import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from functools import reduce
-from itertools import count
 
 import numpy as np
 from lxml import etree
@@ -67,7 +65,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_id, with_id
+from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_ids, with_id
 from cartoonface.render.elements import DECIMALS, Part, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text
 from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
@@ -132,6 +130,12 @@ MIN_BATCH = 32
 # each to draw; starting the process and sending the drawings back take ~0.1 s), and searches the
 # reused drawings in two (_reuse) from this many distinct drawings of all tracks.
 POOL_STATES = 400
+# The share of the distinct states this process draws when a helper draws the rest (_drawings): the
+# helper's part must also be pickled, sent and unpickled (~0.1 s for the 2,400 of the 190 s bench
+# book) while this process only collects its own (Writer.prepare). Halves left this process waiting
+# 0.10 s for the helper's (median of 6 runs), 0.53 0.04 s, 0.56 none (the helper waiting then):
+# docs/BENCHMARKS.md, "The SVG stage's middle, halved".
+FIRST_SHARE = 0.53
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
 # when the shared parts are found and when the tracks are written; the rest makes the document's
@@ -198,27 +202,42 @@ class _Track:
     shapes: list[str] = field(default_factory=list)
 
 
-def _tracks(frames: Sequence[tuple[FaceState, tuple[int, ...]]], raw_tracks: Sequence[str],
-            mapping: Sequence[int]) -> dict[str, _Track]:
-    """Group each frame's raw parts (track names `raw_tracks`, tidy numbers `mapping`) into
-    tracks, in drawing order; equal drawings of a track get one number."""
-    tracks: dict[str, _Track] = {}
-    numbers: dict[str, dict[tuple[int, ...], int]] = {}
-    for state, parts in frames:
-        by_track: dict[str, list[int]] = {}
-        for raw in parts:
-            by_track.setdefault(raw_tracks[raw], []).append(mapping[raw])
-        for name, tidy_parts in by_track.items():
-            track = tracks.setdefault(name, _Track())
-            known = numbers.setdefault(name, {})
-            number = known.get(tuple(tidy_parts))
-            if number is None:
-                number = known[tuple(tidy_parts)] = len(track.drawings)
-                track.drawings.append(tidy_parts)
-                if name == MOUTH_TRACK:
-                    track.shapes.append(max(state.mouth, key=lambda pair: pair[1])[0])
-            track.keys.append(number)
+def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: Sequence[int],
+            raw_tracks: Sequence[str], mapping: Sequence[int]) -> dict[str, _Track]:
+    """Group the raw parts of each distinct drawing `raw` (of `states`; track names `raw_tracks`,
+    tidy numbers `mapping`) into tracks, in drawing order, for the frames (frame i shows drawing
+    `shown[i]`; the drawings numbered as frames first show them); equal drawings of a track get
+    one number, in the order frames first show them. Every drawing has its parts in the same
+    tracks in the same order (render/svg.py's face_parts): numpy over all drawings at once."""
+    if not len(raw):
+        return {}
+    parts = np.asarray(raw)  # (drawings, parts)
+    names = [raw_tracks[number] for number in raw[0]]
+    assert (np.asarray(raw_tracks)[parts] == np.asarray(names)).all(), "drawings with their parts in other tracks"
+    tidy = np.asarray(mapping)[parts]
+    places: dict[str, list[int]] = {}
+    for place, name in enumerate(names):
+        places.setdefault(name, []).append(place)
+    tracks = {}
+    frames = np.asarray(shown, dtype=np.intp)
+    for name, at in places.items():
+        numbers, firsts = _numbered_rows(tidy[:, at])
+        shapes = ([max(states[index].mouth, key=operator.itemgetter(1))[0] for index in firsts.tolist()]
+                  if name == MOUTH_TRACK else [])
+        tracks[name] = _Track(tidy[firsts][:, at].tolist(), numbers[frames].tolist(), shapes)
     return tracks
+
+
+def _numbered_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of `rows` (n, k) integers numbered in the order they first come: the number
+    of each row (n,), and the index of each number's first row (distinct,). Rows compared as bytes
+    by one np.unique (as pathdata's _alike_rows)."""
+    keys = np.ascontiguousarray(rows).view(f"V{rows.shape[1] * rows.itemsize}").ravel()
+    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # the distinct rows by their first
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[which.reshape(-1)], first[order]
 
 
 def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dict[str, str]:
@@ -489,55 +508,61 @@ Numbered = list[tuple[DrawingKey, tuple[int, ...]]]  # _draw's drawings, parts a
 
 
 def _draw_compacted(face: FaceModel, states: Sequence[FaceState], progress: Callable[[float], None] | None = None,
-                    tenths: dict[str, np.ndarray] | None = None) -> tuple[Numbered, Drawn]:
+                    tenths: dict[str, np.ndarray] | None = None, sent: bool = False) -> tuple[Numbered, Drawn]:
     """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
-    for the Writer (compact.drawn_parts: their path data compacted, their skeletons): what a
-    drawing process does of compact.Writer.finish's work. `tenths`, when given, gets the numbers
-    of the path data as drawn (_draw's)."""
+    for the Writer (compact.drawn_parts: their path data compacted, their skeletons; `sent`: for
+    another process): what a drawing process does of compact.Writer.finish's work. `tenths`, when
+    given, gets the numbers of the path data as drawn (_draw's)."""
     tenths = {} if tenths is None else tenths  # compacting takes the path data's numbers as drawn, not read again
     drawings = _draw(face, states, progress, tenths)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
-    return numbered, drawn_parts(list(numbers), tenths)
+    return numbered, drawn_parts(list(numbers), tenths, sent)
 
 
 def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[tuple[Numbered, Drawn], PackedTenths]:
-    """_draw_compacted of `states` in a drawing helper, and the numbers of the path data it drew
-    packed to send back (pathdata.packed)."""
+    """_draw_compacted of `states` in a drawing helper, for this process, and the numbers of the
+    path data it drew packed to send back (pathdata.packed)."""
     tenths: dict[str, np.ndarray] = {}
-    return _draw_compacted(face, states, None, tenths), packed(tenths)
+    return _draw_compacted(face, states, None, tenths, True), packed(tenths)
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progress: Callable[[float], None],
-              tenths: dict[str, np.ndarray] | None = None) -> list[tuple[Numbered, Drawn]]:
-    """_draw_compacted of `states`, in order: in one go, or with `workers` 2 and at least
-    POOL_STATES states in two halves, the second drawn by a forked helper (workers.helper_pool,
-    _draw_sent) meanwhile. When the helper cannot be started, has not begun or fails, its half is
-    drawn here (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the
-    reuse search, render/reuse.shapes_of)."""
+              writer: Writer, tenths: dict[str, np.ndarray]) -> tuple[list[tuple[int, ...]], Compacted]:
+    """_draw_compacted of `states` collected by `writer` in order (_collected): the raw part
+    numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In
+    one go, or with `workers` 2 and at least POOL_STATES states in two parts (FIRST_SHARE of them
+    first), the second drawn by a forked helper (workers.helper_pool, _draw_sent) meanwhile; the
+    first is collected and its templates and tidy texts made (Writer.prepare) while the second
+    comes. When the helper cannot be started, has not begun or fails, its part is drawn here
+    (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the reuse
+    search, render/reuse.shapes_of)."""
+    where: dict[DrawingKey, int] = {}
     if workers < 2 or len(states) < POOL_STATES:
-        return [_draw_compacted(face, states, progress, tenths)]
-    half = len(states) // 2
+        numbered, drawn = _draw_compacted(face, states, progress, tenths)
+        return _collected(writer, numbered, drawn, where, []), drawn.done
+    half = round(len(states) * FIRST_SHARE)
     with helper_pool(workers) as pool:
         other = offloaded(pool, _draw_sent, face, states[half:])
-        first = _draw_compacted(face, states[:half], lambda done: progress(done / 2), tenths)
-        second, sent = other()
-        if tenths is not None:
-            tenths.update(unpacked(sent))
-        return [first, second]
+        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE), tenths)
+        raw = _collected(writer, numbered, drawn, where, [])
+        writer.prepare()
+        done = drawn.done
+        (numbered, drawn), sent = other()
+    tenths.update(unpacked(sent))
+    return _collected(writer, numbered, drawn, where, raw), merged(done, drawn.done)
 
 
-def _collected(writer: Writer, halves: list[tuple[Numbered, Drawn]]) -> tuple[list[tuple[int, ...]], Compacted]:
-    """The raw part numbers of each drawing of `halves` (_drawings'), collected by `writer` in
-    order (Writer.collector), and the halves' path data compacted together (pathdata.merged). A
-    drawing whose key an earlier one has is that one's. (The halves are let go on return.)"""
-    done = reduce(merged, (parts.done for _, parts in halves))
-    drawn: dict[DrawingKey, tuple[int, ...]] = {}
-    raw = []
-    for drawings, parts in halves:
-        collect = writer.collector(parts, done)
-        raw += [drawn.get(key) or drawn.setdefault(key, collect(numbers)) for key, numbers in drawings]
-    return raw, done
+def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[DrawingKey, int],
+               raw: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+    """`raw` (the raw part numbers of the drawings collected before) and those of the `drawings` of
+    one drawing process (_draw_compacted's, with `drawn`) collected by `writer` (Writer.collected).
+    A drawing whose key an earlier one has (`where`: the first drawing of each key, filled) is
+    that one's."""
+    firsts = [where.setdefault(key, index) for index, (key, _) in enumerate(drawings, len(raw))]
+    own = [index for index, first in enumerate(firsts, len(raw)) if first == index]
+    mine = dict(zip(own, writer.collected(drawn, (drawings[index - len(raw)][1] for index in own))))
+    return raw + [mine[first] if first in mine else raw[first] for first in firsts]
 
 
 @collector_paused()  # its containers hold no cycles (workers.collector_paused; also for callers but generate)
@@ -584,10 +609,9 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
     tenths: dict[str, np.ndarray] = {}  # the path data's numbers as drawn: the reuse search takes them
-    raw, done = _collected(writer, _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), tenths))
-    frames = [(distinct[number], raw[number]) for number in shown]
+    raw, done = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer, tenths)
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
-    tracks = _tracks(frames, [part.label for part in writer.raw], mapping)
+    tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
     reuse = _reuse(tracks, writer, mapping, tolerance,
                    lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers, tenths)
@@ -624,7 +648,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     if desk is not None:
         root.append(desk)
     layer = element(root, "g", id="face")
-    names = (short_id(FRAME_LETTER, number) for number in count())
+    names = short_ids(FRAME_LETTER)
     for number, (name, track) in enumerate(tracks.items(), 1):
         (hair if name in HAIR_TRACKS else layer).append(etree.Comment(f"{SPLICE}{len(texts)}"))
         texts.append(_track_group(name, elements[name], track.keys, fps, track.shapes, names, reused[name]))

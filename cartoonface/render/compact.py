@@ -13,7 +13,7 @@ browser to build (docs/BENCHMARKS.md, "Fewer elements").
 
 Speed (docs/BENCHMARKS.md, "Speed of the SVG stage"): the parts come as text, and tidying a
 part depends only on its skeleton, the text with its path data (numbered by their compact
-forms, so alike ones stay alike) and positions taken out; so one part of each skeleton is
+forms, so alike ones stay alike), positions and sizes taken out; so one part of each skeleton is
 tidied as lxml elements and the others' values are filled into its text. The style classes
 are renamed and the clip paths several drawings hold alike taken out on those texts, and the
 distinct tidy drawings stay texts (one per top-level element, as lxml writes it in the document):
@@ -21,26 +21,28 @@ distinct tidy drawings stay texts (one per top-level element, as lxml writes it 
 as text, spliced into the document's bytes, so the drawings are never parsed nor serialized again
 ("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
-(`drawn_parts`); the parent puts the path data together (render/pathdata.py's merged), collects
-the drawings by those numbers (`Writer.collector`) and goes on from there, making again only the
-skeletons whose path data the other process's first path data changed ("Finishing in parallel",
-"The SVG stage's middle").
+(`drawn_parts`); the parent collects the drawings by those numbers (`Writer.collected`: its own
+half's, with their templates and tidy texts, `Writer.prepare`, while the helper's half comes),
+puts the path data together (render/pathdata.py's merged) and goes on from there, making again
+only the skeletons whose path data the other process's first path data changed ("Finishing in
+parallel", "The SVG stage's middle", "The SVG stage's middle, halved").
 """
 
 from __future__ import annotations
 
 import functools
 import html
+import itertools
 import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 from lxml import etree
 
 from cartoonface.render.elements import SVG, Part, element, markup, parse_elements
-from cartoonface.render.pathdata import Compacted, Extent, Tenths, compacted
+from cartoonface.render.pathdata import Compacted, Extent, Tenths, changed_forms, compacted
 
 # Elements that only define something referenced by id: a part's own ones (per state, from
 # face_parts) go with the part, renamed so each distinct part drawing has its own.
@@ -51,6 +53,10 @@ DEFINITIONS = tuple(f"{{{SVG}}}{tag}" for tag in ("clipPath", "linearGradient", 
 POSITIONS = frozenset(("cx", "cy", "x", "y", "x1", "y1", "x2", "y2"))
 KEPT = frozenset(("d", "r", "rx", "ry", "width", "height", "points", "clip-path", "mask", "transform", "href",
                   "offset", "id"))
+# KEPT sizes (not rounded) that change from state to state (a mouth's gloss and tongue, the cheeks'
+# blush): taken out of a part's skeleton as written, as positions are, so that parts differing only
+# in them are tidied by one template (a fifth as many: docs/BENCHMARKS.md, "The SVG stage's middle, halved").
+SIZES = frozenset(("r", "rx", "ry", "width", "height"))
 # Properties a <g> passes on to its children by inheritance (SVG 1.1, property index): a group
 # with no other attribute can be dissolved into its children. Not opacity, which applies to
 # the group as a whole.
@@ -61,7 +67,8 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_ID = re.compile(rb' id="[^"]*"')  # an id attribute in serialized SVG (_content)
+_BASE36 = "0123456789abcdefghijklmnopqrstuvwxyz"  # short_id's digits
+_ID = re.compile(r' id="[^"]*"')  # an id attribute in serialized SVG (_content)
 _TAG = re.compile(r"<[^\s/>]+")  # an element's start tag up to its name
 _OWN_ID = re.compile(r'<[^>]*? id="([^"]*)"')  # the id in an element's start tag
 # Path data read by _extent: a command letter and its numbers.
@@ -82,11 +89,11 @@ _ANY_TAG = re.compile(r'<(/?)[^>]*>')
 _FIRST_PATH = re.compile(r'<path[\s/>]')
 _CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's text (Writer._short_classes)
 # Writer.finish tidies one part of each skeleton (_skeleton) and fills in the others' values:
-# the attributes it takes out (path data and positions), a path data's token, and the
-# placeholder positions (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
-_VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS))})="([^"]*)"')
+# the attributes it takes out (path data, positions and sizes), a path data's token, and the
+# placeholder positions and sizes (SENTINEL + j: whole numbers that rounding keeps, found again in the output).
+_VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS | SIZES))})="([^"]*)"')
 _TOKEN = re.compile(r'="@(\d+)@"')
-SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions
+SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions and sizes
 _FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
 # A local definition's id ("c0", "c1_") where a tidy drawing's text names it: as an id, in a
 # url() reference or a <use>'s href. Writer.finish writes the drawing's own prefix in its place
@@ -121,9 +128,10 @@ class RawPart(NamedTuple):
 
 @dataclass(frozen=True)
 class Drawn:
-    """The distinct parts one drawing process drew, made ready for Writer.collector by that process
+    """The distinct parts one drawing process drew, made ready for Writer.collected by that process
     (drawn_parts): `parts`, distinct, each as (name, text, clips) (elements.Part's fields: plain
-    tuples unpickle six times as fast); `done`, all their path data compacted; per
+    tuples unpickle six times as fast); `done`, all their path data compacted (for a Drawn to be
+    sent, done.compact only of the parts holding a member of done.members: see drawn_parts); per
     part its skeleton and values (_skeleton's with done.compact) as `forms` (the number of its
     skeleton in `skeletons`, a few hundred for ten thousand parts, and the values); `holds`: the
     parts holding a first path data of done.firsts (part number -> those path data), which
@@ -136,9 +144,14 @@ class Drawn:
     holds: dict[int, tuple[str, ...]]
 
 
-def drawn_parts(parts: list[Part], tenths: Tenths | None = None) -> Drawn:
+def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = False) -> Drawn:
     """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts); `tenths`: the
-    numbers of some of their path data as written (pathdata.Tenths), not read again."""
+    numbers of some of their path data as written (pathdata.Tenths), not read again. `sent`: the
+    Drawn goes to another process, which needs the compact forms only of the parts whose forms
+    another process's first path data may change (pathdata.changed_forms: those holding a member
+    of a skeleton with a first; Writer.finish makes them again), so done.compact keeps only theirs
+    (~a fifth of the bytes sent less; were every part's needed again, Writer.finish compacts them
+    from their text)."""
     fields = [(part.name, part.text, part.clips) for part in parts]
     # each part's text cut at its values once (_VALUE), for its path data and its skeleton; its
     # elements end in ">": a path data in two cannot match
@@ -155,6 +168,10 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None) -> Drawn:
         held = {d for d in part_paths_ if d in rank}
         if held:
             holds[number] = tuple(sorted(held, key=rank.__getitem__))
+    if sent:
+        members = {d for skeleton_members in done.members.values() for d in skeleton_members}
+        done = replace(done, compact={d: done.compact[d] for part_paths_ in paths
+                                       if not members.isdisjoint(part_paths_) for d in part_paths_})
     return Drawn(fields, list(numbers), forms, done, holds)
 
 
@@ -170,48 +187,55 @@ class Writer:
         self.definitions: list[etree._Element] = []  # shared by several tidy drawings: for the document's <defs>
         self.extents: dict[str, Extent] = {}  # of the compact path data (merge_alike's)
         self._templates: dict[str, _Template] = {}  # by skeleton, and the distinct tidy drawings'
+        self._ahead: dict[str, _Template] = {}  # made by prepare, for finish
+        self._texts: list[str | None] = []  # prepare's tidy texts of the first raw parts (finish's)
         self._distinct: list[tuple[str, list[str]]] = []  # skeletons and values (finish's, for drawings)
         self._forms: list[tuple[str, list[str]] | None] = []  # per raw part, when a drawing process made them
         self._held: set[str] = set()  # the path data of drawn_parts' Drawn.holds the collected parts hold
+        self._sources: list[tuple[Compacted, int, int]] = []  # by collected: each Drawn's path data, its raw parts
 
     def collect(self, parts: Sequence[Part]) -> tuple[int, ...]:
         """Take one drawing's parts (render/svg.py's face_parts); return the raw part numbers,
         in drawing order."""
-        return tuple(self._number((part.name, part.text, part.clips), None) for part in parts)
+        numbers = []
+        for part in parts:
+            key = (part.text, part.clips)
+            number = self.raw_ids.get(key)
+            if number is None:  # a new part: finish makes its skeleton
+                number = self.raw_ids[key] = len(self.raw)
+                self.raw.append(RawPart(self.label_of(part.name), part.text, part.clips))
+                self._forms.append(None)
+            numbers.append(number)
+        return tuple(numbers)
 
-    def collector(self, drawn: Drawn, done: Compacted) -> Callable[[Sequence[int]], tuple[int, ...]]:
-        """A `collect` of drawings whose parts are given by their numbers in `drawn` (a drawing
-        process's, drawn_parts): each part is looked at once. A part's skeleton and values are
-        taken from `drawn` when `done` (the path data of all the processes compacted together,
-        pathdata.merged) writes its path data as drawn.done does (else finish makes them)."""
-        # the compact forms another process's first path data changed (pathdata.merged): the
-        # skeletons holding them are made again
-        changed = set() if done is drawn.done else {form for d, form in drawn.done.compact.items()
-                                                     if done.compact[d] != form}
+    def collected(self, drawn: Drawn, drawings: Iterable[Sequence[int]]) -> list[tuple[int, ...]]:
+        """`collect` of each of `drawings`, whose parts are given by their numbers in `drawn` (a
+        drawing process's, drawn_parts), in order: the raw part numbers of each. Each part of
+        `drawn` they show is a new raw part (a part that another process's drawings show too is two:
+        finish gives them one tidy drawing, numbered at the first). A part keeps its skeleton and
+        values from `drawn` (finish makes them again where the path data of all the processes
+        compacted together write its path data otherwise)."""
+        drawings = list(drawings)
+        order = list(dict.fromkeys(number for numbers in drawings for number in numbers))  # as first shown
         raws = [-1] * len(drawn.parts)
+        for raw, number in enumerate(order, len(self.raw)):
+            raws[number] = raw
+        self._sources.append((drawn.done, len(self.raw), len(self.raw) + len(order)))
+        labels = {name: self.label_of(name) for name in {drawn.parts[number][0] for number in order}}
+        self.raw += [RawPart(labels[name], text, clips) for name, text, clips in map(drawn.parts.__getitem__, order)]
+        self._forms += [(drawn.skeletons[skeleton], values) for skeleton, values in map(drawn.forms.__getitem__, order)]
+        self._held.update(d for number, held in drawn.holds.items() if raws[number] >= 0 for d in held)
+        return [tuple([raws[number] for number in numbers]) for numbers in drawings]
 
-        def collect(numbers: Sequence[int]) -> tuple[int, ...]:
-            for number in [number for number in numbers if raws[number] < 0]:
-                skeleton, values = drawn.forms[number]
-                raws[number] = self._number(drawn.parts[number], (drawn.skeletons[skeleton], values)
-                                            if changed.isdisjoint(values) else None)
-                if number in drawn.holds:
-                    self._held.update(drawn.holds[number])
-            return tuple([raws[number] for number in numbers])
-
-        return collect
-
-    def _number(self, part: tuple[str, str, tuple[str, ...]], form: tuple[str, list[str]] | None) -> int:
-        """The raw part number of `part` (name, text, clips), a new one when its text and clips are
-        new, which then keeps `form`: its skeleton and values (_skeleton's) or None (finish makes them)."""
-        name, text, clips = part
-        key = (text, clips)
-        number = self.raw_ids.get(key)
-        if number is None:
-            number = self.raw_ids[key] = len(self.raw)
-            self.raw.append(RawPart(self.label_of(name), text, clips))
-            self._forms.append(form)
-        return number
+    def prepare(self) -> None:
+        """Make ahead of finish (in a drawing process's idle time: while the other one's parts
+        come) the templates of the skeletons of the parts `collected` since, and their tidy texts,
+        which finish takes (a part whose skeleton finish makes again does not)."""
+        forms = self._forms[len(self._texts):]
+        for skeleton in dict.fromkeys(form[0] for form in forms if form is not None):
+            if skeleton not in self._ahead:
+                self._ahead[skeleton] = self._template(skeleton)
+        self._texts += [None if form is None else self._ahead[form[0]].form.format(*form[1], k=LOCAL) for form in forms]
 
     def finish(self, progress: Callable[[float], None] | None = None,
                done: Compacted | None = None) -> list[int]:
@@ -219,7 +243,8 @@ class Writer:
         (`drawings()` then makes them). `progress(fraction)`, when given, is
         told the share 0..1 of the parts tidied every PROGRESS_PARTS parts. `done`: path data
         compacted already (the drawing processes', drawn_parts and pathdata.merged, whose parts
-        `collector` took), which may hold more than the parts collected."""
+        `collected` took), which may hold more than the parts collected; a part collected keeps
+        its skeleton and values unless `done` writes a compact form of them otherwise."""
         forms, self._forms = self._forms, []  # let go when finish returns
         if done is None or not self._held.issuperset(done.firsts.values()):
             # the first path data of a skeleton (whose points are kept in all) came from a drawing
@@ -227,26 +252,42 @@ class Writer:
             # skeleton made here
             done = compacted(part_paths((part.element, *part.definitions) for part in self.raw), done)
             forms = [None] * len(self.raw)
+        for own, start, end in self._sources:  # the forms another process's first path data changed: made again
+            changed = changed_forms(own, done)
+            if changed:
+                forms[start:end] = [form if form is None or changed.isdisjoint(form[1]) else None for form in forms[start:end]]
+        self._sources = []
+        made, self._texts = self._texts, []  # prepare's, of the parts whose forms stand
+        made += [None] * (len(self.raw) - len(made))
         compact, self.extents = done.compact, done.extents
         self.raw_ids.clear()
         templates: dict[str, _Template] = {}
         tidy_ids: dict[str, int] = {}
         distinct: list[tuple[str, list[str]]] = []  # skeleton and values of each distinct tidy drawing
-        mapping = []
-        for index, (part, form) in enumerate(zip(self.raw, forms, strict=True)):
-            if progress is not None and index % PROGRESS_PARTS == 0:
-                progress(index / len(self.raw))
-            skeleton, values = form or _skeleton((part.element, *part.definitions), compact)
-            template = templates.get(skeleton)
-            if template is None:
-                template = templates[skeleton] = self._template(skeleton)
-            text = template.form.format(*values, k=LOCAL)  # alike drawings alike, with the local ids
-            number = tidy_ids.get(text)
-            if number is None:
-                number = tidy_ids[text] = len(distinct)
-                distinct.append((skeleton, values))
-            mapping.append(number)
-        self._templates, self._distinct = templates, distinct
+        mapping: list[int] = []
+        for start in range(0, len(self.raw), PROGRESS_PARTS):
+            if progress is not None:
+                progress(start / len(self.raw))
+            end = start + PROGRESS_PARTS
+            chunk = [form or _skeleton((part.element, *part.definitions), compact)
+                     for part, form in zip(self.raw[start:end], forms[start:end], strict=True)]
+            for skeleton in dict.fromkeys(skeleton for skeleton, _ in chunk):  # made in the order first used
+                if skeleton not in templates:
+                    templates[skeleton] = self._ahead.pop(skeleton) if skeleton in self._ahead else self._template(skeleton)
+            # alike drawings alike, with the local ids; numbered as they first come
+            texts = [text if text is not None and form is not None else templates[skeleton].form.format(*values, k=LOCAL)
+                     for text, form, (skeleton, values) in zip(made[start:end], forms[start:end], chunk, strict=True)]
+            mapping += [tidy_ids.setdefault(text, len(tidy_ids)) for text in texts]
+            for form, number in zip(chunk, mapping[start:], strict=True):
+                if number == len(distinct):  # its first
+                    distinct.append(form)
+        self._templates, self._distinct, self._ahead = templates, distinct, {}
+        # the style classes in the order the templates made in this order make them (a template
+        # makes its new ones in the order its text holds them), those of templates made ahead
+        # and not taken left out: the style sheet's order
+        style = {label: key for key, label in self.styles.items()}
+        self.styles = {style[label]: label
+                       for label in dict.fromkeys(label for template in templates.values() for label in _CLASS.findall(template.form))}
         return mapping
 
     def drawings(self) -> list[list[str]]:
@@ -257,11 +298,15 @@ class Writer:
         `<defs>`), which they refer to; the style classes are named by use (_short_classes)."""
         templates, distinct = self._templates, self._distinct
         forms = self._short_classes(templates, Counter(skeleton for skeleton, _ in distinct))
-        # the local definitions' ids made the drawing's own: "k" and its number
-        # kept as text, which the document is written from (no parse, no serializing again)
-        texts, self.definitions = _hoist([[(piece.format(*values, k=short_id("k", number)), definition)
-                                           for piece, definition in forms[skeleton]]
-                                          for number, (skeleton, values) in enumerate(distinct)])
+        # the local definitions' ids made the drawing's own: "k" and its number; kept as text, which
+        # the document is written from (no parse, no serializing again); a definition's key for
+        # _hoist made by formatting its piece's _content (no regex per drawing)
+        contents = {skeleton: [(piece, _content(piece) if definition else None) for piece, definition in pieces]
+                    for skeleton, pieces in forms.items()}
+        texts, self.definitions = _hoist([[(piece.format(*values, k=own),
+                                            None if content is None else content.format(*values, k=own).encode())
+                                           for piece, content in contents[skeleton]]
+                                          for (skeleton, values), own in zip(distinct, short_ids("k"))])
         return [SEPARATOR.join(kept).split(SEPARATOR) if kept else [] for kept in texts]
 
     def _short_classes(self, templates: dict[str, _Template],
@@ -372,9 +417,10 @@ def _skeleton(texts: tuple[str, ...], compact: dict[str, str]) -> tuple[str, lis
     """A part's `texts` (its element, then its definitions) with the values that tidying only
     passes on taken out: each path data as "@k@", k numbering its distinct compact forms
     (`compact`, a Compacted's) in order, so paths alike after compacting stay alike (an
-    outline and its clip path); each position (POSITIONS) as SENTINEL + j, j counting them.
-    Returns the text and the values: the distinct compact path data, then the positions
-    rounded to whole pixels. Parts with one skeleton are tidied alike (Writer._template)."""
+    outline and its clip path); each position (POSITIONS) and each size (SIZES, a plain number)
+    as SENTINEL + j, j counting them. Returns the text and the values: the distinct compact path
+    data, then the positions rounded to whole pixels and the sizes as written, in the order of the
+    text. Parts with one skeleton are tidied alike (Writer._template)."""
     return _skeleton_of(_VALUE.split("".join(texts)), compact)
 
 
@@ -387,9 +433,11 @@ def _skeleton_of(cut: list[str], compact: dict[str, str]) -> tuple[str, list[str
         name, value = cut[index], cut[index + 1]
         if name == "d":
             cut[index] = _path_token(distinct.setdefault(compact[_text(value)], len(distinct)))
-        else:
+        elif name in POSITIONS or value.replace(".", "", 1).isdigit():
             cut[index] = _position_token(name, len(positions))
-            positions.append(_whole(value))
+            positions.append(_whole(value) if name in POSITIONS else _as_written(value))
+        else:  # a size that is not a plain number stays in the skeleton
+            cut[index] = f' {name}="{value}"'
         cut[index + 1] = ""
     return "".join(cut), [*distinct, *positions]
 
@@ -403,7 +451,7 @@ def _path_token(number: int) -> str:
 
 @functools.cache
 def _position_token(name: str, number: int) -> str:
-    """_skeleton's attribute `name` (POSITIONS) holding its placeholder position `number`."""
+    """_skeleton's attribute `name` (POSITIONS, SIZES) holding its placeholder position `number`."""
     return f' {name}="{SENTINEL + number}"'
 
 
@@ -412,6 +460,12 @@ def _whole(value: str) -> str:
     """A position's text `value` rounded to whole pixels, as text (the drawings repeat a few
     thousand positions over and over)."""
     return str(round(float(value)))
+
+
+@functools.lru_cache(maxsize=1 << 12)
+def _as_written(value: str) -> str:
+    """A size's text `value`, one object for equal texts (sent pickled once per drawing process)."""
+    return value
 
 
 def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree._Element]) -> None:
@@ -434,22 +488,23 @@ def _reuse_clip_outlines(definitions: list[etree._Element], elements: list[etree
         elements[index] = use
 
 
-def _content(definition: str) -> bytes:
+def _content(definition: str) -> str:
     """The text of a `definition` as lxml serializes it on its own (the namespace declared) and
-    without the ids of its nodes: equal for definitions that define alike."""
+    without the ids of its nodes: equal for definitions that define alike. Of a template's piece
+    (a format string) too: formatting it gives the content of the piece formatted (no value holds an id)."""
     name = _TAG.match(definition)
     assert name is not None, definition
-    return _ID.sub(b"", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}'.encode())
+    return _ID.sub("", f'{name.group()} xmlns="{SVG}"{definition[name.end():]}')
 
 
-def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], list[etree._Element]]:
+def _hoist(drawings: list[list[tuple[str, bytes | None]]]) -> tuple[list[list[str]], list[etree._Element]]:
     """Take the definitions that two or more of the tidy `drawings` (each its top-level definitions'
-    texts (True) and other elements' (False), own ids "k5", "k5_", "k5-1", ...) hold alike out of
-    them, pointing their references at one shared copy. Returns each drawing's pieces' texts left
-    and the shared copies, ids "v0", "v1", ... (a clip path's only path "v0_",
-    for its `<use>`s)."""
-    keys = [[_content(text) if definition else None for text, definition in pieces] for pieces in drawings]
-    counts = Counter(key for drawing in keys for key in set(drawing) if key is not None)
+    texts with their _content as UTF-8 and other elements' texts with None, own ids "k5", "k5_",
+    "k5-1", ...) hold alike out of them, pointing their references at one shared copy. Returns each
+    drawing's pieces' texts left and the shared copies, ids "v0", "v1", ... (a clip path's only
+    path "v0_", for its `<use>`s)."""
+    held = [{key for _, key in pieces if key is not None} for pieces in drawings]
+    counts = Counter(key for keys in held for key in keys)
     # named and written alike outlines side by side (their path data after its first move), for gzip
     order = sorted((content for content, count in counts.items() if count > 1), key=lambda content: _MOVE.sub(b"", content))
     names = {key: short_id("v", number) for number, key in enumerate(order)}
@@ -459,10 +514,13 @@ def _hoist(drawings: list[list[tuple[str, bool]]]) -> tuple[list[list[str]], lis
         if len(copy) == 1:
             copy[0].set("id", names[content] + "_")
     texts: list[list[str]] = []
-    for pieces, drawing in zip(drawings, keys, strict=True):
+    for pieces, keys in zip(drawings, held, strict=True):
+        if not keys:  # no definition (most drawings)
+            texts.append([text for text, _ in pieces])
+            continue
         local: dict[str, str] = {}
         kept = []
-        for (text, _), key in zip(pieces, drawing, strict=True):
+        for text, key in pieces:
             if key is None or counts[key] < 2:
                 kept.append(text)
                 continue
@@ -491,9 +549,17 @@ def short_id(letter: str, number: int) -> str:
     digits = ""
     while True:
         number, digit = divmod(number, 36)
-        digits = "0123456789abcdefghijklmnopqrstuvwxyz"[digit] + digits
+        digits = _BASE36[digit] + digits
         if not number:
             return letter + digits
+
+
+def short_ids(letter: str) -> Iterator[str]:
+    """short_id(letter, 0), short_id(letter, 1), ... in order, made by itertools.product of the
+    digits (a third of the time of dividing each number)."""
+    for width in itertools.count(1):
+        for digits in itertools.product(_BASE36[1:] if width > 1 else _BASE36, *[_BASE36] * (width - 1)):
+            yield letter + "".join(digits)
 
 
 def _text(value: str) -> str:

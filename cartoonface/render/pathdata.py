@@ -34,7 +34,7 @@ import functools
 import re
 import warnings
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -292,13 +292,16 @@ class Compacted:
     numbers (render/compact.py's merge_alike would otherwise parse the text); `firsts`: the first (in
     sorted order) path data of each skeleton with linetos, whose points Douglas-Peucker keeps in
     all of them (_kept), and `members` all the path data of each such skeleton compacted with it
-    (sorted; what `merged` compacts again where another first comes earlier). Paths compacted in
-    two processes are put together by `merged`."""
+    (sorted; what `merged` compacts again where another first comes earlier), `rows` their numbers
+    rounded to whole pixels ((n, 2P) integers, int16 where they fit, a row per member: `merged`
+    compacts them again without reading their text). Paths compacted in two processes are put
+    together by `merged`."""
 
     compact: dict[str, str]
     extents: dict[str, Extent]
     firsts: dict[str, str]
     members: dict[str, list[str]]
+    rows: dict[str, np.ndarray] = field(default_factory=dict, compare=False)  # members' (equal members: equal rows)
 
 
 def compacted(paths: Iterable[str], done: Compacted | None = None,
@@ -317,17 +320,17 @@ def compacted(paths: Iterable[str], done: Compacted | None = None,
              if first not in distinct or skeleton in new and min(new[skeleton]) < first}
     every = _groups(distinct) if stale else {}
     for skeleton, first in firsts.items():
-        if skeleton not in stale:
+        if skeleton not in stale and done:
             known.firsts[skeleton] = first
-            known.members[skeleton] = done.members[skeleton] if done else []
+            known.members[skeleton], known.rows[skeleton] = done.members[skeleton], done.rows[skeleton]
         elif skeleton in every:
             _compact_group(skeleton, every[skeleton], known, tenths)
     for skeleton, members in new.items():
         if skeleton not in stale:  # compacted with the first, whose points are kept
-            before = known.members.get(skeleton, [])
+            before = (known.members[skeleton], known.rows[skeleton]) if skeleton in known.members else None
             _compact_group(skeleton, [firsts[skeleton], *members] if skeleton in firsts else members, known, tenths)
             if before:
-                known.members[skeleton] = sorted({*before, *known.members[skeleton]})
+                _join(skeleton, before, known)
     return known
 
 
@@ -336,15 +339,48 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
     gives it: where a skeleton's first path data differs, the paths of the side whose first comes
     later are compacted again with the other's (its points kept)."""
     done = Compacted({**first.compact, **second.compact}, {**first.extents, **second.extents},
-                     {**first.firsts, **second.firsts}, {**first.members, **second.members})
+                     {**first.firsts, **second.firsts}, {**first.members, **second.members}, {**first.rows, **second.rows})
     for skeleton, one in first.firsts.items():
         other = second.firsts.get(skeleton)
         if other is None:
             continue
-        if one != other:
-            _compact_group(skeleton, [min(one, other), *(second if one < other else first).members[skeleton]], done)
-        done.members[skeleton] = sorted({*first.members[skeleton], *second.members[skeleton]})
+        if one != other:  # the later side's members compacted again from their rows, after the earlier first's
+            earlier, later = (first, second) if one < other else (second, first)
+            rows = np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64)
+            done.firsts[skeleton] = earlier.firsts[skeleton]
+            if not _same_kept(skeleton, rows[0], rows[1]):  # else the later side's forms stand
+                _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done, rounded=rows)
+        done.members[skeleton], done.rows[skeleton] = first.members[skeleton], first.rows[skeleton]
+        _join(skeleton, (second.members[skeleton], second.rows[skeleton]), done)
     return done
+
+
+def _same_kept(skeleton: str, first: np.ndarray, other: np.ndarray) -> bool:
+    """Whether Douglas-Peucker keeps the same points of `skeleton`'s path data from the rounded
+    numbers `first` (2P,) as from `other` (2P,) (_kept): then every member is compacted alike
+    after either as its first."""
+    commands = _commands(skeleton, len(first))
+    assert commands is not None, skeleton  # rows are kept of compacted members only
+    spans = _spans(commands)
+    return _kept(commands, spans, first) == _kept(commands, spans, other)
+
+
+def changed_forms(own: Compacted, done: Compacted) -> set[str]:
+    """The compact forms of `own` that `done` (`merged` of it and others) writes otherwise: those
+    of the members of a skeleton whose first path data another side has earlier (`merged`
+    compacts them again; no other path data changes)."""
+    return {form for skeleton, first in own.firsts.items() if done.firsts.get(skeleton) != first
+            for d in own.members[skeleton] if done.compact[d] != (form := own.compact[d])}
+
+
+def _join(skeleton: str, other: tuple[list[str], np.ndarray], done: Compacted) -> None:
+    """Add the members `other` (sorted path data and their rows, Compacted's) of `skeleton` to
+    those of `done` (kept sorted, each once)."""
+    both = [*done.members[skeleton], *other[0]]
+    where = dict(zip(both, range(len(both))))  # each member's row (equal members: equal rows)
+    members = sorted(where)
+    done.members[skeleton] = members
+    done.rows[skeleton] = np.concatenate((done.rows[skeleton], other[1]))[[where[d] for d in members]]
 
 
 def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
@@ -358,23 +394,32 @@ def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
 
 
 def _compact_group(skeleton: str, members: list[str], done: Compacted,
-                   tenths: Tenths | None = None) -> None:
+                   tenths: Tenths | None = None, rounded: np.ndarray | None = None) -> None:
     """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
-    the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them."""
-    members.sort()
-    if "#" in skeleton:
-        texts = [_NUMBER.findall(d) for d in members]
-        numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
+    the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them;
+    `rounded`, when given, all their numbers rounded to whole pixels, a row per member in their
+    (sorted) order: they are not read."""
+    if rounded is None:
+        members.sort()
+        if "#" in skeleton:
+            texts = [_NUMBER.findall(d) for d in members]
+            numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
+        else:
+            numbers = _plain_numbers(members, tenths)
+        commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
+        if commands is None or numbers is None:
+            done.compact.update((d, d) for d in members)
+            return
+        rounded = np.rint(numbers).astype(np.int64)
     else:
-        numbers = _plain_numbers(members, tenths)
-    commands = _commands(skeleton, numbers.shape[1]) if numbers is not None else None
-    if commands is None or numbers is None:
-        done.compact.update((d, d) for d in members)
-        return
+        commands = _commands(skeleton, rounded.shape[1])
+        assert commands is not None, skeleton  # rows are kept of compacted members only
     if "L" in skeleton:
         done.firsts[skeleton] = members[0]
         done.members[skeleton] = members
-    rounded = np.rint(numbers).astype(np.int64)
+        # kept in as few bits as they fit in (16 on a canvas): a quarter of the bytes a drawing process sends
+        bound = np.abs(rounded).max(initial=0)
+        done.rows[skeleton] = rounded.astype(np.int16 if bound < 1 << 15 else np.int32 if bound < 1 << 31 else np.int64)
     spans = _spans(commands)
     kept = _kept(commands, spans, rounded[0])
     smooth = _smooth(commands, spans, kept, rounded)
