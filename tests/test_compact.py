@@ -169,7 +169,7 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
         drawings = reference.drawings()
         for cut in (7, 45, 80):
             # the second half as a helper sends it (its compact forms only of the parts that may change)
-            halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:], None, True)]
+            halves = [_draw_compacted(face, states[:cut]), _draw_compacted(face, states[cut:], sent=True)]
             done = reduce(merged, (half.done for _, half in halves))
             writer = Writer(track_of)
             raw = []

@@ -524,7 +524,7 @@ def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[tuple[Numb
     """_draw_compacted of `states` in a drawing helper, for this process, and the numbers of the
     path data it drew packed to send back (pathdata.packed)."""
     tenths: dict[str, np.ndarray] = {}
-    return _draw_compacted(face, states, None, tenths, True), packed(tenths)
+    return _draw_compacted(face, states, None, tenths, sent=True), packed(tenths)
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progress: Callable[[float], None],
