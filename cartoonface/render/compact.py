@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import functools
 import html
+import operator
 import re
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -590,8 +591,10 @@ _ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
 def start_tag(text: str) -> tuple[str, dict[str, str]]:
     """The tag (no namespace: "path") and attributes (values as written) of the element `text`
     begins with."""
-    head = text[1:text.index(">")].rstrip("/")  # finds, not a regex: a regex walks long path data slower
-    return head.partition(" ")[0], dict(_ATTRIBUTE.findall(head))
+    end = text.index(">")  # a find, not a regex: a regex walks long path data slower; and no copy of it
+    name = _TAG.match(text)
+    assert name is not None, text
+    return name.group()[1:], dict(_ATTRIBUTE.findall(text, 1, end))
 
 
 def _own_class(text: str) -> str | None:
@@ -615,9 +618,32 @@ def merge_alike(elements: list[str], styles: dict[str, dict[str, str]],
     lie apart (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). A path data's extent is taken from `extents` (Writer.extents: read off its
     numbers) when it is there, else read (_extent)."""
-    labels = [_own_class(text) for text in elements] if len(elements) > 1 else []
-    if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
-        return list(elements)  # only consecutive paths of one class join: none here (most drawings)
+    return _merged(elements, [_own_class(text) or text for text in elements], styles, extents)
+
+
+def merge_all_alike(drawings: Sequence[list[str]], styles: dict[str, dict[str, str]],
+                    extents: Mapping[str, Extent] | None = None) -> list[list[str]]:
+    """merge_alike of each of `drawings`, the class of an element text read once however many of them
+    show it (a shared part's `<use>`, a part of several drawings)."""
+    classes = _Classes()
+    return [_merged(drawing, list(map(classes.__getitem__, drawing)), styles, extents) for drawing in drawings]
+
+
+class _Classes(dict[str, str]):
+    """The class of each element text asked for (_own_class), read from the text the first time; of
+    an element without a class, the text itself (no class is equal to it: it begins with "<")."""
+
+    def __missing__(self, text: str) -> str:
+        label = self[text] = _own_class(text) or text
+        return label
+
+
+def _merged(elements: list[str], labels: list[str], styles: dict[str, dict[str, str]],
+            extents: Mapping[str, Extent] | None) -> list[str]:
+    """merge_alike of `elements`, whose classes are `labels` (an element without one: any text but
+    the class of its neighbours)."""
+    if not any(map(operator.eq, labels, labels[1:])):
+        return elements  # only consecutive paths of one class join: none here (most drawings)
     tags = [start_tag(text) for text in elements]
     known = extents or {}
     merged: list[str] = []
@@ -650,8 +676,11 @@ def bare(elements: Sequence[str]) -> bool:
     a `<use>` in place of a `<g id>` around it: drawn (not a definition) and without an id of its own."""
     if len(elements) != 1:
         return False
-    tag, attrs = start_tag(elements[0])
-    return f"{{{SVG}}}{tag}" not in DEFINITIONS and "id" not in attrs
+    text = elements[0]
+    name = _TAG.match(text)
+    assert name is not None, text
+    # start_tag's, without reading (or copying) the attributes: an id is ' id="' before the first ">"
+    return f"{{{SVG}}}{name.group()[1:]}" not in DEFINITIONS and text.find(' id="', 0, text.index(">")) < 0
 
 
 def _children(text: str) -> int:
@@ -674,8 +703,8 @@ def _kind(elements: Sequence[str]) -> tuple[str, str, int, int, str]:
     numbers after its starting point): gzip finds their repeats within its window (32 KB)."""
     first = elements[0]
     tag, attrs = start_tag(first)
-    path = _FIRST_PATH.search(first)
-    d = _text(start_tag(first[path.start():])[1].get("d", "")) if path else ""
+    path = None if tag == "path" else _FIRST_PATH.search(first)  # a path's own start tag read once
+    d = _text((attrs if tag == "path" else start_tag(first[path.start():])[1] if path else {}).get("d", ""))
     return tag, attrs.get("class", ""), len(elements), _children(first), _START.sub("", d, count=1)
 
 
@@ -690,20 +719,18 @@ def share(drawings: dict[str, list[list[int]]], tidy: list[list[str]],
     drawings' element texts by group and the definitions' text."""
     shown = moved or {}
     # a moved part counts as a use of its source (which its own drawing uses too: shared)
-    uses = Counter(shown[part][0] if part in shown else part
-                   for track in drawings.values() for drawing in track for part in drawing)
+    every = Counter(part for track in drawings.values() for drawing in track for part in drawing)
+    uses: Counter[int] = Counter()
+    for part, count in every.items():
+        uses[shown[part][0] if part in shown else part] += count
     names: dict[int, str] = {}
     defs = []
     for part in sorted((part for part, count in uses.items() if count > 1), key=lambda part: _kind(tidy[part])):
         names[part] = short_id("g", len(names))
         defs.append(with_id(tidy[part][0], names[part]) if bare(tidy[part])
                     else markup("g", {"id": names[part]}, "".join(tidy[part])))
-
-    def node(part: int) -> list[str]:
-        if part in shown:
-            source, matrix = shown[part]
-            return [markup("use", {"href": f"#{names[source]}", "transform": f"matrix({matrix})"})]
-        return [markup("use", {"href": f"#{names[part]}"})] if part in names else tidy[part]
-
-    return ({track: [[child for part in drawing for child in node(part)] for drawing in track_drawings]
+    # each part's texts made once, however many drawings show it (ids and matrices need no escaping)
+    nodes = {part: [f'<use href="#{names[shown[part][0]]}" transform="matrix({shown[part][1]})"/>'] if part in shown
+             else [f'<use href="#{names[part]}"/>'] if part in names else tidy[part] for part in every}
+    return ({track: [[child for part in drawing for child in nodes[part]] for drawing in track_drawings]
              for track, track_drawings in drawings.items()}, "".join(defs))
