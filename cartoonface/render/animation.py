@@ -298,7 +298,7 @@ def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
     new_tracks, new_reused = {}, {}
     for name, track in tracks.items():
         own = reused[name]
-        drawings = [drawing if number in own else [parts.get(part, part) for part in drawing]
+        drawings = [drawing if number in own else list(map(parts.get, drawing, drawing))  # C loops: parts.get(part, part)
                     for number, drawing in enumerate(track.drawings)]
         alias: dict[int, int] = {}
         firsts: dict[tuple[object, ...], int] = {}
@@ -310,7 +310,7 @@ def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
             source = alias[reuse.source]
             alias[number] = (source if reuse.matrix == IDENTITY and (not track.shapes or track.shapes[number] == track.shapes[source])
                              else number)
-        new_tracks[name] = _Track(drawings, [alias[key] for key in track.keys], track.shapes)
+        new_tracks[name] = _Track(drawings, list(map(alias.__getitem__, track.keys)), track.shapes)
         new_reused[name] = {number: Reuse(alias[reuse.source], reuse.matrix, reuse.error)
                             for number, reuse in own.items() if alias[number] == number}
     return new_tracks, new_reused, {number: reuse for number, reuse in moved.items() if number not in parts}
