@@ -616,7 +616,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     style.text = writer.style_sheet()
     hair, layer = _stage(root, defs, figure, clothes, background, leans, body, fps)
     _roll((hair, layer), rolls, fps, f"{origin[0]:.6g} {origin[1]:.6g}")
-    del frames, raw, done  # freed here, not at the end
+    del frames, raw, done  # freed while the child searches (~5 ms), not at the return
     reused, moved = reuse()
     tracks, reused, moved = _aliased(tracks, reused, moved)
     report(REUSED_SHARE)

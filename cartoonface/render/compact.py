@@ -738,8 +738,12 @@ def _kind(elements: Sequence[str]) -> tuple[str, str, int, int, str]:
     numbers after its starting point): gzip finds their repeats within its window (32 KB)."""
     first = elements[0]
     tag, attrs = start_tag(first)
-    path = None if tag == "path" else _FIRST_PATH.search(first)  # a path's own start tag read once
-    d = _text((attrs if tag == "path" else start_tag(first[path.start():])[1] if path else {}).get("d", ""))
+    if tag == "path":  # its own start tag, read already
+        path_attrs = attrs
+    else:
+        path = _FIRST_PATH.search(first)
+        path_attrs = start_tag(first[path.start():])[1] if path else {}
+    d = _text(path_attrs.get("d", ""))
     return tag, attrs.get("class", ""), len(elements), _children(first), _START.sub("", d, count=1)
 
 
