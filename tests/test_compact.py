@@ -15,7 +15,7 @@ from PIL import Image
 from cartoonface.face.model import load_face
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import animation_svg
-from cartoonface.render.compact import merge_alike
+from cartoonface.render.compact import merge_alike, merge_all_alike, short_id
 from cartoonface.render.elements import Part
 from cartoonface.render.png import svg_to_png
 from tests.stills import frozen
@@ -344,3 +344,26 @@ def _unclassed(elements: list[etree._Element]) -> list[tuple[str, dict[str, str]
     classes apart)."""
     return [(node.tag, {name: value for name, value in node.attrib.items() if name != "class"})
             for element in elements for node in element.iter()]
+
+
+def test_merging_many_drawings_at_once_is_merging_each_alone():
+    def path(d: str, label: str = "n") -> str:
+        return f'<path d="{d}" class="{label}"/>'
+
+    apart = [path("m10,20c5-6,15-6,20,0l-20,4z"), path("m60,20 20,0 0,8-20,0z"), path("M90,20H110V28H90Z")]
+    overlapping = path("m25,20c5-6,15-6,20,0l-20,4z")
+    other = path("m200,20 5,0 0,5z", "o")
+    use = '<use href="#g1"/>'
+    drawings = [apart[:2], [apart[0], use, apart[1]], [], [use, use], [apart[0], overlapping], [other, *apart],
+                [*apart, other, apart[0], apart[2]], [apart[1]], [apart[2], apart[0]], [other], [other, other], apart[:2]]
+    styles = {"n": BROW_STYLE, "o": BROW_STYLE}
+    each = [merge_alike(drawing, styles) for drawing in drawings]
+    assert merge_all_alike(drawings, styles) == each
+    assert sum(len(merged) < len(drawing) for merged, drawing in zip(each, drawings, strict=True)) >= 4  # some join
+
+
+def test_short_ids_are_the_numbers_in_base_36_after_the_letter():
+    numbers = [*range(0, 3000), 36 ** 2 - 1, 36 ** 2, 36 ** 3 - 1, 36 ** 3, 36 ** 4 + 5, 10 ** 9]
+    ids = [short_id("f", number) for number in numbers]
+    assert all(text[0] == "f" and text[1:] == text[1:].lower() and int(text[1:], 36) == number
+               and (text[1] != "0" or number == 0) for text, number in zip(ids, numbers, strict=True))

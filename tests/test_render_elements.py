@@ -1,4 +1,4 @@
-"""render/elements.py (the one SVG element helper) and render/numbers.py's decimal_text."""
+"""render/elements.py (the one SVG element helper) and render/numbers.py's decimal_text and fraction_texts."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from lxml import etree
 
 from cartoonface.render.elements import DECIMALS, SVG, element, markup, svg_bytes, svg_root
-from cartoonface.render.numbers import decimal_text
+from cartoonface.render.numbers import decimal_text, fraction_texts
 
 
 @pytest.mark.parametrize("decimals", [1, 3, 9])
@@ -20,6 +20,15 @@ def test_decimal_text_is_the_value_to_its_decimals_without_trailing_zeros(decima
         whole, _, fraction = text.partition(".")
         assert len(fraction) <= decimals and not fraction.endswith("0") and not text.endswith(".")
         assert whole.lstrip("-") != ""  # a leading zero is kept: "0.5", never ".5"
+
+
+@pytest.mark.parametrize("decimals", [1, 3, 7, 15])
+def test_fraction_texts_are_decimal_texts_of_the_fractions(decimals: int) -> None:
+    rng = np.random.default_rng(decimals)
+    top = 10 ** decimals
+    numerators = [0, 1, top - 1, top // 10, *(int(n) for n in rng.integers(0, top, 2000, dtype=np.int64)),
+                  *(int(n) // 1000 * 1000 for n in rng.integers(0, top, 50, dtype=np.int64))]  # trailing zeros
+    assert fraction_texts(numerators, decimals) == [decimal_text(n / top, decimals) for n in numerators]
 
 
 def test_element_writes_attributes_in_order_with_hyphens_and_numbers_to_its_decimals() -> None:

@@ -51,6 +51,7 @@ clock from the audio (static/cartoonface.js).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import operator
 import re
@@ -65,9 +66,9 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_alike, share, short_ids, with_id
-from cartoonface.render.elements import DECIMALS, Part, element, markup, svg_root
-from cartoonface.render.numbers import decimal_text
+from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_all_alike, share, short_ids, with_id
+from cartoonface.render.elements import DECIMALS, Part, attributes_text, element, markup, svg_root
+from cartoonface.render.numbers import decimal_text, fraction_texts
 from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
@@ -159,15 +160,6 @@ TORSO_DECIMALS = 1
 BODY_RATE = 10
 
 
-@dataclass(frozen=True)
-class Run:
-    """Frames `first` .. `first + count - 1` of a track show its drawing number `drawing`."""
-
-    drawing: int
-    first: int
-    count: int
-
-
 def frame_ms(index: int, fps: int) -> int:
     """Start of frame `index` at `fps` frames per second, in whole milliseconds."""
     return round(index * 1000 / fps)
@@ -176,15 +168,6 @@ def frame_ms(index: int, fps: int) -> int:
 def clock(ms: int) -> str:
     """A SMIL clock value (seconds, no unit) for `ms` milliseconds: 1234 -> '1.234', 500 -> '0.5', 0 -> '0'."""
     return decimal_text(ms / 1000, 3)  # exact: ms / 1000 is the double nearest a 3-decimal number
-
-
-def runs(keys: Sequence[int]) -> tuple[Run, ...]:
-    """Merge consecutive equal drawing numbers `keys` (one per frame) into Runs, in time order."""
-    if not len(keys):
-        return ()
-    array = np.asarray(keys)
-    firsts = np.flatnonzero(np.concatenate(([True], array[1:] != array[:-1]))).tolist()
-    return tuple(Run(keys[first], first, end - first) for first, end in zip(firsts, [*firsts[1:], len(keys)]))
 
 
 def track_of(name: str) -> str:
@@ -244,14 +227,26 @@ def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dic
     """The attributes of a discrete SMIL animation holding `value(key)` over each run of equal
     `keys` (one per frame) from just before the run's first frame boundary, frozen at the end:
     calcMode, values, keyTimes (fractions of the whole), dur and fill."""
-    all_runs = runs(keys)
-    total = 10 ** len(str(frame_ms(len(keys), fps)))  # ms: 633 -> 1000, 190325 -> 1000000
+    array = np.asarray(keys)
+    firsts = np.flatnonzero(np.concatenate(([True], array[1:] != array[:-1])))  # each run's first frame
+    times, dur = _key_times(len(keys), fps)
+    shown = array[firsts].tolist()
+    texts = {key: value(key) for key in dict.fromkeys(shown)}  # value once per distinct key
+    return {"calcMode": "discrete", "values": ";".join([texts[key] for key in shown]),
+            "keyTimes": ";".join(times[firsts].tolist()), "dur": dur, "fill": "freeze"}
+
+
+@functools.lru_cache(maxsize=1)
+def _key_times(frames: int, fps: int) -> tuple[np.ndarray, str]:
+    """The key time (text) of a run of `frames` frames beginning at each frame, just before its
+    boundary, as an object array; and the `dur` of the animation. Made once for the document's
+    animations alike (the tracks', the roll's, the body's: ~10,000 runs on a 3-minute book)."""
+    total = 10 ** len(str(frame_ms(frames, fps)))  # ms: 633 -> 1000, 190325 -> 1000000
     units = 10 ** KEY_TIME_DECIMALS
     lead = max(KEY_TIME_LEAD, math.ceil(KEY_TIME_MIN_LEAD * units / total))
-    times = ";".join(decimal_text(max(0, frame_ms(run.first, fps) * units // total - lead) / units,
-                                  KEY_TIME_DECIMALS) for run in all_runs)
-    return {"calcMode": "discrete", "values": ";".join(value(keys[run.first]) for run in all_runs),
-            "keyTimes": times, "dur": clock(total), "fill": "freeze"}
+    starts = np.rint(np.arange(frames) * 1000 / fps).astype(np.int64)  # frame_ms of each (both round half to even)
+    texts = fraction_texts(np.maximum(0, starts * units // total - lead).tolist(), KEY_TIME_DECIMALS)
+    return np.array(texts, dtype=object), clock(total)
 
 
 def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
@@ -332,7 +327,7 @@ def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
     new_tracks, new_reused = {}, {}
     for name, track in tracks.items():
         own = reused[name]
-        drawings = [drawing if number in own else [parts.get(part, part) for part in drawing]
+        drawings = [drawing if number in own else list(map(parts.get, drawing, drawing))  # C loops: parts.get(part, part)
                     for number, drawing in enumerate(track.drawings)]
         alias: dict[int, int] = {}
         firsts: dict[tuple[object, ...], int] = {}
@@ -344,8 +339,8 @@ def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
             source = alias[reuse.source]
             alias[number] = (source if reuse.matrix == IDENTITY and (not track.shapes or track.shapes[number] == track.shapes[source])
                              else number)
-        new_tracks[name] = _Track(drawings, [alias[key] for key in track.keys], track.shapes)
-        new_reused[name] = {number: dataclasses.replace(reuse, source=alias[reuse.source])
+        new_tracks[name] = _Track(drawings, list(map(alias.__getitem__, track.keys)), track.shapes)
+        new_reused[name] = {number: Reuse(alias[reuse.source], reuse.matrix, reuse.error)
                             for number, reuse in own.items() if alias[number] == number}
     return new_tracks, new_reused, {number: reuse for number, reuse in moved.items() if number not in parts}
 
@@ -362,17 +357,21 @@ def _track_group(track: str, drawings: list[list[str]], keys: Sequence[int], fps
         return markup("g", {"data-part": track}, "".join(drawings[keys[0]]))
     store = []
     ids = {number: next(names) for number in sorted(set(keys))}  # drawings no frame shows (_aliased) left out
+    # the attributes written as markup writes them, the data-shape once per shape (ids and matrices
+    # need no escaping): a markup call per drawing took a third of the time
+    mouth = track == MOUTH_TRACK
+    shaped = {shape: attributes_text({"data-shape": shape}) for shape in set(shapes)} if mouth else {}
     for number, name in ids.items():
         drawing = drawings[number]
-        shaped = {"data-shape": shapes[number]} if track == MOUTH_TRACK else {}
+        shape = shaped[shapes[number]] if mouth else ""
         if number in reused:
             matrix = reused[number].matrix
-            moving = {"transform": f"matrix({matrix})"} if matrix != IDENTITY else {}
-            store.append(markup("use", {"id": name, "href": f"#{ids[reused[number].source]}", **moving, **shaped}))
-        elif track != MOUTH_TRACK and bare(drawing):
+            moving = f' transform="matrix({matrix})"' if matrix != IDENTITY else ""
+            store.append(f'<use id="{name}" href="#{ids[reused[number].source]}"{moving}{shape}/>')
+        elif not mouth and bare(drawing):
             store.append(with_id(drawing[0], name))
         else:
-            store.append(markup("g", {"id": name, **shaped}, "".join(drawing)))
+            store.append(f'<g id="{name}"{shape}>{"".join(drawing)}</g>')  # never empty: a drawing has parts
     animate = markup("animate", {"attributeName": "href", **_discrete(keys, fps, lambda key: f"#{ids[key]}")})
     return markup("g", {"data-part": track}, markup("defs", {}, "".join(store)) + markup("use", {"href": f"#{ids[keys[0]]}"}, animate))
 
@@ -461,6 +460,24 @@ def _body(dressed: etree._Element, body: BodyMotion, figure: Figure, fps: int) -
     keys, text, moving = _shifts([0.0] * len(neck_dy), neck_dy)
     if moving:
         _move([dressed[0]], keys, fps, "translate", text)
+
+
+def _stage(root: etree._Element, defs: etree._Element, figure: Figure, clothes: str, background: str,
+           leans: Sequence[int], body: BodyMotion | None, fps: int) -> tuple[etree._Element, etree._Element]:
+    """Append to `root` the layers in front of the background: the (empty) hair layer, the clothes
+    layer (render/scenery.py; its neck leaned by `leans`, _lean, and moved with `body`, _body), the
+    desk layer of `background` if it has one, and the (empty) face layer; their paint servers go
+    into `defs`. Returns the hair and face layers, for the tracks."""
+    hair = element(root, "g", id="hair")
+    dressed = clothes_layer(clothes, figure, defs)
+    _lean(dressed[0], leans, fps, neck_pivot(figure))
+    if body is not None:
+        _body(dressed, body, figure, fps)
+    root.append(dressed)
+    desk = desk_layer(background, figure, defs)
+    if desk is not None:
+        root.append(desk)
+    return hair, element(root, "g", id="face")
 
 
 DrawingKey = tuple[object, ...]  # _draw's key of a drawing: the fields of the state but its roll, the pupils
@@ -618,6 +635,12 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     tidy = writer.drawings()
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)
+    # what does not wait for the search, done before this process's share of it: the child's share
+    # usually takes longer (docs/BENCHMARKS.md, "tail"), so this costs no time
+    style.text = writer.style_sheet()
+    hair, layer = _stage(root, defs, figure, clothes, background, leans, body, fps)
+    _roll((hair, layer), rolls, fps, f"{origin[0]:.6g} {origin[1]:.6g}")
+    del raw, done  # freed while the child searches (~5 ms), not at the return
     reused, moved = reuse()
     tracks, reused, moved = _aliased(tracks, reused, moved)
     report(REUSED_SHARE)
@@ -635,26 +658,13 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
         texts.append(markup("defs", {"id": PARTS_ID}, shared))
         defs.addnext(etree.Comment(f"{SPLICE}0"))
     classes = writer.classes()
-    elements = {name: [merge_alike(drawing, classes, writer.extents) for drawing in drawings] for name, drawings in elements.items()}
+    elements = {name: merge_all_alike(drawings, classes, writer.extents) for name, drawings in elements.items()}
     report(SHARED_SHARE)
-    style.text = writer.style_sheet()
-    hair = element(root, "g", id="hair")
-    dressed = clothes_layer(clothes, figure, defs)
-    _lean(dressed[0], leans, fps, neck_pivot(figure))
-    if body is not None:
-        _body(dressed, body, figure, fps)
-    root.append(dressed)
-    desk = desk_layer(background, figure, defs)
-    if desk is not None:
-        root.append(desk)
-    layer = element(root, "g", id="face")
     names = short_ids(FRAME_LETTER)
     for number, (name, track) in enumerate(tracks.items(), 1):
         (hair if name in HAIR_TRACKS else layer).append(etree.Comment(f"{SPLICE}{len(texts)}"))
         texts.append(_track_group(name, elements[name], track.keys, fps, track.shapes, names, reused[name]))
         report(SHARED_SHARE + (TRACKED_SHARE - SHARED_SHARE) * number / len(tracks))
-    _roll((hair, layer), rolls, fps,
-          f"{origin[0]:.6g} {origin[1]:.6g}")
     report(TRACKED_SHARE)
     document = re.sub(rf"<!--{SPLICE}(\d+)-->".encode(), lambda match: texts[int(match.group(1))].encode(),
                       etree.tostring(root, xml_declaration=True, encoding="utf-8"))

@@ -33,10 +33,13 @@ from __future__ import annotations
 import functools
 import html
 import itertools
+import operator
 import re
+from bisect import bisect_right
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
+from itertools import accumulate, chain, compress, groupby
 from typing import NamedTuple
 
 from lxml import etree
@@ -67,7 +70,6 @@ INHERITED = frozenset(("fill", "fill-opacity", "fill-rule", "stroke", "stroke-wi
                        "stroke-linejoin", "stroke-opacity", "stroke-miterlimit", "stroke-dasharray",
                        "stroke-dashoffset", "color"))
 _REFERENCE = re.compile(r"url\(#([^)]+)\)")
-_BASE36 = "0123456789abcdefghijklmnopqrstuvwxyz"  # short_id's digits
 _ID = re.compile(r' id="[^"]*"')  # an id attribute in serialized SVG (_content)
 _TAG = re.compile(r"<[^\s/>]+")  # an element's start tag up to its name
 _OWN_ID = re.compile(r'<[^>]*? id="([^"]*)"')  # the id in an element's start tag
@@ -80,6 +82,7 @@ _ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "z": 0
 # apart beyond half their stroke width: antialiasing reaches 1 px.
 MERGE_GAP = 1.0
 _START = re.compile(r"^[Mm][^A-Za-z]*")  # path data's first move (_kind)
+_FIRST_MOVE = re.compile(r"m\s*([-+.\d]+)[\s,]*([-+]?[.\d]+)[\s,]*")  # a relative first move's point (_absolute_start)
 _MOVE = re.compile(rb' d="[Mm][^A-Za-z"]*')  # path data's first move in a definition's text (_hoist)
 _PATH_DATA = re.compile(r' d="([^"]*)"')
 # An element's text read without parsing it (the tidy drawings, as lxml wrote them: attribute values
@@ -546,19 +549,28 @@ def _letters(number: int) -> str:
 
 def short_id(letter: str, number: int) -> str:
     """An id for drawing `number` (>= 0): `letter` and the number in base 36 ("k", 1295 -> "kzz")."""
-    digits = ""
-    while True:
-        number, digit = divmod(number, 36)
-        digits = _BASE36[digit] + digits
-        if not number:
-            return letter + digits
+    return letter + _base36(number)
+
+
+_DIGITS = "0123456789abcdefghijklmnopqrstuvwxyz"
+_PAIRS = [high + low for high in _DIGITS for low in _DIGITS]  # 00 .. zz: two digits a look-up (ids by the thousand)
+
+
+def _base36(number: int) -> str:
+    """`number` (>= 0) in base 36, no leading zero: 0 -> "0", 1295 -> "zz", 1296 -> "100"."""
+    if number < 36:
+        return _DIGITS[number]
+    if number < 36 * 36:
+        return _PAIRS[number]
+    high, low = divmod(number, 36 * 36)
+    return _base36(high) + _PAIRS[low]
 
 
 def short_ids(letter: str) -> Iterator[str]:
     """short_id(letter, 0), short_id(letter, 1), ... in order, made by itertools.product of the
     digits (a third of the time of dividing each number)."""
     for width in itertools.count(1):
-        for digits in itertools.product(_BASE36[1:] if width > 1 else _BASE36, *[_BASE36] * (width - 1)):
+        for digits in itertools.product(_DIGITS[1:] if width > 1 else _DIGITS, *[_DIGITS] * (width - 1)):
             yield letter + "".join(digits)
 
 
@@ -643,7 +655,7 @@ def _extent(d: str) -> Extent | None:
 def _absolute_start(d: str) -> str:
     """The path data `d` (starting with a move) with its first move absolute, so that it can follow
     other path data: "m3,4 5,6" -> "M3,4l5,6"."""
-    match = re.match(r"m\s*([-+.\d]+)[\s,]*([-+]?[.\d]+)[\s,]*", d)
+    match = _FIRST_MOVE.match(d)
     if match is None:
         return d
     rest = d[match.end():]
@@ -656,8 +668,10 @@ _ARITY_LETTERS = "".join(letter + letter.upper() for letter in _ARITY)
 def start_tag(text: str) -> tuple[str, dict[str, str]]:
     """The tag (no namespace: "path") and attributes (values as written) of the element `text`
     begins with."""
-    head = text[1:text.index(">")].rstrip("/")  # finds, not a regex: a regex walks long path data slower
-    return head.partition(" ")[0], dict(_ATTRIBUTE.findall(head))
+    end = text.index(">")  # a find, not a regex: a regex walks long path data slower; and no copy of it
+    name = _TAG.match(text)
+    assert name is not None, text
+    return name.group()[1:], dict(_ATTRIBUTE.findall(text, 1, end))
 
 
 def _own_class(text: str) -> str | None:
@@ -681,9 +695,53 @@ def merge_alike(elements: list[str], styles: dict[str, dict[str, str]],
     lie apart (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). A path data's extent is taken from `extents` (Writer.extents: read off its
     numbers) when it is there, else read (_extent)."""
-    labels = [_own_class(text) for text in elements] if len(elements) > 1 else []
-    if not any(label is not None and label == following for label, following in zip(labels, labels[1:])):
+    labels = [_own_class(text) or text for text in elements]
+    if not any(map(operator.eq, labels, labels[1:])):
         return list(elements)  # only consecutive paths of one class join: none here (most drawings)
+    return _joined(elements, labels, styles, extents)
+
+
+def merge_all_alike(drawings: Sequence[list[str]], styles: dict[str, dict[str, str]],
+                    extents: Mapping[str, Extent] | None = None) -> list[list[str]]:
+    """merge_alike of each of `drawings` (the same lists where nothing joins): the classes of all their
+    elements compared in one pass, the class of a text read once however many drawings show it (a
+    shared part's `<use>`); only the drawings with two consecutive elements of one class are read
+    further (about one in eight of a book's). A loop over the drawings took twice as long."""
+    elements = list(chain.from_iterable(drawings))
+    labels = list(map(_Classes().__getitem__, elements))
+    ends = list(accumulate(map(len, drawings)))  # of each drawing in `elements`: its first is the next's
+    firsts = set(ends)
+    alike = {bisect_right(ends, at) for at in compress(range(1, len(elements)), map(operator.eq, labels, labels[1:]))
+             if at not in firsts}  # the drawings of the second elements of equal pairs inside one drawing
+    merged = list(drawings)
+    for number in alike:
+        start = ends[number - 1] if number else 0
+        merged[number] = _joined(drawings[number], labels[start:ends[number]], styles, extents)
+    return merged
+
+
+class _Classes(dict[str, str]):
+    """The class of each element text asked for (_own_class), read from the text the first time; of
+    an element without a class, the text itself (no class is equal to it: it begins with "<")."""
+
+    def __missing__(self, text: str) -> str:
+        label = self[text] = _own_class(text) or text
+        return label
+
+
+def _joined(elements: list[str], labels: list[str], styles: dict[str, dict[str, str]],
+            extents: Mapping[str, Extent] | None) -> list[str]:
+    """merge_alike of `elements` whose classes are `labels` (_Classes'): each run of one class read
+    in full (_joined_run), an element of a class of its own as it is."""
+    joined: list[str] = []
+    for _, run in groupby(range(len(elements)), labels.__getitem__):
+        texts = [elements[index] for index in run]
+        joined.extend(_joined_run(texts, styles, extents) if len(texts) > 1 else texts)
+    return joined
+
+
+def _joined_run(elements: list[str], styles: dict[str, dict[str, str]], extents: Mapping[str, Extent] | None) -> list[str]:
+    """merge_alike of `elements`, read in full."""
     tags = [start_tag(text) for text in elements]
     known = extents or {}
     merged: list[str] = []
@@ -716,12 +774,17 @@ def bare(elements: Sequence[str]) -> bool:
     a `<use>` in place of a `<g id>` around it: drawn (not a definition) and without an id of its own."""
     if len(elements) != 1:
         return False
-    tag, attrs = start_tag(elements[0])
-    return f"{{{SVG}}}{tag}" not in DEFINITIONS and "id" not in attrs
+    text = elements[0]
+    name = _TAG.match(text)
+    assert name is not None, text
+    # start_tag's, without reading (or copying) the attributes: an id is ' id="' before the first ">"
+    return f"{{{SVG}}}{name.group()[1:]}" not in DEFINITIONS and text.find(' id="', 0, text.index(">")) < 0
 
 
 def _children(text: str) -> int:
     """How many child elements the element `text` holds."""
+    if text.count("<") == 1:  # one empty element (most shared parts): no tag to walk
+        return 0
     depth = children = 0
     for match in _ANY_TAG.finditer(text):
         if match.group(1):
@@ -740,8 +803,12 @@ def _kind(elements: Sequence[str]) -> tuple[str, str, int, int, str]:
     numbers after its starting point): gzip finds their repeats within its window (32 KB)."""
     first = elements[0]
     tag, attrs = start_tag(first)
-    path = _FIRST_PATH.search(first)
-    d = _text(start_tag(first[path.start():])[1].get("d", "")) if path else ""
+    if tag == "path":  # its own start tag, read already
+        path_attrs = attrs
+    else:
+        path = _FIRST_PATH.search(first)
+        path_attrs = start_tag(first[path.start():])[1] if path else {}
+    d = _text(path_attrs.get("d", ""))
     return tag, attrs.get("class", ""), len(elements), _children(first), _START.sub("", d, count=1)
 
 
@@ -756,20 +823,17 @@ def share(drawings: dict[str, list[list[int]]], tidy: list[list[str]],
     drawings' element texts by group and the definitions' text."""
     shown = moved or {}
     # a moved part counts as a use of its source (which its own drawing uses too: shared)
-    uses = Counter(shown[part][0] if part in shown else part
-                   for track in drawings.values() for drawing in track for part in drawing)
+    shows = list(chain.from_iterable(chain.from_iterable(drawings.values())))  # the parts, as often as shown
+    sources = {part: source for part, (source, _) in shown.items()}
+    uses = Counter(map(sources.get, shows, shows))  # C loops: each part's source or itself
     names: dict[int, str] = {}
     defs = []
     for part in sorted((part for part, count in uses.items() if count > 1), key=lambda part: _kind(tidy[part])):
         names[part] = short_id("g", len(names))
         defs.append(with_id(tidy[part][0], names[part]) if bare(tidy[part])
                     else markup("g", {"id": names[part]}, "".join(tidy[part])))
-
-    def node(part: int) -> list[str]:
-        if part in shown:
-            source, matrix = shown[part]
-            return [markup("use", {"href": f"#{names[source]}", "transform": f"matrix({matrix})"})]
-        return [markup("use", {"href": f"#{names[part]}"})] if part in names else tidy[part]
-
-    return ({track: [[child for part in drawing for child in node(part)] for drawing in track_drawings]
+    # each part's texts made once, however many drawings show it (ids and matrices need no escaping)
+    nodes = {part: [f'<use href="#{names[shown[part][0]]}" transform="matrix({shown[part][1]})"/>'] if part in shown
+             else [f'<use href="#{names[part]}"/>'] if part in names else tidy[part] for part in dict.fromkeys(shows)}
+    return ({track: [list(chain.from_iterable(map(nodes.__getitem__, drawing))) for drawing in track_drawings]
              for track, track_drawings in drawings.items()}, "".join(defs))
