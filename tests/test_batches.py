@@ -95,7 +95,9 @@ def test_shapes_mouths_and_parts_in_a_batch_as_alone(face):
     outlines = all_mouth_outlines(posed.xy[:, ROWS], shown, face.fapu.d)
     assert {o.tongue[3] == 0 for o in outlines} == {True, False}  # shut and open mouths built together
     texts = all_mouth_texts(outlines)
-    assert drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d) == texts
+    distinct, which = drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d)
+    assert [distinct[number] for number in which] == texts
+    assert len(distinct) == len({tuple(mouth.items()) for mouth in texts})  # each mouth written once
     parts = all_face_parts(face, posed, "u")
     for index in range(len(states)):
         alone = posed[index]
@@ -163,3 +165,5 @@ def test_path_data_compacted_from_its_numbers_as_drawn_as_from_its_text(face):
     ties = np.concatenate([row[row % 10 == 5] // 10 % 2 for row in tenths.values()])
     assert set(ties.tolist()) == {0, 1}  # halves of a pixel to round, to an even and to an odd whole
     assert compacted(paths, tenths=tenths) == compacted(paths)
+    partly = dict(list(tenths.items())[::2])  # a skeleton's paths some taken from tenths, some read
+    assert compacted(paths, tenths=partly) == compacted(paths)

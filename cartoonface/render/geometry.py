@@ -42,7 +42,7 @@ from typing import Protocol
 import numpy as np
 
 from cartoonface.face.lift import FRONT_NAMES, LIFTED_NAMES
-from cartoonface.render.numbers import fill, rounded_tenths, template_frame, tenths_texts
+from cartoonface.render.numbers import distinct_rows, fill, rounded_tenths, template_frame, tenths_texts
 
 # Eyebrows and hair: rounds of corner cutting. Three rounds turn each polygon edge into
 # eight short pieces, which read as a smooth outline at the sizes a face is drawn.
@@ -334,7 +334,7 @@ def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[np.n
     names = LIFTED_NAMES + FRONT_NAMES
     plans = {side: _plan(names, hair.shape[1], side) for side in {int(side) for side in np.atleast_1d(posed.nose_side)}}
     plan = next(iter(plans.values()))
-    outlines, outline_of = _distinct_rows(hair.reshape(count, -1))
+    outlines, outline_of = distinct_rows(hair.reshape(count, -1))
     outlines = outlines.reshape(len(outlines), -1, 2)
     # the sparse map on the U distinct hair outlines side by side: (8 H, H) @ (H, 2 U); each
     # column alone, so the same numbers as for one face
@@ -373,16 +373,7 @@ def _written(frame: tuple[str, ...], tenths: np.ndarray) -> tuple[list[str], lis
     """The path data of the `frame` (numbers.template_frame) of each row of `tenths` (n, k: the
     numbers in whole tenths of a pixel), written once per distinct row: those texts, in the order
     first seen, their rows ((k,) each) and each row's number among them (n)."""
-    distinct, numbers = _distinct_rows(tenths)
+    distinct, numbers = distinct_rows(tenths)
     texts, width = tenths_texts(distinct), tenths.shape[1]
     return ([fill(frame, texts[row * width:(row + 1) * width]).replace(" -", "-") for row in range(len(distinct))],
             list(distinct), numbers)
-
-
-def _distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, list[int]]:
-    """The distinct rows of `rows` (n, k), k > 0, in the order first seen, (u, k), and each row's
-    number among them (n): the rows compared as bytes (3x faster than np.unique)."""
-    data, step = np.ascontiguousarray(rows).tobytes(), rows.itemsize * rows.shape[1]
-    seen: dict[bytes, int] = {}
-    numbers = [seen.setdefault(data[at:at + step], len(seen)) for at in range(0, len(data), step)]
-    return np.frombuffer(b"".join(seen), dtype=rows.dtype).reshape(len(seen), rows.shape[1]), numbers

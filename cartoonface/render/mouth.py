@@ -43,7 +43,7 @@ import numpy as np
 
 from cartoonface.face.lift import LIFTED_INDEX
 from cartoonface.render.geometry import hypots
-from cartoonface.render.numbers import fill, rounded_tenths, template_frame, tenths_texts
+from cartoonface.render.numbers import distinct_rows, fill, rounded_tenths, template_frame, tenths_texts
 
 # The posed points the mouth is drawn from, in this order (thesis 002, Alg. 2.2 step 13).
 MOUTH_POINTS = ("8.4", "8.3", "8.9", "8.10", "8.1", "2.2", "2.3", "8.2")
@@ -263,29 +263,35 @@ def all_mouth_texts(outlines: Sequence[MouthOutlines]) -> list[dict[str, str]]:
     rows = np.array([o.rows for o in outlines], dtype=float).reshape(len(outlines), -1, 2)
     sizes = np.array([[o.upper_width, o.lower_width, o.bite_width, *o.tongue[2:], *o.gloss[2:]] for o in outlines],
                      dtype=float).reshape(-1, 7)
-    return _texts(np.concatenate([rows, places], axis=1), sizes)
+    texts, which = _texts(np.concatenate([rows, places], axis=1), sizes)
+    return [texts[number] for number in which]
 
 
 def drawn_mouth_texts(points: np.ndarray, shown: np.ndarray, d: float,
-                      tenths: dict[str, np.ndarray] | None = None) -> list[dict[str, str]]:
-    """all_mouth_texts(all_mouth_outlines(points, shown, d)) without the MouthOutlines between:
-    the texts of S mouths (`points` (S, 8, 2), `shown` (S, 4)) straight from _drawn's arrays."""
+                      tenths: dict[str, np.ndarray] | None = None) -> tuple[list[dict[str, str]], list[int]]:
+    """all_mouth_texts(all_mouth_outlines(points, shown, d)) without the MouthOutlines between,
+    each distinct mouth written once: the texts of the distinct mouths among S (`points` (S, 8, 2),
+    `shown` (S, 4)) straight from _drawn's arrays, in the order first seen, and each mouth's number
+    among them (S). `tenths`: as _texts'."""
     return _texts(*_drawn(points, shown, d), tenths)
 
 
-def _texts(images: np.ndarray, sizes: np.ndarray, tenths: dict[str, np.ndarray] | None = None) -> list[dict[str, str]]:
-    """The mouth_texts of S mouths from _drawn's `images` (S, 46, 2) and `sizes` (S, 7) pixels.
-    `tenths`, when given, gets the numbers of their path data as written (render/pathdata.py's Tenths)."""
+def _texts(images: np.ndarray, sizes: np.ndarray,
+           tenths: dict[str, np.ndarray] | None = None) -> tuple[list[dict[str, str]], list[int]]:
+    """The mouth_texts of the distinct mouths among S from _drawn's `images` (S, 46, 2) and `sizes`
+    (S, 7) pixels, those whose numbers written differ (a pose shown many times: ~a third fewer),
+    in the order first seen, and each mouth's number among them (S). `tenths`, when given, gets
+    the numbers of their path data as written (render/pathdata.py's Tenths)."""
     sizes = np.rint(sizes)
     places = images[:, 44:].reshape(-1, 4)
     numbers = np.concatenate([images[:, :44].reshape(len(images), -1), sizes[:, :3], places[:, :2], sizes[:, 3:5],
                               places[:, 2:], sizes[:, 5:]], axis=1)
-    rounded = rounded_tenths(numbers)
+    rounded, which = distinct_rows(rounded_tenths(numbers))
     texts = tenths_texts(rounded)
     count = numbers.shape[1]
     drawn = [dict(zip(TEXTS, fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|")))
-             for index in range(len(images))]
+             for index in range(len(rounded))]
     if tenths is not None:
         for name, start, end in _PATH_SLICES:
             tenths.update(zip([mouth[name] for mouth in drawn], rounded[:, start:end], strict=True))
-    return drawn
+    return drawn, which

@@ -229,14 +229,30 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
 def _plain_numbers(paths: list[str], tenths: Tenths | None = None) -> np.ndarray | None:
     """The numbers of `paths` (path data of plain numbers: letters, commas, spaces and signs
     between them) as an (n, k) float array, k each; None when they hold different counts or a
-    text that is no number. All of them read by one np.fromstring (C's strtod: the values
-    float() gives), "nan" between the paths; or, when `tenths` (Tenths) has every path and they
-    hold one count, not read but taken from it: tenths / 10 is the value strtod reads of the
-    tenths' text (both the double nearest the decimal), but for the sign of a zero, which
-    compacting (rounding to whole pixels) does not see."""
-    rows = [tenths[d] for d in paths if d in tenths] if tenths is not None else []
-    if len(rows) == len(paths) and len({len(row) for row in rows}) == 1:
-        return np.array(rows) / TENTHS
+    text that is no number. Those `tenths` (Tenths) has are not read but taken from it: tenths /
+    10 is the value strtod reads of the tenths' text (both the double nearest the decimal), but
+    for the sign of a zero, which compacting (rounding to whole pixels) does not see; the others
+    are read by _read_numbers (a few cut chin shadows among thousands written from tenths)."""
+    known = [tenths.get(d) for d in paths] if tenths is not None else [None] * len(paths)
+    unknown = [index for index, row in enumerate(known) if row is None]
+    read = _read_numbers([paths[index] for index in unknown]) if unknown else None
+    rows = [row for row in known if row is not None]
+    counts = {len(row) for row in rows} | ({read.shape[1]} if read is not None else set())
+    if unknown and read is None or len(counts) != 1:
+        return None
+    numbers = np.empty((len(paths), counts.pop()))
+    if rows:  # all of them (most groups): no index
+        numbers[[index for index, row in enumerate(known) if row is not None] if unknown else slice(None)] = (
+            np.concatenate(rows).reshape(len(rows), -1) / TENTHS)
+    if read is not None:
+        numbers[unknown] = read
+    return numbers
+
+
+def _read_numbers(paths: list[str]) -> np.ndarray | None:
+    """The numbers of `paths` (as _plain_numbers') read by one np.fromstring (C's strtod: the
+    values float() gives), "nan" between the paths: (n, k); None when they hold different counts
+    or a text that is no number."""
     text = _SEPARATOR.join(paths).translate(_LETTERS_TO_SPACES).replace("-", " -").replace(_SEPARATOR, " nan ")
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)  # numpy's word for text it cannot read

@@ -202,7 +202,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
     of them by geometry's all_face_shape_columns, the cheeks' and eyes' numbers of all of them as
     arrays written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; each
-    part but the mouth drawn once per batch (_once), part by part, and the states' drawings
+    part drawn once per batch (_once, _drawn_once), part by part, and the states' drawings
     zipped from those columns. Written as text: the hot path of render/animation.py. `tenths`,
     when given, gets the numbers of the path data of geometry's shapes, the mouths and the chin shadows as written (render/pathdata.py's
     Tenths: what compacting them would read again)."""
@@ -215,7 +215,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     per_state = _CHEEK_COUNT + 2 * _EYE_COUNT
     # each mouth's mix of shapes @ the table of what they show, (S, 1, 12) @ (12, 4) as one state's
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
-    mouths = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d, tenths)
+    mouths, mouth_of = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d, tenths)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW, tenths)
     paths = {name: _path_parts(name, shapes[shape][0], shapes[shape][2], style[kind])
              for name, (shape, kind) in _PATHS.items()}
@@ -232,7 +232,8 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     cheeks = _once(list(zip(*numbers[:_CHEEK_COUNT], strict=True)), lambda key: Part("cheeks", _cheeks(key, style)))
     return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
                     paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
-                    *eye_parts, [_mouth(mouth, uid, style) for mouth in mouths], strict=True))
+                    *eye_parts, _drawn_once([_mouth(mouth, uid, style) for mouth in mouths], mouth_of),
+                    strict=True))
 
 
 # The parts drawn as one path of geometry's face_shapes: their class, by the face_shapes name,
@@ -245,7 +246,12 @@ _PATHS = {"hair": ("hair", "hair"), "ear-l": ("ear_l", "skin"), "ear-r": ("ear_r
 def _path_parts(name: str, paths: list[str], which: list[int], style: str) -> list[Part]:
     """The part `name` (one of _PATHS) of each state, drawn once per distinct path data of
     `paths` (geometry's all_face_shape_columns: its numbers per state `which`), with the `style` text."""
-    made = [Part(name, f'<path class="{name}" d="{d}"{style}/>') for d in paths]
+    return _drawn_once([Part(name, f'<path class="{name}" d="{d}"{style}/>') for d in paths], which)
+
+
+def _drawn_once(made: list[Part], which: list[int]) -> list[Part]:
+    """The part of each state, `made` holding the distinct ones drawn once and `which` (per state)
+    the number of its own among them (a part drawn again is the same object)."""
     return [made[number] for number in which]
 
 
