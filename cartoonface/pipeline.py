@@ -50,12 +50,13 @@ from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
 from cartoonface.workers import collector_paused, helper_pool, offloaded, processes
 
-# Share of the whole job done when each stage starts (measured 2026-11-27, processor time of the
-# job's process, on the sample story and on bench/generate.py's 190 s input, after the analysis
-# helper process (workers.py) and the drawing in batches: the SVG takes ~70 % of the time, the
-# schedule's pitch track is computed meanwhile by the helper; docs/web.md, "Progress").
-STAGES = (("decode", 0.0), ("segment", 0.03), ("align", 0.15), ("schedule", 0.255),
-          ("frames", 0.26), ("svg", 0.28), ("pages", 0.97))
+# Share of the whole job done when each stage starts (measured 2026-11-27, fourth session,
+# processor time of the job's process, on the sample story and on bench/generate.py's 190 s input:
+# the SVG takes ~60 % of it, the schedule's pitch track is computed meanwhile by the analysis
+# helper process, workers.py; docs/web.md, "Progress"; docs/BENCHMARKS.md, "Issue 16, where it
+# stands (end of the fourth session").
+STAGES = (("decode", 0.0), ("segment", 0.03), ("align", 0.16), ("schedule", 0.32),
+          ("frames", 0.33), ("svg", 0.35), ("pages", 0.96))
 # An edited TextGrid may end this much after the audio (Praat rounds its times).
 ALIGNMENT_SLACK = 0.05  # seconds
 MAX_TITLE = 200  # characters

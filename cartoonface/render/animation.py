@@ -140,15 +140,16 @@ FIRST_SHARE = 0.53
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
 # when the shared parts are found and when the tracks are written; the rest makes the document's
-# bytes (measured 2026-11-27, processor time, on the sample story and bench/generate.py's 190 s
-# input: docs/BENCHMARKS.md, "Web progress"). REUSE_STEPS: shares of the reuse step done when the
+# bytes (measured 2026-11-27, fourth session, processor time of this process in generate, on the
+# sample story and bench/generate.py's 190 s input: docs/BENCHMARKS.md, "Issue 16, where it stands
+# (end of the fourth session"). REUSE_STEPS: shares of the reuse step done when the
 # points are read and when the tracks' drawings are searched (the parts' search is the rest).
-DRAWN_SHARE = 0.4
-TIDIED_SHARE = 0.57
-REUSED_SHARE = 0.88
-SHARED_SHARE = 0.92
+DRAWN_SHARE = 0.5
+TIDIED_SHARE = 0.65
+REUSED_SHARE = 0.91
+SHARED_SHARE = 0.96
 REUSE_STEPS = (0.3, 0.6)
-TRACKED_SHARE = 0.97
+TRACKED_SHARE = 0.98
 # The body's motion (animate/body.py) is written in steps of MOTION_STEP px (the torso's and
 # the neck's shift) and of 0.1 degree (the torso's lean, TORSO_DECIMALS): each change makes the
 # browser repaint the torso, so no finer than a viewer sees (a full breath, ~4 px, in ~9 steps).
