@@ -64,7 +64,7 @@ def command() -> int:
     """The `cartoonface` command (and `python -m cartoonface`): main() on sys.argv, its exit code.
     The heap is frozen (gc.freeze) before the process exits, so the interpreter's last collection
     skips what the job left behind: ~0.05 s of CPU after a 3-minute book (docs/BENCHMARKS.md,
-    "Issue 16, fourth session")."""
+    "Issue 16, where it stands (end of the fourth session of 2026-11-27)")."""
     code = main()
     gc.freeze()
     return code
