@@ -4,7 +4,8 @@
 decides, e.g. by `processes()`: no pool for a process with a CPU-time limit,
 whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)` there and
 returns a getter of its result that computes it here instead when the pool has not begun it, is
-None, could not start, or broke (no memory, a killed child); `forked(workers, fn, *args)` runs
+None, could not start, or broke (no memory, a killed child), its result handed back through a
+`memory_file` when given one; `forked(workers, fn, *args)` runs
 `fn(*args)` in a child forked there and then, which inherits the arguments instead of receiving
 them pickled (work on a large state built in this process); `from_both_ends(pool, jobs)` shares a
 list of jobs with the pool as they go; `shares(costs)` splits work in two.
@@ -15,14 +16,16 @@ The results are the same either way: the child is a fork of this process running
 from __future__ import annotations
 
 import gc
+import mmap
 import multiprocessing
 import os
+import pickle
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from multiprocessing.connection import Connection
-from typing import TypeVar
+from typing import Any, TypeVar, cast
 
 T = TypeVar("T")
 # Jobs `from_both_ends` keeps given to the pool and not done: one under way and one waiting, so the
@@ -46,13 +49,15 @@ def processes() -> int:
 
 
 @contextmanager
-def helper_pool(workers: int) -> Iterator[Executor | None]:
+def helper_pool(workers: int, wait: bool = True) -> Iterator[Executor | None]:
     """A one-process pool, forked at once, or None when `workers` < 2, fork is missing or fails.
 
     Forked at once, the helper holds no pipe of a subprocess the caller starts later (generate's
     ffmpeg: a helper forked while another thread starts it could keep its output open, and the
     thread reading it would wait for the helper). On leaving, work not yet started is cancelled;
-    work under way is waited for."""
+    work under way is waited for, and the process's end, unless `wait` is False (for a caller that
+    has taken every result: the process then ends on its own, its exit, ~7 ms of freeing the
+    drawing helper's memory, off this process's way)."""
     if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
         yield None
         return
@@ -70,31 +75,72 @@ def helper_pool(workers: int) -> Iterator[Executor | None]:
     try:
         yield pool
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        pool.shutdown(wait=wait, cancel_futures=True)
 
 
-def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object) -> Callable[[], T]:
+@contextmanager
+def memory_file() -> Iterator[int | None]:
+    """An anonymous file in memory (os.memfd_create: its descriptor) for a pool forked inside the
+    `with` to hand large results back through (offloaded's `through`); None where there is no
+    such file (not Linux, no memory). Closed on leaving (its memory freed once the pool's process,
+    which inherited it, has ended too)."""
+    try:
+        descriptor = os.memfd_create("cartoonface-result")
+    except (AttributeError, OSError):
+        yield None
+        return
+    try:
+        yield descriptor
+    finally:
+        os.close(descriptor)
+
+
+def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object, through: int | None = None) -> Callable[[], T]:
     """fn(*args) queued in `pool`; returns a function giving its result. Computed in this
     process when the pool has not begun it by then (so a caller done with its own share takes
     over the queued rest, asking for the last first), or when `pool` is None or cannot run it
     (fork or thread start failed, broken pool). An exception raised by `fn` itself is raised by
-    the getter."""
-    future = None
+    the getter. `through`: a memory_file the pool's process inherited: the result is pickled into
+    it there and read here without a copy, only its size sent through the pool's pipe (a result of
+    many megabytes then costs neither the pipe's copies in 64 KB pieces nor this process's reading
+    thread taking turns with its main one: docs/BENCHMARKS.md, "xfer")."""
+    future: Future[Any] | None = None
+    job: Callable[..., object] = fn if through is None else _written
+    job_args = args if through is None else (os.getpid(), through, fn, args)
     if pool is not None:
         try:
-            future = pool.submit(fn, *args)
+            future = pool.submit(job, *job_args)
         except (BrokenProcessPool, OSError, RuntimeError):
             future = None
 
     def result() -> T:
         if future is not None and not future.cancel():  # begun (or done) there
             try:
-                return future.result()
+                value = future.result()
             except (BrokenProcessPool, OSError, MemoryError):
                 pass
+            else:
+                return value if through is None else cast(T, _read(through, value))
         return fn(*args)
 
     return result
+
+
+def _written(owner: int, through: int, fn: Callable[..., object], args: tuple[object, ...]) -> int:
+    """In the pool's process (not `owner`, the process that queued it): fn(*args) pickled into the
+    memory file `through` from its start; its size in bytes."""
+    assert os.getpid() != owner, "a result to hand back is computed here by offloaded itself"
+    value = fn(*args)
+    with open(through, "wb", closefd=False) as file:
+        file.seek(0)
+        pickle.dump(value, file, protocol=pickle.HIGHEST_PROTOCOL)
+        return file.tell()
+
+
+def _read(through: int, size: int) -> object:
+    """The object pickled into the first `size` bytes of the memory file `through` (_written)."""
+    with mmap.mmap(through, size, access=mmap.ACCESS_READ) as view:
+        return pickle.loads(view)
 
 
 def from_both_ends(pool: Executor | None, jobs: Sequence[tuple[Callable[..., T], tuple[object, ...], Callable[[], T]]],

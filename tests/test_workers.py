@@ -22,7 +22,7 @@ from cartoonface.errors import OptionError
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import load_audio
-from cartoonface.workers import collector_paused, forked, from_both_ends, helper_pool, offloaded, shares
+from cartoonface.workers import collector_paused, forked, from_both_ends, helper_pool, memory_file, offloaded, shares
 from tests.conftest import ROOT
 from tests.synthetic import synthetic_talk
 
@@ -104,6 +104,31 @@ def test_jobs_of_a_lost_helper_are_done_here():
 def test_a_lost_helper_is_done_here():
     with helper_pool(2) as pool:
         assert offloaded(pool, _dies_in_a_child, os.getpid())() == os.getpid()
+
+
+def _pid_and_arrays(size: int, flag: str = "") -> tuple[int, dict[str, np.ndarray], list[str]]:
+    if flag:
+        Path(flag).touch()  # begun in the helper
+    rng = np.random.default_rng(size)
+    return os.getpid(), {"numbers": rng.integers(-1000, 1000, size)}, [f"part {n}" for n in range(size)]
+
+
+def test_a_result_handed_back_through_a_memory_file_is_the_one_computed_there(tmp_path):
+    """Through a memory file, a large result (megabytes) comes from the helper as it was computed
+    there; lost or not begun there, it is computed here; the helper may end on its own."""
+    flag = tmp_path / "begun"
+    with memory_file() as through, helper_pool(2, wait=False) as pool:
+        assert pool is not None and through is not None  # Linux, as the tests run
+        getter = offloaded(pool, _pid_and_arrays, 300_000, str(flag), through=through)
+        deadline = time.monotonic() + 60
+        while not flag.exists() and time.monotonic() < deadline:  # a loaded machine may start it late
+            time.sleep(0.01)
+        pid, arrays, texts = getter()
+        assert pid != os.getpid()
+        _, expected, expected_texts = _pid_and_arrays(300_000)
+        assert np.array_equal(arrays["numbers"], expected["numbers"]) and texts == expected_texts
+        assert offloaded(pool, _dies_in_a_child, os.getpid(), through=through)() == os.getpid()
+    assert offloaded(None, _pid_and_arrays, 10, through=through)()[0] == os.getpid()
 
 
 def _pid_and_call(fn) -> tuple[int, object]:

@@ -74,7 +74,7 @@ from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alik
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
-from cartoonface.workers import collector_paused, forked, helper_pool, offloaded, shares
+from cartoonface.workers import collector_paused, forked, helper_pool, memory_file, offloaded, shares
 
 # The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
@@ -560,8 +560,8 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
         numbered, drawn = _draw_compacted(face, states, progress, tenths)
         return _collected(writer, numbered, drawn, where, []), drawn.done
     half = round(len(states) * FIRST_SHARE)
-    with helper_pool(workers) as pool:
-        other = offloaded(pool, _draw_sent, face, states[half:])
+    with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
+        other = offloaded(pool, _draw_sent, face, states[half:], through=through)
         numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE), tenths)
         raw = _collected(writer, numbered, drawn, where, [])
         writer.prepare()
