@@ -266,7 +266,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts. `tenths` (pathdata.Tenths): the numbers
-    of the path data as drawn, which the points are taken from (reuse.shapes_of)."""
+    of the path data as drawn, which the points are taken from (reuse.shapes_of); a dict is emptied
+    by the search here (_search)."""
     if tolerance <= 0:
         return lambda: ({name: {} for name in tracks}, {})
     first: dict[int, int] = {}
@@ -294,11 +295,16 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
 def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], tolerance: float,
             progress: Callable[[float], None] | None = None,
             tenths: Tenths | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
-    """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number)."""
+    """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number).
+    `tenths`, a dict, is emptied once the points are read (a search computed after it in this
+    process, forked's when the child is lost, reads the path data's numbers from their texts:
+    the same values)."""
     report = progress or (lambda fraction: None)
     raws = {number: writer.raw[first[number]]
             for number in dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing)}
     parts = dict(zip(raws, shapes_of([(raw.element, *raw.definitions) for raw in raws.values()], {}, tenths), strict=True))
+    if isinstance(tenths, dict):  # read: let go before the fits (a few MB less at the peak, docs/BENCHMARKS.md "xfer")
+        tenths.clear()
     read, searched = REUSE_STEPS
     report(read)
     drawings = {}
