@@ -310,14 +310,16 @@ class Compacted:
     all of them (_kept), and `members` all the path data of each such skeleton compacted with it
     (sorted; what `merged` compacts again where another first comes earlier), `rows` their numbers
     rounded to whole pixels ((n, 2P) integers, int16 where they fit, a row per member: `merged`
-    compacts them again without reading their text). Paths compacted in two processes are put
-    together by `merged`."""
+    compacts them again without reading their text), `kept` the commands Douglas-Peucker keeps of
+    them (_kept of the first's row: `merged` compares the two sides' instead of simplifying again).
+    Paths compacted in two processes are put together by `merged`."""
 
     compact: dict[str, str]
     extents: dict[str, Extent]
     firsts: dict[str, str]
     members: dict[str, list[str]]
     rows: dict[str, np.ndarray] = field(default_factory=dict, compare=False)  # members' (equal members: equal rows)
+    kept: dict[str, list[bool]] = field(default_factory=dict, compare=False)
 
 
 def compacted(paths: Iterable[str], done: Compacted | None = None,
@@ -339,6 +341,7 @@ def compacted(paths: Iterable[str], done: Compacted | None = None,
         if skeleton not in stale and done:
             known.firsts[skeleton] = first
             known.members[skeleton], known.rows[skeleton] = done.members[skeleton], done.rows[skeleton]
+            known.kept[skeleton] = done.kept[skeleton]
         elif skeleton in every:
             _compact_group(skeleton, every[skeleton], known, tenths)
     for skeleton, members in new.items():
@@ -355,7 +358,8 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
     gives it: where a skeleton's first path data differs, the paths of the side whose first comes
     later are compacted again with the other's (its points kept)."""
     done = Compacted({**first.compact, **second.compact}, {**first.extents, **second.extents},
-                     {**first.firsts, **second.firsts}, {**first.members, **second.members}, {**first.rows, **second.rows})
+                     {**first.firsts, **second.firsts}, {**first.members, **second.members}, {**first.rows, **second.rows},
+                     {**first.kept, **second.kept})
     for skeleton, one in first.firsts.items():
         other = second.firsts.get(skeleton)
         if other is None:
@@ -363,22 +367,13 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
         if one != other:  # the later side's members compacted again from their rows, after the earlier first's
             earlier, later = (first, second) if one < other else (second, first)
             rows = np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64)
-            done.firsts[skeleton] = earlier.firsts[skeleton]
-            if not _same_kept(skeleton, rows[0], rows[1]):  # else the later side's forms stand
-                _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done, rounded=rows)
+            done.firsts[skeleton], done.kept[skeleton] = earlier.firsts[skeleton], earlier.kept[skeleton]
+            if earlier.kept[skeleton] != later.kept[skeleton]:  # else the later side's forms stand
+                _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done, rounded=rows,
+                               kept=earlier.kept[skeleton])
         done.members[skeleton], done.rows[skeleton] = first.members[skeleton], first.rows[skeleton]
         _join(skeleton, (second.members[skeleton], second.rows[skeleton]), done)
     return done
-
-
-def _same_kept(skeleton: str, first: np.ndarray, other: np.ndarray) -> bool:
-    """Whether Douglas-Peucker keeps the same points of `skeleton`'s path data from the rounded
-    numbers `first` (2P,) as from `other` (2P,) (_kept): then every member is compacted alike
-    after either as its first."""
-    commands = _commands(skeleton, len(first))
-    assert commands is not None, skeleton  # rows are kept of compacted members only
-    spans = _spans(commands)
-    return _kept(commands, spans, first) == _kept(commands, spans, other)
 
 
 def changed_forms(own: Compacted, done: Compacted) -> set[str]:
@@ -410,11 +405,11 @@ def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
 
 
 def _compact_group(skeleton: str, members: list[str], done: Compacted,
-                   tenths: Tenths | None = None, rounded: np.ndarray | None = None) -> None:
+                   tenths: Tenths | None = None, rounded: np.ndarray | None = None, kept: list[bool] | None = None) -> None:
     """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
     the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them;
     `rounded`, when given, all their numbers rounded to whole pixels, a row per member in their
-    (sorted) order: they are not read."""
+    (sorted) order: they are not read; `kept`, when given, _kept of the first's (Compacted.kept)."""
     if rounded is None:
         members.sort()
         if "#" in skeleton:
@@ -437,7 +432,9 @@ def _compact_group(skeleton: str, members: list[str], done: Compacted,
         bound = np.abs(rounded).max(initial=0)
         done.rows[skeleton] = rounded.astype(np.int16 if bound < 1 << 15 else np.int32 if bound < 1 << 31 else np.int64)
     spans = _spans(commands)
-    kept = _kept(commands, spans, rounded[0])
+    kept = _kept(commands, spans, rounded[0]) if kept is None else kept
+    if "L" in skeleton:
+        done.kept[skeleton] = kept
     smooth = _smooth(commands, spans, kept, rounded)
     for pattern, rows in _alike_rows(smooth):
         plan = _plan(commands, spans, kept, pattern)
