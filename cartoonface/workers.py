@@ -81,7 +81,8 @@ def helper_pool(workers: int, wait: bool = True) -> Iterator[Executor | None]:
 @contextmanager
 def memory_file() -> Iterator[int | None]:
     """An anonymous file in memory (os.memfd_create: its descriptor) for a pool forked inside the
-    `with` to hand large results back through (offloaded's `through`); None where there is no
+    `with` to hand large results back through (offloaded's `through`, one result taken before the
+    next is asked for: each is written from the file's start); None where there is no
     such file (not Linux, no memory). Closed on leaving (its memory freed once the pool's process,
     which inherited it, has ended too)."""
     try:
@@ -101,12 +102,12 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object, throug
     over the queued rest, asking for the last first), or when `pool` is None or cannot run it
     (fork or thread start failed, broken pool). An exception raised by `fn` itself is raised by
     the getter. `through`: a memory_file the pool's process inherited: the result is pickled into
-    it there and read here without a copy, only its size sent through the pool's pipe (a result of
+    it there and read here from a mapping of the file, only its size sent through the pool's pipe (a result of
     many megabytes then costs neither the pipe's copies in 64 KB pieces nor this process's reading
     thread taking turns with its main one: docs/BENCHMARKS.md, "xfer")."""
     future: Future[Any] | None = None
     job: Callable[..., object] = fn if through is None else _written
-    job_args = args if through is None else (os.getpid(), through, fn, args)
+    job_args = args if through is None else (through, fn, args)
     if pool is not None:
         try:
             future = pool.submit(job, *job_args)
@@ -126,10 +127,9 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object, throug
     return result
 
 
-def _written(owner: int, through: int, fn: Callable[..., object], args: tuple[object, ...]) -> int:
-    """In the pool's process (not `owner`, the process that queued it): fn(*args) pickled into the
-    memory file `through` from its start; its size in bytes."""
-    assert os.getpid() != owner, "a result to hand back is computed here by offloaded itself"
+def _written(through: int, fn: Callable[..., object], args: tuple[object, ...]) -> int:
+    """In the pool's process: fn(*args) pickled into the memory file `through` from its start; its
+    size in bytes."""
     value = fn(*args)
     with open(through, "wb", closefd=False) as file:
         file.seek(0)

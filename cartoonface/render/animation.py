@@ -133,7 +133,8 @@ MIN_BATCH = 32
 POOL_STATES = 400
 # The share of the distinct states this process draws when a helper draws the rest (_drawings): the
 # helper's part must also be pickled, sent and unpickled (~0.1 s for the 2,400 of the 190 s bench
-# book) while this process only collects its own (Writer.prepare). Halves left this process waiting
+# book through the pool's pipe, ~0.05 s through a memory file: docs/BENCHMARKS.md, "xfer") while this
+# process only collects its own (Writer.prepare). Measured through the pipe, halves left this process waiting
 # 0.10 s for the helper's (median of 6 runs), 0.53 0.04 s, 0.56 none (the helper waiting then):
 # docs/BENCHMARKS.md, "The SVG stage's middle, halved".
 FIRST_SHARE = 0.53
@@ -558,8 +559,9 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     one go, or with `workers` 2 and at least POOL_STATES states in two parts (FIRST_SHARE of them
     first), the second drawn by a forked helper (workers.helper_pool, _draw_sent) meanwhile; the
     first is collected and its templates and tidy texts made (Writer.prepare) while the second
-    comes. When the helper cannot be started, has not begun or fails, its part is drawn here
-    (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the reuse
+    comes. The helper's part comes back through a memory file (workers.memory_file: no pipe), and
+    the helper ends on its own. When the helper cannot be started, has not begun or fails, its part
+    is drawn here (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the reuse
     search, render/reuse.shapes_of)."""
     where: dict[DrawingKey, int] = {}
     if workers < 2 or len(states) < POOL_STATES:
