@@ -219,16 +219,16 @@ class Writer:
         values from `drawn` (finish makes them again where the path data of all the processes
         compacted together write its path data otherwise)."""
         drawings = list(drawings)
-        order = list(dict.fromkeys(number for numbers in drawings for number in numbers))  # as first shown
+        order = list(dict.fromkeys(chain.from_iterable(drawings)))  # as first shown
         raws = [-1] * len(drawn.parts)
         for raw, number in enumerate(order, len(self.raw)):
             raws[number] = raw
         self._sources.append((drawn.done, len(self.raw), len(self.raw) + len(order)))
-        labels = {name: self.label_of(name) for name in {drawn.parts[number][0] for number in order}}
+        labels = {name: self.label_of(name) for name in {name for name, _, _ in drawn.parts}}  # a few names
         self.raw += [RawPart(labels[name], text, clips) for name, text, clips in map(drawn.parts.__getitem__, order)]
         self._forms += [(drawn.skeletons[skeleton], values) for skeleton, values in map(drawn.forms.__getitem__, order)]
         self._held.update(d for number, held in drawn.holds.items() if raws[number] >= 0 for d in held)
-        return [tuple([raws[number] for number in numbers]) for numbers in drawings]
+        return [tuple(map(raws.__getitem__, numbers)) for numbers in drawings]  # C loops
 
     def prepare(self) -> None:
         """Make ahead of finish (in a drawing process's idle time: while the other one's parts
