@@ -21,7 +21,9 @@ distinct tidy drawings stay texts (one per top-level element, as lxml writes it 
 as text, spliced into the document's bytes, so the drawings are never parsed nor serialized again
 ("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
-(`drawn_parts`); the parent collects the drawings by those numbers (`Writer.collected`: its own
+(`drawn_parts`: a part handed on with its Form and slots, render/svg.py's, has its path data,
+skeleton and values from them, not cut out of its text: `form_of` finds once where a drawing
+function writes its slots; docs/BENCHMARKS.md, "vals"); the parent collects the drawings by those numbers (`Writer.collected`: its own
 half's, with their templates and tidy texts, `Writer.prepare`, while the helper's half comes),
 puts the path data together (render/pathdata.py's merged) and goes on from there, making again
 only the skeletons whose path data the other process's first path data changed ("Finishing in
