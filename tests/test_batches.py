@@ -154,6 +154,52 @@ def test_alike_rows_group_equal_rows():
         assert all(tuple(marks[row].tolist()) == pattern for row in rows)
 
 
+def test_parts_handed_on_with_their_forms_make_what_cutting_their_text_makes(face):
+    """The Form and slots all_face_parts hands on with each part it draws (but the chin shadows) give
+    compact.drawn_parts the path data, skeletons and values that cutting the parts' texts apart
+    gives: the same Drawn, for mixed states and every mouth shape alone (tongue, teeth, bite drawn
+    or not)."""
+    from cartoonface.render.compact import drawn_parts
+
+    states = random_states(40, 11) + [FaceState(mouth=((symbol, 1.0),), lips=0.5) for symbol in MOUTH_SYMBOLS]
+    forms: dict = {}
+    drawn = all_face_parts(face, pose_faces(lift(face), states), "u", forms=forms)
+    parts = list(dict.fromkeys(part for parts in drawn for part in parts))
+    assert {part.name for part in parts if part not in forms} == {"chin-shadow"}
+    assert len({form for part, (form, _) in forms.items() if part.name == "mouth"}) >= 4
+    assert drawn_parts(parts, formed=forms) == drawn_parts(parts)
+
+
+def test_a_form_gives_what_cutting_gives_or_leaves_the_part_to_be_cut():
+    """compact.form_of finds where a drawing function writes its slots (path data, positions, sizes;
+    constants kept as written); parts drawn by it, handed to drawn_parts with their Form, get the
+    skeleton and values of their text cut apart, also where the Form's skeleton is not theirs (two
+    path data compacting alike, a size that is no plain number: cut then). A slot written into an
+    attribute a skeleton keeps is refused."""
+    from cartoonface.render.compact import POSITIONS, drawn_parts, form_of
+    from cartoonface.render.elements import Part
+
+    def draw(slots):
+        outline, lid, x, r = slots
+        return Part("eye", f'<g class="eye"><path d="{outline}" fill="#fff"/><circle cx="{x}" cy="4.5" r="{r}"/>'
+                           f'<ellipse cx="{x}" cy="2" rx="3" ry="{r}"/><path d="{lid}"/></g>',
+                    (f'<clipPath id="e"><path d="{outline}"/></clipPath>',))
+
+    form = form_of(draw, 4)
+    assert form.paths == (0, 1)
+    assert [(slot, name in POSITIONS) for (slot, _, _), name in zip(form.fields, ("cx", "cy", "r", "cx", "cy", "rx", "ry"))] \
+        == [(2, True), (-1, True), (3, False), (2, True), (-1, True), (-1, False), (3, False)]
+    slots = [("M1 2L3 4", "M5 6C7 8 9 10 11 12", "10.5", "3"), ("M1 2L3 4", "M5 6C7 8 9 10 11 12", "11.5", ".5"),
+             ("M1 2L30 4", "M1 2L30 4", "7", "2"), ("M1.2 2L3 4", "M1 2L3 4", "7.3", "2"),  # paths alike
+             ("M1 2L3 4", "M5 6C7 8 9 10 11 12", "7", "-2")]  # a size not plain
+    parts = [draw(list(texts)) for texts in slots]
+    formed = {part: (form, texts) for part, texts in zip(parts, slots, strict=True)}
+    assert drawn_parts(parts, formed=formed) == drawn_parts(parts)
+    assert len(set(drawn_parts(parts).skeletons)) == 3
+    with pytest.raises(ValueError):
+        form_of(lambda slots: Part("line", f'<path d="{slots[0]}" stroke-width="{slots[1]}"/>'), 2)
+
+
 def test_path_data_compacted_from_its_numbers_as_drawn_as_from_its_text(face):
     """The numbers all_face_parts hands on with the path data it drew (pathdata.Tenths) compact
     them as reading their text does: the same compact forms, extents and firsts."""

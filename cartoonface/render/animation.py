@@ -66,7 +66,7 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Drawn, Writer, bare, drawn_parts, merge_all_alike, share, short_ids, with_id
+from cartoonface.render.compact import Drawn, Formed, Writer, bare, drawn_parts, merge_all_alike, share, short_ids, with_id
 from cartoonface.render.elements import DECIMALS, Part, attributes_text, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text, fraction_texts
 from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
@@ -505,14 +505,16 @@ def _unrolled_fields(state: FaceState) -> tuple[object, ...]:
 
 
 def _draw(face: FaceModel, states: Sequence[FaceState], progress: Callable[[float], None] | None = None,
-          tenths: dict[str, np.ndarray] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
+          tenths: dict[str, np.ndarray] | None = None,
+          forms: dict[Part, Formed] | None = None) -> list[tuple[DrawingKey, tuple[Part, ...]]]:
     """Draw each of `states` (render/svg.py's all_face_parts, uid UID, up to BATCH states at a time):
     its key and its parts. The head's roll is not drawn (the layers turn): the face is posed with
     it and turned back by the roll as written (ROLL_DECIMALS; the two turns cancel exactly). The
     drawing depends on the state without roll and on the pupils (written to 0.1 px), the key:
     states that share it differ by a turn of under 0.005 degrees (the roll's rounding), which
     moves no point by more than 0.02 px. `progress(fraction)` is told the share drawn after every batch;
-    `tenths` gets the numbers of the path data all_face_parts wrote from whole tenths (pathdata.Tenths)."""
+    `tenths` gets the numbers of the path data all_face_parts wrote from whole tenths (pathdata.Tenths),
+    `forms` the Form and slots of its parts (compact.Formed)."""
     lifted = lift(face)
     origin = rig(lifted).origin
     drawings = []
@@ -524,7 +526,7 @@ def _draw(face: FaceModel, states: Sequence[FaceState], progress: Callable[[floa
         rolls = [round(state.pose.roll * 10 ** ROLL_DECIMALS) / 10 ** ROLL_DECIMALS for state in batch]
         posed = unroll_faces(pose_faces(lifted, batch), rolls, origin)
         pupils = np.round(posed.pupils, 1).reshape(len(batch), 4).tolist()
-        for state, eyes, parts in zip(batch, pupils, all_face_parts(face, posed, UID, tenths=tenths), strict=True):
+        for state, eyes, parts in zip(batch, pupils, all_face_parts(face, posed, UID, tenths=tenths, forms=forms), strict=True):
             drawings.append(((*_unrolled_fields(state), *eyes), parts))
     return drawings
 
@@ -539,10 +541,11 @@ def _draw_compacted(face: FaceModel, states: Sequence[FaceState], progress: Call
     another process): what a drawing process does of compact.Writer.finish's work. `tenths`, when
     given, gets the numbers of the path data as drawn (_draw's)."""
     tenths = {} if tenths is None else tenths  # compacting takes the path data's numbers as drawn, not read again
-    drawings = _draw(face, states, progress, tenths)
+    forms: dict[Part, Formed] = {}  # and the parts' values as drawn, not cut out of their text
+    drawings = _draw(face, states, progress, tenths, forms)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
-    return numbered, drawn_parts(list(numbers), tenths, sent)
+    return numbered, drawn_parts(list(numbers), tenths, sent, forms)
 
 
 def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[tuple[Numbered, Drawn], PackedTenths]:

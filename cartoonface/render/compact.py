@@ -21,7 +21,9 @@ distinct tidy drawings stay texts (one per top-level element, as lxml writes it 
 as text, spliced into the document's bytes, so the drawings are never parsed nor serialized again
 ("The SVG stage's tail as text"). The drawing processes (render/animation.py)
 each number their own distinct parts, compact their path data and make their skeletons
-(`drawn_parts`); the parent collects the drawings by those numbers (`Writer.collected`: its own
+(`drawn_parts`: a part handed on with its Form and slots, render/svg.py's, has its path data,
+skeleton and values from them, not cut out of its text: `form_of` finds once where a drawing
+function writes its slots; docs/BENCHMARKS.md, "vals"); the parent collects the drawings by those numbers (`Writer.collected`: its own
 half's, with their templates and tidy texts, `Writer.prepare`, while the helper's half comes),
 puts the path data together (render/pathdata.py's merged) and goes on from there, making again
 only the skeletons whose path data the other process's first path data changed ("Finishing in
@@ -147,26 +149,104 @@ class Drawn:
     holds: dict[int, tuple[str, ...]]
 
 
-def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = False) -> Drawn:
+class Form(NamedTuple):
+    """How the parts one drawing function writes from its slots (the texts it fills in: path data,
+    numbers) split into a skeleton and values (_skeleton's), known once for all of them (form_of):
+    `skeleton` the skeleton of every such part whose path data compact to distinct forms and whose
+    sizes are plain numbers; `paths` the slots holding path data, in the order the text first holds
+    them; `fields`, per position or size placeholder in order, the slot filling it and whether it is
+    a position (rounded to whole pixels), or -1 and the value itself (the same in every part)."""
+
+    skeleton: str
+    paths: tuple[int, ...]
+    fields: tuple[tuple[int, str, bool], ...]
+
+
+# A part's Form and its slots' texts, in the order the drawing function takes them.
+Formed = tuple[Form, tuple[str, ...]]
+# form_of's slot k as the drawing function is given it: a whole number no drawing writes, so it
+# passes for a number (rounding keeps it) and, as path data, is compacted to itself.
+MARK = 2 * SENTINEL
+
+
+def form_of(draw: Callable[[list[str]], Part], slots: int) -> Form:
+    """The Form of the parts `draw` writes from `slots` texts (its slot k fills path data, or a
+    position or a size, wherever the text holds it), found by drawing one with marks (MARK + k)
+    for slots. ValueError when a slot fills something else (an attribute a skeleton keeps)."""
+    marks = [str(MARK + slot) for slot in range(slots)]
+    part = draw(marks)
+    where = {mark: slot for slot, mark in enumerate(marks)}
+    try:  # the marks as their own compact forms
+        skeleton, values = _skeleton_of(_VALUE.split("".join((part.text, *part.clips))), dict(zip(marks, marks)))
+    except KeyError as error:
+        raise ValueError(f"path data of {part.name} not from a slot: {error}") from None
+    if any(mark in skeleton for mark in marks):
+        raise ValueError(f"a slot of {part.name} fills no path data, position or size: {skeleton}")
+    names = _PLACED.findall(skeleton)
+    paths = tuple(where[d] for d in values[:len(values) - len(names)])
+    fields = tuple((where.get(value, -1), "" if value in where else value, name in POSITIONS)
+                   for name, value in zip(names, values[len(paths):], strict=True))
+    return Form(skeleton, paths, fields)
+
+
+_PLACED = re.compile(rf' ([^\s=]+)="{str(SENTINEL)[:-3]}\d{{3}}"')  # a position's or size's placeholder
+
+
+def _form_values(form: Form, slots: Sequence[str], compact: Mapping[str, str]) -> list[str] | None:
+    """The values (_skeleton's) of the part written from `slots` by the drawing function of `form`,
+    whose skeleton is form.skeleton; None when it is not (two of its path data compact alike, a size
+    is no plain number): its text is cut then."""
+    values = [compact[slots[slot]] for slot in form.paths]
+    if len(set(values)) < len(values):
+        return None
+    for slot, value, position in form.fields:
+        if slot < 0:
+            values.append(value)
+        elif position:
+            values.append(_whole(slots[slot]))
+        elif slots[slot].replace(".", "", 1).isdigit():
+            values.append(_as_written(slots[slot]))
+        else:
+            return None
+    return values
+
+
+def _part_skeleton(known: Formed | None, cut: list[str] | None, part: tuple[str, str, tuple[str, ...]],
+                   compact: dict[str, str]) -> tuple[str, list[str]]:
+    """The skeleton and values (_skeleton's) of `part` (name, text, clips): from its Form and slots
+    `known` where they give them, else from its text's `cut` (_VALUE.split; None: cut here)."""
+    if known is not None:
+        values = _form_values(*known, compact)
+        if values is not None:
+            return known[0].skeleton, values
+    return _skeleton_of(cut or _VALUE.split("".join((part[1], *part[2]))), compact)
+
+
+def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = False,
+                formed: Mapping[Part, Formed] | None = None) -> Drawn:
     """The Drawn of the distinct `parts` (render/svg.py's face_parts' parts); `tenths`: the
     numbers of some of their path data as written (pathdata.Tenths), not read again. `sent`: the
     Drawn goes to another process, which needs the compact forms only of the parts whose forms
     another process's first path data may change (pathdata.changed_forms: those holding a member
     of a skeleton with a first; Writer.finish makes them again), so done.compact keeps only theirs
     (~a fifth of the bytes sent less; were every part's needed again, Writer.finish compacts them
-    from their text)."""
+    from their text). `formed`: the Form and slots of some parts (render/svg.py's all_face_parts'),
+    whose path data, skeleton and values are taken from them, not cut out of their text."""
     fields = [(part.name, part.text, part.clips) for part in parts]
-    # each part's text cut at its values once (_VALUE), for its path data and its skeleton; its
-    # elements end in ">": a path data in two cannot match
-    cuts = [_VALUE.split("".join((text, *clips))) for _, text, clips in fields]
-    paths = [[_text(cut[index + 1]) for index in range(1, len(cut), 3) if cut[index] == "d"] for cut in cuts]
+    given: list[Formed | None] = [None] * len(parts) if formed is None else list(map(formed.get, parts))
+    # each other part's text cut at its values once (_VALUE), for its path data and its skeleton;
+    # its elements end in ">": a path data in two cannot match
+    cuts = [None if known else _VALUE.split("".join((text, *clips))) for (_, text, clips), known in zip(fields, given)]
+    paths = [[_text(cut[index + 1]) for index in range(1, len(cut), 3) if cut[index] == "d"] if cut is not None
+             else [known[1][slot] for slot in known[0].paths] if known else []
+             for cut, known in zip(cuts, given, strict=True)]
     done = compacted((d for part_paths_ in paths for d in part_paths_), tenths=tenths)
     rank = {d: place for place, d in enumerate(done.firsts.values())}  # holds keep firsts' order
     numbers: dict[str, int] = {}
     forms = []
     holds = {}
-    for number, (cut, part_paths_) in enumerate(zip(cuts, paths, strict=True)):
-        skeleton, values = _skeleton_of(cut, done.compact)
+    for number, (cut, known, part_paths_) in enumerate(zip(cuts, given, paths, strict=True)):
+        skeleton, values = _part_skeleton(known, cut, fields[number], done.compact)
         forms.append((numbers.setdefault(skeleton, len(numbers)), values))
         held = {d for d in part_paths_ if d in rank}
         if held:

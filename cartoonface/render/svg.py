@@ -34,9 +34,11 @@ from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import PosedFace, PosedFaces, pose_face
 from cartoonface.face.state import FaceState
 from cartoonface.face.mouth import shown_parts
+from cartoonface.render.compact import Form, Formed, form_of
 from cartoonface.render.elements import SVG, Part, attributes_text, element, svg_root
 from cartoonface.render.geometry import all_face_shape_columns, hypots
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
+from cartoonface.render.mouth import TEXTS as MOUTH_TEXTS
 from cartoonface.render.mouth import drawn_mouth_texts
 from cartoonface.render.numbers import number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
@@ -198,15 +200,18 @@ def face_parts(face: FaceModel, posed: PosedFace, uid: str, neck_lean: float = 0
 
 
 def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: float = 0.0,
-                   tenths: dict[str, np.ndarray] | None = None) -> list[tuple[Part, ...]]:
+                   tenths: dict[str, np.ndarray] | None = None,
+                   forms: dict[Part, Formed] | None = None) -> list[tuple[Part, ...]]:
     """face_parts of S states at once (`posed`: face/pose.py's PosedFaces): the path data of all
     of them by geometry's all_face_shape_columns, the cheeks' and eyes' numbers of all of them as
     arrays written by one number_texts, the mouths by render/mouth.py's drawn_mouth_texts; each
     part drawn once per batch (_once, _drawn_once), part by part, and the states' drawings
     zipped from those columns. Written as text: the hot path of render/animation.py. `tenths`,
     when given, gets the numbers of the path data of geometry's shapes, the mouths and the chin shadows as written (render/pathdata.py's
-    Tenths: what compacting them would read again)."""
-    style = _style_texts(face)
+    Tenths: what compacting them would read again). `forms`, when given, gets the Form and slots
+    (render/compact.py's Formed) of each part drawn but the chin shadows: its path data, positions and
+    sizes, for compacting without cutting its text apart again (compact.drawn_parts)."""
+    style, made = _style_texts(face), _forms(face, uid)
     shapes = all_face_shape_columns(posed)
     figure, chins = _canvas_figure(face), posed.xy[:, LIFTED_INDEX["2.1"]]
     points = posed.xy[:, _ROWS]
@@ -217,7 +222,8 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
     mouths, mouth_of = drawn_mouth_texts(posed.xy[:, MOUTH_ROWS], shown, face.fapu.d, tenths)
     shadows = chin_shadows(figure, chins, np.asarray(neck_middle(figure, neck_lean, chins[:, 1])), _CHIN_SHADOW, tenths)
-    paths = {name: _path_parts(name, shapes[shape][0], shapes[shape][2], style[kind])
+    paths = {name: _drawn_once([_formed(_path_part(name, d, style[kind]), made[name], (d,), forms) for d in shapes[shape][0]],
+                               shapes[shape][2])
              for name, (shape, kind) in _PATHS.items()}
     if tenths is not None:
         tenths.update(pair for texts, rows, _ in shapes.values() for pair in zip(texts, rows, strict=True))
@@ -228,11 +234,15 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
         (outlines, _, outline_of), (lids, _, lid_of) = shapes[f"eye_{side}"], shapes[f"lid_{side}"]
         keys = zip([side] * len(outline_of), [outlines[number] for number in outline_of],
                    [lids[number] for number in lid_of], *numbers[first:first + _EYE_COUNT], strict=True)
-        eye_parts.append(_once(list(keys), lambda key: _eye(key[0], key[1], key[2], key[3:], uid, style)))
-    cheeks = _once(list(zip(*numbers[:_CHEEK_COUNT], strict=True)), lambda key: Part("cheeks", _cheeks(key, style)))
+        eye_parts.append(_once(list(keys), lambda key: _formed(_eye(key[0], key[1], key[2], key[3:], uid, style),
+                                                               made[f"eye-{key[0]}"], key[1:], forms)))
+    cheeks = _once(list(zip(*numbers[:_CHEEK_COUNT], strict=True)),
+                   lambda key: _formed(Part("cheeks", _cheeks(key, style)), made["cheeks"], key, forms))
     return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
                     paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
-                    *eye_parts, _drawn_once([_mouth(mouth, uid, style) for mouth in mouths], mouth_of),
+                    *eye_parts, _drawn_once([_formed(_mouth(mouth, uid, style), _mouth_form(face, uid, mouth),
+                                                     tuple(map(mouth.__getitem__, MOUTH_TEXTS)), forms)
+                                             for mouth in mouths], mouth_of),
                     strict=True))
 
 
@@ -243,10 +253,61 @@ _PATHS = {"hair": ("hair", "hair"), "ear-l": ("ear_l", "skin"), "ear-r": ("ear_r
           "brow-r": ("brow_r", "brow")}
 
 
-def _path_parts(name: str, paths: list[str], which: list[int], style: str) -> list[Part]:
-    """The part `name` (one of _PATHS) of each state, drawn once per distinct path data of
-    `paths` (geometry's all_face_shape_columns: its numbers per state `which`), with the `style` text."""
-    return _drawn_once([Part(name, f'<path class="{name}" d="{d}"{style}/>') for d in paths], which)
+def _path_part(name: str, d: str, style: str) -> Part:
+    """The part `name` (one of _PATHS): the path data `d` with the `style` text."""
+    return Part(name, f'<path class="{name}" d="{d}"{style}/>')
+
+
+@functools.lru_cache(maxsize=16)
+def _forms(face: FaceModel, uid: str) -> dict[str, Form]:
+    """The Form (render/compact.py's form_of) of each part all_face_parts draws of `face` with
+    clip ids ending in `uid`, by name, but the mouth's (_mouth_form): the path parts (_PATHS, slot:
+    the path data), the eyes (_eye's outline, lid and texts) and the cheeks (_cheeks' texts)."""
+    style = _style_texts(face)
+    forms = {name: form_of(functools.partial(_slot_path_part, name, style[kind]), 1) for name, (_, kind) in _PATHS.items()}
+    for side in EYES:
+        forms[f"eye-{side}"] = form_of(functools.partial(_slot_eye, side, uid, style), 2 + _EYE_COUNT)
+    forms["cheeks"] = form_of(lambda slots: Part("cheeks", _cheeks(slots, style)), _CHEEK_COUNT)
+    return forms
+
+
+def _slot_path_part(name: str, style: str, slots: Sequence[str]) -> Part:
+    """_path_part from its slot (form_of's)."""
+    return _path_part(name, slots[0], style)
+
+
+def _slot_eye(side: str, uid: str, style: dict[str, str], slots: Sequence[str]) -> Part:
+    """_eye from its slots (form_of's): the outline, the lid, then _eye's texts."""
+    return _eye(side, slots[0], slots[1], slots[2:], uid, style)
+
+
+# The mouth's texts that _mouth writes into what its skeleton keeps (render/compact.py: stroke widths)
+# or reads (whether a piece is drawn): its Forms differ by them.
+_KEPT = ("tongue_ry", "lower_width", "upper_width", "bite_width")
+
+
+def _mouth_form(face: FaceModel, uid: str, text: dict[str, str]) -> Form:
+    """The Form of _mouth's part of the mouth `text` (render/mouth.py's texts; slots: its texts in
+    mouth.TEXTS order): one for each set of pieces drawn and widths (whole pixels: a few), made once."""
+    return _kept_mouth_form(face, uid, text["tongue_ry"] == "0", tuple(map(text.__getitem__, _KEPT[1:])))
+
+
+@functools.lru_cache(maxsize=1024)
+def _kept_mouth_form(face: FaceModel, uid: str, shut: bool, widths: tuple[str, ...]) -> Form:
+    """_mouth_form of the mouths with no tongue drawn (`shut`) or one, and the `widths` of _KEPT[1:]."""
+    fixed = dict(zip(_KEPT[1:], widths, strict=True))
+    if shut:
+        fixed["tongue_ry"] = "0"
+    style = _style_texts(face)
+    return form_of(lambda slots: _mouth({name: fixed.get(name, slot) for name, slot in zip(MOUTH_TEXTS, slots, strict=True)},
+                                        uid, style), len(MOUTH_TEXTS))
+
+
+def _formed(part: Part, form: Form, slots: tuple[str, ...], forms: dict[Part, Formed] | None) -> Part:
+    """`part`, put into `forms` (when given) with its `form` and the `slots` it was drawn from."""
+    if forms is not None:
+        forms[part] = (form, slots)
+    return part
 
 
 def _drawn_once(made: list[Part], which: list[int]) -> list[Part]:
