@@ -118,10 +118,9 @@ def offloaded(pool: Executor | None, fn: Callable[..., T], *args: object, throug
         if future is not None and not future.cancel():  # begun (or done) there
             try:
                 value = future.result()
-            except (BrokenProcessPool, OSError, MemoryError):
-                pass
-            else:
                 return value if through is None else cast(T, _read(through, value))
+            except (BrokenProcessPool, OSError, MemoryError):  # lost, or its result cannot be mapped here
+                pass
         return fn(*args)
 
     return result

@@ -131,6 +131,19 @@ def test_a_result_handed_back_through_a_memory_file_is_the_one_computed_there(tm
     assert offloaded(None, _pid_and_arrays, 10, through=through)()[0] == os.getpid()
 
 
+def test_a_result_that_cannot_be_read_from_its_memory_file_is_computed_here():
+    """The helper writes its result into the file, but this process can no longer map it (its
+    descriptor closed): the result is computed here, not an error."""
+    through = os.memfd_create("cartoonface-test")  # inherited by the helper forked next
+    with helper_pool(2) as pool:
+        assert pool is not None
+        getter = offloaded(pool, _pid_and_arrays, 1000, through=through)
+        time.sleep(0.5)  # begun there, most likely: taken back otherwise, computed here all the same
+        os.close(through)
+        pid, arrays, _ = getter()
+    assert pid == os.getpid() and len(arrays["numbers"]) == 1000
+
+
 def _pid_and_call(fn) -> tuple[int, object]:
     return os.getpid(), fn()
 
