@@ -68,7 +68,7 @@ from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import Drawn, Formed, Writer, bare, drawn_parts, merge_all_alike, share, short_ids, with_id
 from cartoonface.render.elements import DECIMALS, Part, attributes_text, element, markup, svg_root
-from cartoonface.render.numbers import decimal_text, fraction_texts
+from cartoonface.render.numbers import decimal_text, distinct_rows, fraction_texts
 from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
 from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
@@ -206,23 +206,12 @@ def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: 
     tracks = {}
     frames = np.asarray(shown, dtype=np.intp)
     for name, at in places.items():
-        numbers, firsts = _numbered_rows(tidy[:, at])
-        shapes = ([max(states[index].mouth, key=operator.itemgetter(1))[0] for index in firsts.tolist()]
+        distinct, numbers = distinct_rows(tidy[:, at])
+        shapes = ([max(states[index].mouth, key=operator.itemgetter(1))[0]
+                   for index in np.unique(numbers, return_index=True)[1].tolist()]  # each drawing's first
                   if name == MOUTH_TRACK else [])
-        tracks[name] = _Track(tidy[firsts][:, at].tolist(), numbers[frames].tolist(), shapes)
+        tracks[name] = _Track(distinct.tolist(), np.asarray(numbers)[frames].tolist(), shapes)
     return tracks
-
-
-def _numbered_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct rows of `rows` (n, k) integers numbered in the order they first come: the number
-    of each row (n,), and the index of each number's first row (distinct,). Rows compared as bytes
-    by one np.unique (as pathdata's _alike_rows)."""
-    keys = np.ascontiguousarray(rows).view(f"V{rows.shape[1] * rows.itemsize}").ravel()
-    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
-    order = np.argsort(first)  # the distinct rows by their first
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    return rank[which.reshape(-1)], first[order]
 
 
 def _discrete(keys: Sequence[int], fps: int, value: Callable[[int], str]) -> dict[str, str]:
