@@ -33,7 +33,7 @@ from __future__ import annotations
 import functools
 import re
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -229,23 +229,30 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
 def _plain_numbers(paths: list[str], tenths: Tenths | None = None) -> np.ndarray | None:
     """The numbers of `paths` (path data of plain numbers: letters, commas, spaces and signs
     between them) as an (n, k) float array, k each; None when they hold different counts or a
-    text that is no number. Those `tenths` (Tenths) has are not read but taken from it: tenths /
-    10 is the value strtod reads of the tenths' text (both the double nearest the decimal), but
-    for the sign of a zero, which compacting (rounding to whole pixels) does not see; the others
-    are read by _read_numbers (a few cut chin shadows among thousands written from tenths)."""
-    known = [tenths.get(d) for d in paths] if tenths is not None else [None] * len(paths)
+    text that is no number. Those `tenths` (Tenths) has are taken from it (taken_or_read), the
+    others read by _read_numbers (a few cut chin shadows among thousands written from tenths)."""
+    return taken_or_read(paths, tenths or {}, _read_numbers)
+
+
+def taken_or_read(paths: Sequence[str], tenths: Tenths, read: Callable[[list[str]], np.ndarray | None]
+                  ) -> np.ndarray | None:
+    """The numbers (n, k) of the path data `paths`: those `tenths` has taken from it, not read
+    (tenths / 10 is the value strtod reads of the tenths' text, both the double nearest the
+    decimal, but for the sign of a zero, which no one here sees), the others read by `read` ((m, k)
+    of m path data, or None); None when `read` gives None or the paths hold different counts."""
+    known = [tenths.get(d) for d in paths]
     unknown = [index for index, row in enumerate(known) if row is None]
-    read = _read_numbers([paths[index] for index in unknown]) if unknown else None
+    read_rows = read([paths[index] for index in unknown]) if unknown else None
     rows = [row for row in known if row is not None]
-    counts = {len(row) for row in rows} | ({read.shape[1]} if read is not None else set())
-    if unknown and read is None or len(counts) != 1:
+    counts = {len(row) for row in rows} | ({read_rows.shape[1]} if read_rows is not None else set())
+    if unknown and read_rows is None or len(counts) != 1:
         return None
     numbers = np.empty((len(paths), counts.pop()))
     if rows:  # all of them (most groups): no index
         numbers[[index for index, row in enumerate(known) if row is not None] if unknown else slice(None)] = (
             np.concatenate(rows).reshape(len(rows), -1) / TENTHS)
-    if read is not None:
-        numbers[unknown] = read
+    if read_rows is not None:
+        numbers[unknown] = read_rows
     return numbers
 
 

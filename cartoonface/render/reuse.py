@@ -41,8 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from cartoonface.render.numbers import TENTHS
-from cartoonface.render.pathdata import Tenths
+from cartoonface.render.pathdata import Tenths, taken_or_read
 
 
 # Largest distance (px) between a point of the earlier drawing as drawn, moved by the matrix as
@@ -199,24 +198,16 @@ def shapes_of(parts: Sequence[Sequence[str]], layouts: dict[str, _Layout | None]
 
 def _numbers(rows: Sequence[Sequence[str]], layout: _Layout, tenths: Tenths) -> np.ndarray:
     """The geometry numbers (R, K) of parts of one skeleton (`rows`: each part's values, as its
-    `layout` reads them), value by value: a path data in `tenths` taken from there (tenths /
-    TENTHS is the double float() reads of the tenths' text, both the one nearest the decimal; a
-    zero is written "0", never "-0"), the others read from their texts (_read)."""
+    `layout` reads them), value by value: a path data in `tenths` taken from there
+    (pathdata.taken_or_read; a zero is written "0", never "-0"), the others read from their texts
+    (_read)."""
     if not tenths or not any(layout.paths):
         return _read(["\x01".join(values) for values in rows], sum(layout.counts))
     columns = []
     for slot, (count, path) in enumerate(zip(layout.counts, layout.paths, strict=True)):
         values = [row[slot] for row in rows]
-        drawn = [tenths.get(value) for value in values] if path else [None] * len(values)
-        taken = [row for row, numbers in enumerate(drawn) if numbers is not None]
-        unread = [row for row, numbers in enumerate(drawn) if numbers is None]
-        column = np.empty((len(rows), count))
-        if taken:
-            column[taken if unread else slice(None)] = (np.concatenate([drawn[row] for row in taken]) / TENTHS
-                                                        ).reshape(len(taken), count)
-        if unread:
-            column[unread if taken else slice(None)] = _read([values[row] for row in unread], count)
-        columns.append(column)
+        column = taken_or_read(values, tenths, functools.partial(_read, count=count)) if path else None
+        columns.append(_read(values, count) if column is None else column)
     return np.concatenate(columns, axis=1)
 
 
