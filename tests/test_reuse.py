@@ -19,7 +19,7 @@ from cartoonface.face.pose import pose_face, pose_faces
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.reuse import (CANDIDATES, TOLERANCE, Shape, _distances, _single_slack, find, find_alike, joined, read_parts,
+from cartoonface.render.reuse import (CANDIDATES, TOLERANCE, Shape, _distances, _recipe, _single_slack, find, find_alike, joined, read_parts,
                                      shapes_from, shapes_of)
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.stills import frozen
@@ -161,6 +161,28 @@ def test_the_points_taken_from_the_numbers_as_drawn_are_those_read_from_the_text
             if shape is not None and taken is not None:
                 assert (taken.skeleton, taken.stroke) == (shape.skeleton, shape.stroke)
                 assert taken.points.tobytes() == shape.points.tobytes()
+
+
+def test_parts_read_from_their_forms_and_slots_are_those_read_from_their_texts(face):
+    """A drawing process reads its parts from the slots it drew them from, placed as their Form
+    (compact.Form) places them (read_parts' `formed`): the same skeletons, numbers to the bit and
+    strokes as read from the texts, for every Form drawn (the mouths' many); a part whose slots are
+    not its text's (no Form of it) is read from its text."""
+    tenths: dict[str, np.ndarray] = {}
+    forms: dict = {}
+    drawn = all_face_parts(face, pose_faces(lift(face), nodding(60)), "u", tenths=tenths, forms=forms)
+    distinct = list(dict.fromkeys(part for drawing in drawn for part in drawing))
+    texts = [(part.text, *part.clips) for part in distinct]
+    formed = [forms.get(part) for part in distinct]
+    assert len({known[0] for known in formed if known is not None}) > 15 and None in formed, "many Forms; chin shadows none"
+    liar = next(index for index, known in enumerate(formed) if known is not None and known[0].paths)
+    form, slots = formed[liar]  # the first part of its Form, with another path data in its slot
+    formed[liar] = (form, (slots[0].replace("1", "2", 1), *slots[1:]))
+    assert formed[liar][1] != slots and _recipe(form, slots, texts[liar]) and not _recipe(*formed[liar], texts[liar])
+    read, taken = read_parts(texts, {}, tenths), read_parts(texts, {}, tenths, formed)
+    assert (taken.skeletons, taken.strokes) == (read.skeletons, read.strokes)
+    assert taken.skeleton.tolist() == read.skeleton.tolist() and taken.row.tolist() == read.row.tolist()
+    assert all(mine.tobytes() == theirs.tobytes() for mine, theirs in zip(taken.numbers, read.numbers, strict=True))
 
 
 def test_a_drawing_s_shape_is_its_parts_one_after_another(face):

@@ -42,6 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from cartoonface.render.compact import SENTINEL, Form, Formed
 from cartoonface.render.pathdata import Tenths, taken_or_read
 
 
@@ -197,20 +198,29 @@ def shapes_of(parts: Sequence[Sequence[str]], layouts: Layouts,
     return shapes_from(read_parts(parts, layouts, tenths), range(len(parts)))
 
 
-def read_parts(parts: Sequence[Sequence[str]], layouts: Layouts,
-               tenths: Tenths | None = None) -> Readings:
+def read_parts(parts: Sequence[Sequence[str]], layouts: Layouts, tenths: Tenths | None = None,
+               formed: Sequence[Formed | None] | None = None) -> Readings:
     """The Readings of `parts` (each the texts of its element and of its definitions): each part's
     skeleton (its texts with the numbers of its geometry values taken out), the numbers of all parts
     of one skeleton read in one go (_numbers) as the skeleton's _layout reads them (`layouts`
     caches it by skeleton). `tenths` (render/pathdata.py's Tenths): the numbers of some of the path
-    data as drawn, taken rather than read again."""
+    data as drawn, taken rather than read again. `formed`: per part, the Form and slots it was drawn
+    from (render/compact.py's Formed) or None: the geometry values of a part with one are its slots
+    as its Form places them (_recipe), not cut out of its text (the same values: checked on the
+    first part of each Form)."""
     members: dict[str, list[tuple[int, list[str]]]] = {}  # by skeleton: (part's index, its geometry values)
+    recipes: dict[Form, _Recipe | None] = {}
     for index, texts in enumerate(parts):
-        pieces = _GEOMETRY.split("".join(texts))
-        names, values = pieces[1::3], pieces[2::3]
-        stripped = "\x01".join(values).encode().translate(None, _NUMBER_CHARACTERS).decode()
-        rest = "\x02".join(pieces[0::3])
-        skeleton = f"{rest}\x03{'|'.join(names)}\x03{stripped}"
+        known = formed[index] if formed is not None else None
+        recipe = None
+        if known is not None:
+            recipe = recipes[known[0]] if known[0] in recipes else recipes.setdefault(known[0], _recipe(*known, texts))
+        if recipe is None or known is None:
+            names, values, rest = _pieces(texts)
+        else:
+            rest, names, sources = recipe
+            values = [known[1][slot] if slot >= 0 else text for slot, text in sources]
+        skeleton = f"{rest}\x03{'|'.join(names)}\x03{_stripped(values)}"
         if skeleton not in layouts:
             layouts[skeleton] = _layout(names, values, rest)
         members.setdefault(skeleton, []).append((index, values))
@@ -227,6 +237,50 @@ def read_parts(parts: Sequence[Sequence[str]], layouts: Layouts,
         readings.strokes.append(max(map(float, _STROKE.findall(skeleton.partition("\x03")[0])), default=0.0))
         readings.numbers.append(_numbers([values for _, values in group], layout, tenths or {}))
     return readings
+
+
+def _pieces(texts: Sequence[str]) -> tuple[list[str], list[str], str]:
+    """The names and values of the geometry attributes (_GEOMETRY) of a part's `texts`, in order,
+    and the text around them ("\x02" between the pieces)."""
+    pieces = _GEOMETRY.split("".join(texts))
+    return pieces[1::3], pieces[2::3], "\x02".join(pieces[0::3])
+
+
+def _stripped(values: Sequence[str]) -> str:
+    """Geometry `values` with their numbers' digits and points taken out ("\x01" between them)."""
+    return "\x01".join(values).encode().translate(None, _NUMBER_CHARACTERS).decode()
+
+
+# How the parts of one Form make their geometry values (read_parts): the text around them and
+# their names (_pieces', the same for every part of the Form), and where each value comes from:
+# (slot, "") or (-1, the value itself).
+_Recipe = tuple[str, list[str], list[tuple[int, str]]]
+# A geometry value of a Form's skeleton (compact._skeleton's): a path data's token "@k@" (the
+# Form's k-th path slot), a position's or size's placeholder (SENTINEL + j: its j-th field).
+_PLACEHOLDER = re.compile(rf"@(\d+)@|{str(SENTINEL)[:-3]}(\d{{3}})")
+
+
+def _recipe(form: Form, slots: Sequence[str], texts: Sequence[str]) -> _Recipe | None:
+    """The _Recipe of the parts of `form`, found in its skeleton and checked on one of them (its
+    `slots` and `texts`); None when a slot fills something else than a geometry value (the text
+    around them would change) or the part's values are not those its slots make."""
+    names, values, rest = _pieces(texts)
+    pieces = _GEOMETRY.split(form.skeleton)
+    sources: list[tuple[int, str]] = []
+    placed = set()  # the Form's fields placed in geometry values
+    for value in pieces[2::3]:
+        match = _PLACEHOLDER.fullmatch(value)
+        if match is None:
+            sources.append((-1, value))  # kept in the skeleton: the same in every part
+        elif match.group(1) is not None:
+            sources.append((form.paths[int(match.group(1))], ""))
+        else:
+            placed.add(field := int(match.group(2)))
+            sources.append(form.fields[field][:2])
+    if (pieces[1::3] != names or any(slot >= 0 for field, (slot, _, _) in enumerate(form.fields) if field not in placed)
+            or [slots[slot] if slot >= 0 else text for slot, text in sources] != values):
+        return None
+    return rest, names, sources
 
 
 def shapes_from(readings: Readings, indices: Iterable[int]) -> list[Shape | None]:
