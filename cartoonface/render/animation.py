@@ -72,7 +72,7 @@ from cartoonface.render.compact import Drawn, Formed, RawPart, Writer, bare, dra
 from cartoonface.render.elements import DECIMALS, Part, attributes_text, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text, distinct_rows, fraction_texts
 from cartoonface.render.pathdata import Compacted, merged
-from cartoonface.render.reuse import (IDENTITY, TOLERANCE, Readings, Reuse, Shape, find, find_alike, joined, read_parts, shapes_from,
+from cartoonface.render.reuse import (IDENTITY, TOLERANCE, Layouts, Readings, Reuse, Shape, find, find_alike, joined, read_parts, shapes_from,
                                       shapes_of)
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
@@ -139,8 +139,10 @@ POOL_STATES = 400
 # book through the pool's pipe, ~0.05 s through a memory file: docs/BENCHMARKS.md, "xfer") while this
 # process only collects its own (Writer.prepare). Measured through the pipe, halves left this process waiting
 # 0.10 s for the helper's (median of 6 runs), 0.53 0.04 s, 0.56 none (the helper waiting then):
-# docs/BENCHMARKS.md, "The SVG stage's middle, halved".
-FIRST_SHARE = 0.53
+# docs/BENCHMARKS.md, "The SVG stage's middle, halved". The helper also reads its parts for the reuse
+# search (_draw_sent): through the memory file, 0.53 left this process waiting 0.08 s (median of 4),
+# 0.56 and 0.59 0.03 s, the hand-over itself (docs/BENCHMARKS.md, "pts").
+FIRST_SHARE = 0.56
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
 # when the shared parts are found and when the tracks are written; the rest makes the document's
@@ -316,15 +318,23 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
 
 def _shapes(raw: Sequence[RawPart], numbers: Sequence[int], read: Read | None) -> list[Shape | None]:
     """The Shape (render/reuse.py) of each of the raw parts `numbers` (of `raw`, a Writer's): from
-    the readings of the drawing process that drew it (`read`: reuse.shapes_from), or read from
-    their texts (reuse.shapes_of) once they are let go."""
+    the drawing process that drew it (`read`: its readings, reuse.shapes_from, or its parts as drawn
+    read now, reuse.read_parts), or read from their texts (reuse.shapes_of) once they are let go."""
     if read is None or not read.readings:
         return shapes_of([(raw[number].element, *raw[number].definitions) for number in numbers], {})
     which, number = read.which[numbers], read.number[numbers]
+    layouts: Layouts = {}  # the helper's met, shared
+    for readings in read.readings:
+        if isinstance(readings, Readings):
+            layouts.update(zip(readings.skeletons, readings.layouts, strict=True))
     shapes: list[Shape | None] = [None] * len(numbers)
     for process, readings in enumerate(read.readings):
         places = np.flatnonzero(which == process)
-        for place, shape in zip(places.tolist(), shapes_from(readings, number[places].tolist()), strict=True):
+        chosen = number[places].tolist()
+        if isinstance(readings, Unread):  # read here, the parts taken alone
+            readings, chosen = read_parts([readings.texts[part] for part in chosen], layouts, readings.tenths,
+                                          [readings.formed[part] for part in chosen]), range(len(chosen))
+        for place, shape in zip(places.tolist(), shapes_from(readings, chosen), strict=True):
             shapes[place] = shape
     return shapes
 
@@ -541,32 +551,45 @@ Numbered = list[tuple[DrawingKey, tuple[int, ...]]]  # _draw's drawings, parts a
 
 
 def _draw_compacted(face: FaceModel, states: Sequence[FaceState], progress: Callable[[float], None] | None = None,
-                    sent: bool = False) -> tuple[Numbered, Drawn, Readings]:
+                    sent: bool = False) -> tuple[Numbered, Drawn, Unread]:
     """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
     for the Writer (compact.drawn_parts: their path data compacted, their skeletons; `sent`: for
     another process): what a drawing process does of compact.Writer.finish's work; and the
-    distinct parts read for the reuse search (reuse.read_parts, by their number): each process
-    reads its own, from the numbers and slots as drawn, not from the text."""
+    distinct parts as drawn, for the reuse search to read (Unread, by their number)."""
     tenths: dict[str, np.ndarray] = {}  # compacting and reading take the path data's numbers as drawn, not read again
     forms: dict[Part, Formed] = {}  # and the parts' values as drawn, not cut out of their text
     drawings = _draw(face, states, progress, tenths, forms)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
     return (numbered, drawn_parts(list(numbers), tenths, sent, forms),
-            read_parts([(part.text, *part.clips) for part in numbers], {}, tenths, list(map(forms.get, numbers))))
+            Unread([(part.text, *part.clips) for part in numbers], list(map(forms.get, numbers)), tenths))
 
 
 def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[Numbered, Drawn, Readings]:
-    """_draw_compacted of `states` in a drawing helper, for this process."""
-    return _draw_compacted(face, states, None, sent=True)
+    """_draw_compacted of `states` in a drawing helper, for this process, its parts read there
+    (reuse.read_parts: while this process collects its own, the helper has time to spare)."""
+    numbered, drawn, unread = _draw_compacted(face, states, None, sent=True)
+    return numbered, drawn, read_parts(unread.texts, {}, unread.tenths, unread.formed)
+
+
+class Unread(NamedTuple):
+    """A drawing process's distinct parts as drawn, for reuse.read_parts: their texts (the
+    element's and its definitions'), Form and slots (compact.Formed, or None), and the numbers of
+    their path data as drawn (pathdata.Tenths)."""
+
+    texts: list[tuple[str, ...]]
+    formed: list[Formed | None]
+    tenths: dict[str, np.ndarray]
 
 
 class Read(NamedTuple):
-    """The distinct parts the drawing processes read for the reuse search (_draw_compacted's
-    Readings, a list: emptied once the search has taken them, _search), and for each of a Writer's
-    raw parts which of them holds it (`which`) and its number there (`number`), (R,) each."""
+    """The distinct parts of the drawing processes for the reuse search, each process's read
+    (the helper's, _draw_sent) or not yet (this one's, _draw_compacted's Unread: read by the
+    search, only the parts it takes) in a list emptied once the search has taken them (_search);
+    and for each of a Writer's raw parts which of them holds it (`which`) and its number there
+    (`number`), (R,) each."""
 
-    readings: list[Readings]
+    readings: list[Readings | Unread]
     which: np.ndarray
     number: np.ndarray
 
@@ -584,18 +607,18 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     where: dict[DrawingKey, int] = {}
     numbers: list[np.ndarray] = []  # per process, each of its raw parts' number among its distinct parts
     if workers < 2 or len(states) < POOL_STATES:
-        numbered, drawn, read = _draw_compacted(face, states, progress)
-        return _collected(writer, numbered, drawn, where, [], numbers), drawn.done, Read([read], *_sources(numbers))
+        numbered, drawn, unread = _draw_compacted(face, states, progress)
+        return _collected(writer, numbered, drawn, where, [], numbers), drawn.done, Read([unread], *_sources(numbers))
     half = round(len(states) * FIRST_SHARE)
     with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
         other = offloaded(pool, _draw_sent, face, states[half:], through=through)
-        numbered, drawn, read = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE))
+        numbered, drawn, unread = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE))
         raw = _collected(writer, numbered, drawn, where, [], numbers)
         writer.prepare()
         done = drawn.done
         numbered, drawn, sent = other()
     raw = _collected(writer, numbered, drawn, where, raw, numbers)
-    return raw, merged(done, drawn.done), Read([read, sent], *_sources(numbers))
+    return raw, merged(done, drawn.done), Read([unread, sent], *_sources(numbers))
 
 
 def _sources(numbers: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
