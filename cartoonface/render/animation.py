@@ -57,8 +57,8 @@ import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
 from itertools import chain
+from typing import NamedTuple
 
 import numpy as np
 from lxml import etree
@@ -323,7 +323,7 @@ def _shapes(raw: Sequence[RawPart], numbers: Sequence[int], read: Read | None) -
     if read is None or not read.readings:
         return shapes_of([(raw[number].element, *raw[number].definitions) for number in numbers], {})
     which, number = read.which[numbers], read.number[numbers]
-    layouts: Layouts = {}  # the helper's met, shared
+    layouts: Layouts = {}  # of the skeletons the helper met: not made again
     for readings in read.readings:
         if isinstance(readings, Readings):
             layouts.update(zip(readings.skeletons, readings.layouts, strict=True))
