@@ -19,8 +19,8 @@ from cartoonface.face.pose import pose_face, pose_faces
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.pathdata import packed, unpacked
-from cartoonface.render.reuse import CANDIDATES, TOLERANCE, Shape, _distances, _single_slack, find, find_alike, shapes_of
+from cartoonface.render.reuse import (CANDIDATES, TOLERANCE, Shape, _distances, _recipe, _single_slack, find, find_alike, joined, read_parts,
+                                     shapes_from, shapes_of)
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.stills import frozen
 
@@ -140,21 +140,66 @@ def test_a_part_is_found_among_all_earlier_parts_of_its_skeleton_not_only_recent
 
 def test_the_points_taken_from_the_numbers_as_drawn_are_those_read_from_the_text_to_the_bit(face):
     """The drawing hands the reuse search the numbers of its path data in tenths (pathdata.Tenths),
-    the drawing helper's packed and pickled (as sent back): the shapes are those read from the
-    parts' texts, each number to the bit, whether all, some or none of the path data are in it."""
+    and the drawing helper its parts read there (read_parts, pickled as sent back): the shapes are
+    those read from the parts' texts, each number to the bit, whether all, some or none of the path
+    data are in it, and for any choice of the parts read, in any order."""
     tenths: dict[str, np.ndarray] = {}
     drawn = all_face_parts(face, pose_faces(lift(face), nodding(12)), "u", tenths=tenths)
     parts = [(part.text, *part.clips) for drawing in drawn for part in drawing]
-    sent = unpacked(pickle.loads(pickle.dumps(packed(dict(list(tenths.items())[::2])))))
-    assert sent.keys() < tenths.keys() and all(np.array_equal(sent[d], tenths[d]) for d in sent)
+    parts[5:5] = [('<g class="x" transform="rotate(3)"><path d="M1 2L3 4"/></g>',), ('<rect width="2" height="3"/>',)]
+    some = dict(list(tenths.items())[::2])
     read = shapes_of(parts, {})
-    assert sum(shape is not None for shape in read) > len(parts) / 2
-    for given in (tenths, sent):
-        for shape, taken in zip(read, shapes_of(parts, {}, given), strict=True):
+    assert [index for index, shape in enumerate(read) if shape is None] == [5, 6], "what is not read"
+    assert len({shape.skeleton for shape in read if shape is not None}) > 5
+    chosen = np.random.default_rng(3).permutation(len(parts))[:len(parts) // 2].tolist()
+    sent = pickle.loads(pickle.dumps(read_parts(parts, {}, tenths)))
+    for taken_shapes, wanted in ((shapes_of(parts, {}, tenths), range(len(parts))), (shapes_of(parts, {}, some), range(len(parts))),
+                                 (shapes_from(sent, chosen), chosen)):
+        for index, taken in zip(wanted, taken_shapes, strict=True):
+            shape = read[index]
             assert (shape is None) == (taken is None)
             if shape is not None and taken is not None:
                 assert (taken.skeleton, taken.stroke) == (shape.skeleton, shape.stroke)
                 assert taken.points.tobytes() == shape.points.tobytes()
+
+
+def test_parts_read_from_their_forms_and_slots_are_those_read_from_their_texts(face):
+    """A drawing process reads its parts from the slots it drew them from, placed as their Form
+    (compact.Form) places them (read_parts' `formed`): the same skeletons, numbers to the bit and
+    strokes as read from the texts, for every Form drawn (the mouths' many); a part whose slots are
+    not its text's (no Form of it) is read from its text."""
+    tenths: dict[str, np.ndarray] = {}
+    forms: dict = {}
+    drawn = all_face_parts(face, pose_faces(lift(face), nodding(60)), "u", tenths=tenths, forms=forms)
+    distinct = list(dict.fromkeys(part for drawing in drawn for part in drawing))
+    texts = [(part.text, *part.clips) for part in distinct]
+    formed = [forms.get(part) for part in distinct]
+    assert len({known[0] for known in formed if known is not None}) > 15 and None in formed, "many Forms; chin shadows none"
+    liar = next(index for index, known in enumerate(formed) if known is not None and known[0].paths)
+    form, slots = formed[liar]  # the first part of its Form, with another path data in its slot
+    formed[liar] = (form, (slots[0].replace("1", "2", 1), *slots[1:]))
+    assert formed[liar][1] != slots and _recipe(form, slots, texts[liar]) and not _recipe(*formed[liar], texts[liar])
+    read, taken = read_parts(texts, {}, tenths), read_parts(texts, {}, tenths, formed)
+    assert (taken.skeletons, taken.strokes) == (read.skeletons, read.strokes)
+    assert taken.skeleton.tolist() == read.skeleton.tolist() and taken.row.tolist() == read.row.tolist()
+    assert all(mine.tobytes() == theirs.tobytes() for mine, theirs in zip(taken.numbers, read.numbers, strict=True))
+
+
+def test_a_drawing_s_shape_is_its_parts_one_after_another(face):
+    """joined puts each drawing's parts' points together in one go for drawings alike: as
+    concatenated one by one, the skeletons joined, the widest stroke; None where a part is."""
+    drawn = all_face_parts(face, pose_faces(lift(face), nodding(12)), "u")
+    shapes = shapes_of([(part.text, *part.clips) for drawing in drawn for part in drawing], {})
+    drawings = [shapes[start:start + len(drawn[0])] for start in range(0, len(shapes), len(drawn[0]))]
+    drawings += [drawings[0][::-1], drawings[1][:3], [*drawings[2][:2], None]]
+    for parts, shape in zip(drawings, joined(drawings), strict=True):
+        if any(part is None for part in parts):
+            assert shape is None
+            continue
+        assert shape is not None
+        assert shape.skeleton == "|".join(part.skeleton for part in parts if part is not None)
+        assert shape.points.tobytes() == np.concatenate([part.points for part in parts if part is not None]).tobytes()
+        assert shape.stroke == max(part.stroke for part in parts if part is not None)
 
 
 def test_the_fit_measured_in_single_precision_is_within_its_slack_of_double_precision():

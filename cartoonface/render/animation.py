@@ -57,6 +57,8 @@ import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from itertools import chain
+from typing import NamedTuple
 
 import numpy as np
 from lxml import etree
@@ -66,11 +68,12 @@ from cartoonface.face.lift import lift
 from cartoonface.face.model import FaceModel
 from cartoonface.face.pose import pose_faces, rig, unroll_faces
 from cartoonface.face.state import FaceState, Pose
-from cartoonface.render.compact import Drawn, Formed, Writer, bare, drawn_parts, merge_all_alike, share, short_ids, with_id
+from cartoonface.render.compact import Drawn, Formed, RawPart, Writer, bare, drawn_parts, merge_all_alike, share, short_ids, with_id
 from cartoonface.render.elements import DECIMALS, Part, attributes_text, element, markup, svg_root
 from cartoonface.render.numbers import decimal_text, distinct_rows, fraction_texts
-from cartoonface.render.pathdata import Compacted, PackedTenths, Tenths, merged, packed, unpacked
-from cartoonface.render.reuse import IDENTITY, TOLERANCE, Reuse, find, find_alike, joined, shapes_of
+from cartoonface.render.pathdata import Compacted, merged
+from cartoonface.render.reuse import (IDENTITY, TOLERANCE, Layouts, Readings, Reuse, Shape, find, find_alike, joined, read_parts, shapes_from,
+                                      shapes_of)
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
@@ -136,8 +139,10 @@ POOL_STATES = 400
 # book through the pool's pipe, ~0.05 s through a memory file: docs/BENCHMARKS.md, "xfer") while this
 # process only collects its own (Writer.prepare). Measured through the pipe, halves left this process waiting
 # 0.10 s for the helper's (median of 6 runs), 0.53 0.04 s, 0.56 none (the helper waiting then):
-# docs/BENCHMARKS.md, "The SVG stage's middle, halved".
-FIRST_SHARE = 0.53
+# docs/BENCHMARKS.md, "The SVG stage's middle, halved". The helper also reads its parts for the reuse
+# search (_draw_sent): through the memory file, 0.53 left this process waiting 0.08 s (median of 4),
+# 0.56 and 0.59 0.03 s, the hand-over itself (docs/BENCHMARKS.md, "pts").
+FIRST_SHARE = 0.56
 # Share of animation_svg's time done when drawing the frames ends, when tidying the drawings
 # (compact.Writer.finish) ends, when the reused drawings and parts are found (render/reuse.py),
 # when the shared parts are found and when the tracks are written; the rest makes the document's
@@ -242,7 +247,7 @@ def _key_times(frames: int, fps: int) -> tuple[np.ndarray, str]:
 
 def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
            progress: Callable[[float], None], workers: int = 1,
-           tenths: Tenths | None = None) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
+           parts_read: Read | None = None) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
     """A getter of the drawings of each of `tracks` shown as a transform of an earlier drawing of
     their track within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing
     number; and of the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings
@@ -255,9 +260,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts) by a child forked now
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
-    the points, searched each of its tracks and its parts. `tenths` (pathdata.Tenths): the numbers
-    of the path data as drawn, which the points are taken from (reuse.shapes_of); a dict is emptied
-    by the search here (_search)."""
+    the points, searched each of its tracks and its parts. `parts_read` (_drawings'): the parts as the
+    drawing processes read them, whose points the search takes (emptied by the search here, _search)."""
     if tolerance <= 0:
         return lambda: ({name: {} for name in tracks}, {})
     first: dict[int, int] = {}
@@ -270,11 +274,11 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
                    if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
                    else ([], range(len(names))))
     theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
-                    tolerance, None, tenths)
+                    tolerance, None, parts_read)
 
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
         drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress,
-                                  tenths)
+                                  parts_read)
         other_drawings, other_moved = theirs()
         both = {**drawings, **other_drawings}
         return {name: both[name] for name in names}, {**moved, **other_moved}
@@ -284,22 +288,22 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
 
 def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], tolerance: float,
             progress: Callable[[float], None] | None = None,
-            tenths: Tenths | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
-    """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number).
-    `tenths`, a dict, is emptied once the points are read (a search computed after it in this
-    process, forked's when the child is lost, reads the path data's numbers from their texts:
-    the same values)."""
+            parts_read: Read | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+    """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number),
+    the parts' points taken from `parts_read` (_drawings') or read from their texts (_shapes). Its
+    readings are let go once the points are made (a search computed after it in this process,
+    forked's when the child is lost, reads the parts' texts: the same values)."""
     report = progress or (lambda fraction: None)
     raws = {number: writer.raw[first[number]]
             for number in dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing)}
-    parts = dict(zip(raws, shapes_of([(raw.element, *raw.definitions) for raw in raws.values()], {}, tenths), strict=True))
-    if isinstance(tenths, dict):  # read: let go before the fits (a few MB less at the peak, docs/BENCHMARKS.md "xfer")
-        tenths.clear()
+    parts = dict(zip(raws, _shapes(writer.raw, [first[number] for number in raws], parts_read), strict=True))
+    if parts_read is not None:  # let go before the fits (a few MB less at the peak, docs/BENCHMARKS.md "xfer")
+        parts_read.readings.clear()
     read, searched = REUSE_STEPS
     report(read)
     drawings = {}
     for done, (name, track) in enumerate(tracks.items(), 1):
-        drawings[name] = find([joined([parts[number] for number in drawing]) for drawing in track.drawings], tolerance)
+        drawings[name] = find(joined([[parts[number] for number in drawing] for drawing in track.drawings]), tolerance)
         report(read + (searched - read) * done / len(tracks))
     written = [drawing for name, track in tracks.items() for number, drawing in enumerate(track.drawings)
                if number not in drawings[name]]
@@ -310,6 +314,29 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
     return drawings, {alone[number]: Reuse(alone[reuse.source], reuse.matrix, reuse.error)
                       for number, reuse in found.items()
                       if reuse.matrix == IDENTITY or raws[alone[number]].element.startswith(ALONE)}
+
+
+def _shapes(raw: Sequence[RawPart], numbers: Sequence[int], read: Read | None) -> list[Shape | None]:
+    """The Shape (render/reuse.py) of each of the raw parts `numbers` (of `raw`, a Writer's): from
+    the drawing process that drew it (`read`: its readings, reuse.shapes_from, or its parts as drawn
+    read now, reuse.read_parts), or read from their texts (reuse.shapes_of) once they are let go."""
+    if read is None or not read.readings:
+        return shapes_of([(raw[number].element, *raw[number].definitions) for number in numbers], {})
+    which, number = read.which[numbers], read.number[numbers]
+    layouts: Layouts = {}  # of the skeletons the helper met: not made again
+    for readings in read.readings:
+        if isinstance(readings, Readings):
+            layouts.update(zip(readings.skeletons, readings.layouts, strict=True))
+    shapes: list[Shape | None] = [None] * len(numbers)
+    for process, readings in enumerate(read.readings):
+        places = np.flatnonzero(which == process)
+        chosen = number[places].tolist()
+        if isinstance(readings, Unread):  # read here, the parts taken alone
+            readings, chosen = read_parts([readings.texts[part] for part in chosen], layouts, readings.tenths,
+                                          [readings.formed[part] for part in chosen]), range(len(chosen))
+        for place, shape in zip(places.tolist(), shapes_from(readings, chosen), strict=True):
+            shapes[place] = shape
+    return shapes
 
 
 def _aliased(tracks: dict[str, _Track], reused: dict[str, dict[int, Reuse]],
@@ -524,62 +551,99 @@ Numbered = list[tuple[DrawingKey, tuple[int, ...]]]  # _draw's drawings, parts a
 
 
 def _draw_compacted(face: FaceModel, states: Sequence[FaceState], progress: Callable[[float], None] | None = None,
-                    tenths: dict[str, np.ndarray] | None = None, sent: bool = False) -> tuple[Numbered, Drawn]:
+                    sent: bool = False) -> tuple[Numbered, Drawn, Unread]:
     """_draw of `states`, each drawing's parts numbered by the distinct parts, which are made ready
     for the Writer (compact.drawn_parts: their path data compacted, their skeletons; `sent`: for
-    another process): what a drawing process does of compact.Writer.finish's work. `tenths`, when
-    given, gets the numbers of the path data as drawn (_draw's)."""
-    tenths = {} if tenths is None else tenths  # compacting takes the path data's numbers as drawn, not read again
+    another process): what a drawing process does of compact.Writer.finish's work; and the
+    distinct parts as drawn, for the reuse search to read (Unread, by their number)."""
+    tenths: dict[str, np.ndarray] = {}  # compacting and reading take the path data's numbers as drawn, not read again
     forms: dict[Part, Formed] = {}  # and the parts' values as drawn, not cut out of their text
     drawings = _draw(face, states, progress, tenths, forms)
     numbers: dict[Part, int] = {}
     numbered = [(key, tuple(numbers.setdefault(part, len(numbers)) for part in parts)) for key, parts in drawings]
-    return numbered, drawn_parts(list(numbers), tenths, sent, forms)
+    return (numbered, drawn_parts(list(numbers), tenths, sent, forms),
+            Unread([(part.text, *part.clips) for part in numbers], list(map(forms.get, numbers)), tenths))
 
 
-def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[tuple[Numbered, Drawn], PackedTenths]:
-    """_draw_compacted of `states` in a drawing helper, for this process, and the numbers of the
-    path data it drew packed to send back (pathdata.packed)."""
-    tenths: dict[str, np.ndarray] = {}
-    return _draw_compacted(face, states, None, tenths, sent=True), packed(tenths)
+def _draw_sent(face: FaceModel, states: Sequence[FaceState]) -> tuple[Numbered, Drawn, Readings]:
+    """_draw_compacted of `states` in a drawing helper, for this process, its parts read there
+    (reuse.read_parts: while this process collects its own, the helper has time to spare)."""
+    numbered, drawn, unread = _draw_compacted(face, states, None, sent=True)
+    return numbered, drawn, read_parts(unread.texts, {}, unread.tenths, unread.formed)
+
+
+class Unread(NamedTuple):
+    """A drawing process's distinct parts as drawn, for reuse.read_parts: their texts (the
+    element's and its definitions'), Form and slots (compact.Formed, or None), and the numbers of
+    their path data as drawn (pathdata.Tenths)."""
+
+    texts: list[tuple[str, ...]]
+    formed: list[Formed | None]
+    tenths: dict[str, np.ndarray]
+
+
+class Read(NamedTuple):
+    """The distinct parts of the drawing processes for the reuse search, each process's read
+    (the helper's, _draw_sent) or not yet (this one's, _draw_compacted's Unread: read by the
+    search, only the parts it takes) in a list emptied once the search has taken them (_search);
+    and for each of a Writer's raw parts which of them holds it (`which`) and its number there
+    (`number`), (R,) each."""
+
+    readings: list[Readings | Unread]
+    which: np.ndarray
+    number: np.ndarray
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progress: Callable[[float], None],
-              writer: Writer, tenths: dict[str, np.ndarray]) -> tuple[list[tuple[int, ...]], Compacted]:
+              writer: Writer) -> tuple[list[tuple[int, ...]], Compacted, Read]:
     """_draw_compacted of `states` collected by `writer` in order (_collected): the raw part
-    numbers of each drawing, and the path data compacted (pathdata.merged of the processes'). In
-    one go, or with `workers` 2 and at least POOL_STATES states in two parts (FIRST_SHARE of them
-    first), the second drawn by a forked helper (workers.helper_pool, _draw_sent) meanwhile; the
-    first is collected and its templates and tidy texts made (Writer.prepare) while the second
-    comes. The helper's part comes back through a memory file (workers.memory_file: no pipe), and
-    the helper ends on its own. When the helper cannot be started, has not begun or fails, its part
-    is drawn here (workers.offloaded). `tenths` gets the numbers of all the path data drawn (for the reuse
-    search, render/reuse.shapes_of)."""
+    numbers of each drawing, the path data compacted (pathdata.merged of the processes'), and the
+    parts as the processes read them (Read). In one go, or with `workers` 2 and at least
+    POOL_STATES states in two parts (FIRST_SHARE of them first), the second drawn by a forked helper
+    (workers.helper_pool, _draw_sent) meanwhile; the first is collected and its templates and tidy
+    texts made (Writer.prepare) while the second comes. The helper's part comes back through a
+    memory file (workers.memory_file: no pipe), and the helper ends on its own. When the helper
+    cannot be started, has not begun or fails, its part is drawn here (workers.offloaded)."""
     where: dict[DrawingKey, int] = {}
+    numbers: list[np.ndarray] = []  # per process, each of its raw parts' number among its distinct parts
     if workers < 2 or len(states) < POOL_STATES:
-        numbered, drawn = _draw_compacted(face, states, progress, tenths)
-        return _collected(writer, numbered, drawn, where, []), drawn.done
+        numbered, drawn, unread = _draw_compacted(face, states, progress)
+        return _collected(writer, numbered, drawn, where, [], numbers), drawn.done, Read([unread], *_sources(numbers))
     half = round(len(states) * FIRST_SHARE)
     with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
         other = offloaded(pool, _draw_sent, face, states[half:], through=through)
-        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE), tenths)
-        raw = _collected(writer, numbered, drawn, where, [])
+        numbered, drawn, unread = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE))
+        raw = _collected(writer, numbered, drawn, where, [], numbers)
         writer.prepare()
         done = drawn.done
-        (numbered, drawn), sent = other()
-    tenths.update(unpacked(sent))
-    return _collected(writer, numbered, drawn, where, raw), merged(done, drawn.done)
+        numbered, drawn, sent = other()
+    raw = _collected(writer, numbered, drawn, where, raw, numbers)
+    return raw, merged(done, drawn.done), Read([unread, sent], *_sources(numbers))
+
+
+def _sources(numbers: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Read's `which` and `number` of raw parts collected in turn from drawing processes whose parts'
+    `numbers` (_collected's, one array per process) are given in that order."""
+    return (np.repeat(np.arange(len(numbers), dtype=np.int8), [len(own) for own in numbers]),
+            np.concatenate(numbers) if numbers else np.zeros(0, dtype=np.int32))
 
 
 def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[DrawingKey, int],
-               raw: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
+               raw: list[tuple[int, ...]], numbers: list[np.ndarray]) -> list[tuple[int, ...]]:
     """`raw` (the raw part numbers of the drawings collected before) and those of the `drawings` of
     one drawing process (_draw_compacted's, with `drawn`) collected by `writer` (Writer.collected).
     A drawing whose key an earlier one has (`where`: the first drawing of each key, filled) is
-    that one's."""
+    that one's. `numbers` gets the number in `drawn` of each raw part collected here (they follow
+    the writer's raw parts before)."""
     firsts = [where.setdefault(key, index) for index, (key, _) in enumerate(drawings, len(raw))]
     own = [index for index, first in enumerate(firsts, len(raw)) if first == index]
-    mine = dict(zip(own, writer.collected(drawn, (drawings[index - len(raw)][1] for index in own))))
+    parts = [drawings[index - len(raw)][1] for index in own]
+    before = len(writer.raw)
+    collected = writer.collected(drawn, parts)
+    numbers.append(np.empty(len(writer.raw) - before, dtype=np.int32))
+    numbers[-1][np.fromiter(chain.from_iterable(collected), dtype=np.intp) - before] = np.fromiter(chain.from_iterable(parts),
+                                                                                                 dtype=np.int32)
+    mine = dict(zip(own, collected))
     return raw + [mine[first] if first in mine else raw[first] for first in firsts]
 
 
@@ -626,13 +690,12 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    tenths: dict[str, np.ndarray] = {}  # the path data's numbers as drawn: the reuse search takes them
-    raw, done = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer, tenths)
+    raw, done, read = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer)
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
     reuse = _reuse(tracks, writer, mapping, tolerance,
-                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers, tenths)
+                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers, read)
     tidy = writer.drawings()
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)

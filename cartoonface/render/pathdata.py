@@ -281,33 +281,6 @@ Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data
 
 
 @dataclass(frozen=True)
-class PackedTenths:
-    """Tenths as sent from one process to another (packed, unpacked): the path data `texts`, all
-    their numbers in one array (int32 where they fit) and where each one's begin (`bounds`, one
-    more than the texts). Pickled at a small part of the cost of a dict of ten thousand arrays."""
-
-    texts: list[str]
-    numbers: np.ndarray
-    bounds: list[int]
-
-
-def packed(tenths: Tenths) -> PackedTenths:
-    """`tenths` packed (PackedTenths)."""
-    rows = list(tenths.values())
-    numbers = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
-    narrow = np.iinfo(np.int32)
-    fits = not numbers.size or narrow.min <= numbers.min() and numbers.max() <= narrow.max
-    return PackedTenths(list(tenths), numbers.astype(np.int32) if fits else numbers,
-                        np.cumsum([0, *map(len, rows)]).tolist())
-
-
-def unpacked(pack: PackedTenths) -> dict[str, np.ndarray]:
-    """The Tenths `pack` holds (its numbers: views of one array, int32 or int64)."""
-    bounds = pack.bounds
-    return dict(zip(pack.texts, [pack.numbers[start:end] for start, end in zip(bounds, bounds[1:])], strict=True))
-
-
-@dataclass(frozen=True)
 class Compacted:
     """Path data compacted: `compact` maps each path data string to its compact form (see the
     module docstring); `extents` gives each compact path data written (a path left as it is has

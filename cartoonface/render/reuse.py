@@ -35,12 +35,14 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from itertools import repeat
 from typing import NamedTuple
 
 import numpy as np
 
+from cartoonface.render.compact import SENTINEL, Form, Formed
 from cartoonface.render.pathdata import Tenths, taken_or_read
 
 
@@ -81,7 +83,9 @@ _GEOMETRY = re.compile(r' (d|cx|cy|r|rx|ry)="([^"]*)"')  # the attributes whose 
 _PAIRS = re.compile(r"[MLCSQTZ\d\s.,-]*")  # path data of absolute commands taking point pairs
 _STROKE = re.compile(r' stroke-width="([\d.]+)"')
 _LETTERS_TO_SPACES = str.maketrans({**{c: " " for c in "MLCSQTZHVAmlcsqtzhva,\x01"}})
-_NUMBER_CHARACTERS = str.maketrans("", "", "0123456789.")  # taken out of a skeleton
+# taken out of a skeleton (by bytes.translate: twice as fast as str.translate's deletion; UTF-8 holds
+# these bytes only as these characters)
+_NUMBER_CHARACTERS = b"0123456789."
 
 
 class Shape(NamedTuple):
@@ -117,6 +121,9 @@ class _Layout:
     weights: np.ndarray
     counts: tuple[int, ...]
     paths: tuple[bool, ...]
+
+
+Layouts = dict[str, _Layout | None]  # _layout of each skeleton met (shapes_of's cache)
 
 
 def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> _Layout | None:
@@ -164,35 +171,135 @@ def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> _Layout |
                                        tuple(numbers), tuple(name == "d" for name in names))
 
 
-def shapes_of(parts: Sequence[Sequence[str]], layouts: dict[str, _Layout | None],
+@dataclass(frozen=True)
+class Readings:
+    """The geometry of parts read from their texts (read_parts), to make their Shapes from (shapes_from)
+    here or in another process: pickled as a few hundred arrays, not one per part (a drawing
+    helper reads the parts it drew, render/animation.py). Per skeleton with a _Layout: the
+    skeleton, its layout, its widest stroke (px) and the geometry numbers (R, K) of its R parts;
+    per part, its skeleton's number in them (`skeleton`, -1 for a part whose layout is None) and
+    its row there (`row`), (P,) each."""
+
+    skeletons: list[str]
+    layouts: list[_Layout]
+    strokes: list[float]
+    numbers: list[np.ndarray]
+    skeleton: np.ndarray
+    row: np.ndarray
+
+
+def shapes_of(parts: Sequence[Sequence[str]], layouts: Layouts,
               tenths: Tenths | None = None) -> list[Shape | None]:
     """The Shape of each of `parts` as render/svg.py's face_parts drew it (the texts of its element
     and of the definitions, clip paths, it refers to; coordinates in tenths of a pixel). None for
     a part holding an element or attribute this does not read (a transform, an arc, a rect, ...).
-    The numbers of all parts of one skeleton are read in one go (_numbers) and mapped to their
-    points by the skeleton's _layout; `layouts` caches _layout by skeleton. `tenths`
-    (render/pathdata.py's Tenths): the numbers of some of the path data as drawn, taken rather
-    than read again."""
+    shapes_from of read_parts: `layouts` caches _layout by skeleton; `tenths` (render/pathdata.py's
+    Tenths): the numbers of some of the path data as drawn, taken rather than read again."""
+    return shapes_from(read_parts(parts, layouts, tenths), range(len(parts)))
+
+
+def read_parts(parts: Sequence[Sequence[str]], layouts: Layouts, tenths: Tenths | None = None,
+               formed: Sequence[Formed | None] | None = None) -> Readings:
+    """The Readings of `parts` (each the texts of its element and of its definitions): each part's
+    skeleton (its texts with the numbers of its geometry values taken out), the numbers of all parts
+    of one skeleton read in one go (_numbers) as the skeleton's _layout reads them (`layouts`
+    caches it by skeleton). `tenths` (render/pathdata.py's Tenths): the numbers of some of the path
+    data as drawn, taken rather than read again. `formed`: per part, the Form and slots it was drawn
+    from (render/compact.py's Formed) or None: the geometry values of a part with one are its slots
+    as its Form places them (_recipe), not cut out of its text (the same values: checked on the
+    first part of each Form)."""
     members: dict[str, list[tuple[int, list[str]]]] = {}  # by skeleton: (part's index, its geometry values)
+    recipes: dict[Form, _Recipe | None] = {}
     for index, texts in enumerate(parts):
-        pieces = _GEOMETRY.split("".join(texts))
-        names, values = pieces[1::3], pieces[2::3]
-        stripped = "\x01".join(values).translate(_NUMBER_CHARACTERS)
-        rest = "\x02".join(pieces[0::3])
-        skeleton = f"{rest}\x03{'|'.join(names)}\x03{stripped}"
+        known = formed[index] if formed is not None else None
+        recipe = None
+        if known is not None:
+            recipe = recipes[known[0]] if known[0] in recipes else recipes.setdefault(known[0], _recipe(*known, texts))
+        if recipe is None or known is None:
+            names, values, rest = _pieces(texts)
+        else:
+            rest, names, sources = recipe
+            values = [known[1][slot] if slot >= 0 else text for slot, text in sources]
+        skeleton = f"{rest}\x03{'|'.join(names)}\x03{_stripped(values)}"
         if skeleton not in layouts:
             layouts[skeleton] = _layout(names, values, rest)
         members.setdefault(skeleton, []).append((index, values))
-    shapes: list[Shape | None] = [None] * len(parts)
+    readings = Readings([], [], [], [], np.full(len(parts), -1, dtype=np.int32), np.zeros(len(parts), dtype=np.int32))
     for skeleton, group in members.items():
         layout = layouts[skeleton]
         if layout is None:
             continue
-        numbers = _numbers([values for _, values in group], layout, tenths or {})
-        points = (numbers[:, layout.firsts] + layout.weights * numbers[:, layout.seconds]).reshape(len(group), -1, 2)
-        widest = max(map(float, _STROKE.findall(skeleton.partition("\x03")[0])), default=0.0)
-        for (index, _), own in zip(group, points, strict=True):
-            shapes[index] = Shape(skeleton, own, widest)
+        indices = [index for index, _ in group]
+        readings.skeleton[indices] = len(readings.skeletons)
+        readings.row[indices] = np.arange(len(group), dtype=np.int32)
+        readings.skeletons.append(skeleton)
+        readings.layouts.append(layout)
+        readings.strokes.append(max(map(float, _STROKE.findall(skeleton.partition("\x03")[0])), default=0.0))
+        readings.numbers.append(_numbers([values for _, values in group], layout, tenths or {}))
+    return readings
+
+
+def _pieces(texts: Sequence[str]) -> tuple[list[str], list[str], str]:
+    """The names and values of the geometry attributes (_GEOMETRY) of a part's `texts`, in order,
+    and the text around them ("\x02" between the pieces)."""
+    pieces = _GEOMETRY.split("".join(texts))
+    return pieces[1::3], pieces[2::3], "\x02".join(pieces[0::3])
+
+
+def _stripped(values: Sequence[str]) -> str:
+    """Geometry `values` with their numbers' digits and points taken out ("\x01" between them)."""
+    return "\x01".join(values).encode().translate(None, _NUMBER_CHARACTERS).decode()
+
+
+# How the parts of one Form make their geometry values (read_parts): the text around them and
+# their names (_pieces', the same for every part of the Form), and where each value comes from:
+# (slot, "") or (-1, the value itself).
+_Recipe = tuple[str, list[str], list[tuple[int, str]]]
+# A geometry value of a Form's skeleton (compact._skeleton's): a path data's token "@k@" (the
+# Form's k-th path slot), a position's or size's placeholder (SENTINEL + j: its j-th field).
+_PLACEHOLDER = re.compile(rf"@(\d+)@|{str(SENTINEL)[:-3]}(\d{{3}})")
+
+
+def _recipe(form: Form, slots: Sequence[str], texts: Sequence[str]) -> _Recipe | None:
+    """The _Recipe of the parts of `form`, found in its skeleton and checked on one of them (its
+    `slots` and `texts`); None when a slot fills something else than a geometry value (the text
+    around them would change) or the part's values are not those its slots make."""
+    names, values, rest = _pieces(texts)
+    pieces = _GEOMETRY.split(form.skeleton)
+    sources: list[tuple[int, str]] = []
+    placed = set()  # the Form's fields placed in geometry values
+    for value in pieces[2::3]:
+        match = _PLACEHOLDER.fullmatch(value)
+        if match is None:
+            sources.append((-1, value))  # kept in the skeleton: the same in every part
+        elif match.group(1) is not None:
+            sources.append((form.paths[int(match.group(1))], ""))
+        else:
+            placed.add(field := int(match.group(2)))
+            sources.append(form.fields[field][:2])
+    if (pieces[1::3] != names or any(slot >= 0 for field, (slot, _, _) in enumerate(form.fields) if field not in placed)
+            or [slots[slot] if slot >= 0 else text for slot, text in sources] != values):
+        return None
+    return rest, names, sources
+
+
+def shapes_from(readings: Readings, indices: Iterable[int]) -> list[Shape | None]:
+    """The Shape (None: not read) of each of the parts `indices` of `readings`: the points of all
+    of one skeleton made in one go by its _layout, point = numbers[firsts] + weights * numbers[seconds]."""
+    wanted = np.fromiter(indices, dtype=np.intp)
+    skeletons = readings.skeleton[wanted]
+    shapes: list[Shape | None] = [None] * len(wanted)
+    order = np.argsort(skeletons, kind="stable")  # the parts of one skeleton together
+    for places in np.split(order, np.flatnonzero(np.diff(skeletons[order])) + 1) if len(order) else ():
+        number = int(skeletons[places[0]])
+        if number < 0:
+            continue
+        layout = readings.layouts[number]
+        numbers = readings.numbers[number][readings.row[wanted[places]]]
+        points = (numbers[:, layout.firsts] + layout.weights * numbers[:, layout.seconds]).reshape(len(places), -1, 2)
+        made = map(Shape, repeat(readings.skeletons[number]), points, repeat(readings.strokes[number]))
+        for place, shape in zip(places.tolist(), made, strict=True):
+            shapes[place] = shape
     return shapes
 
 
@@ -217,13 +324,24 @@ def _read(texts: Sequence[str], count: int) -> np.ndarray:
     return np.array(" ".join(texts).translate(_LETTERS_TO_SPACES).split(), dtype=float).reshape(len(texts), count)
 
 
-def joined(shapes: Sequence[Shape | None]) -> Shape | None:
-    """The Shape of a drawing made of parts of `shapes` (None if any is)."""
-    present = [shape for shape in shapes if shape is not None]
-    if len(present) < len(shapes):
-        return None
-    return Shape("|".join([shape.skeleton for shape in present]), np.concatenate([shape.points for shape in present]),
-                 max([shape.stroke for shape in present], default=0.0))
+def joined(drawings: Sequence[Sequence[Shape | None]]) -> list[Shape | None]:
+    """The Shape of each of `drawings` made of its parts' Shapes (None if any is): their skeletons
+    joined, their points one after another, the widest stroke. The points of the drawings whose
+    parts have one skeleton each are put together in one go (parts of one skeleton have one number
+    of points, shapes_of's)."""
+    groups: dict[tuple[str, ...], list[tuple[int, list[Shape]]]] = {}  # by the parts' skeletons: the drawings
+    for index, shapes in enumerate(drawings):
+        present = [shape for shape in shapes if shape is not None]
+        if len(present) == len(shapes):
+            groups.setdefault(tuple([shape.skeleton for shape in present]), []).append((index, present))
+    joined_shapes: list[Shape | None] = [None] * len(drawings)
+    for skeletons, members in groups.items():
+        skeleton = "|".join(skeletons)
+        points = np.concatenate([_stacked([present[part].points for _, present in members]) for part in range(len(skeletons))],
+                                axis=1)  # (D, N, 2)
+        for (index, present), own in zip(members, points, strict=True):
+            joined_shapes[index] = Shape(skeleton, own, max([shape.stroke for shape in present], default=0.0))
+    return joined_shapes
 
 
 def _inverses(points: np.ndarray) -> np.ndarray:
