@@ -251,7 +251,7 @@ def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple
     matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
     matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
     matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
-    single = np.max(_distances(sources, matrices.astype(np.float32), targets), axis=1)
+    single = _largest_single(sources, matrices, targets)
     return matrices, _scale_change(matrices[:, :, :2]), single
 
 
@@ -259,26 +259,49 @@ def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
     """How far (M,) px fit's largest distance in single precision may be from the one in double
     precision, for `matrices` (M, 2, 3) and single precision points within `largest` px of 0: each
     of the eight roundings of a x + c y + e - t along an axis (a, c, e to single, two products, two
-    sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own
-    within 2^-24 of the two axes' sum: the distance within 9 * 2^-24 of that sum, 2^-19 over three
-    times it."""
+    sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own (the
+    two squares, their sum, its square root: _largest_single) within 2.5 * 2^-24 of the two axes'
+    sum: the distance within 10.5 * 2^-24 of that sum, 2^-19 over three times it."""
     return 2.0 ** -19 * (np.sum(np.abs(matrices[:, :, :2]), axis=(1, 2)) * largest
                          + np.sum(np.abs(matrices[:, :, 2]), axis=1) + 2 * largest + 1)
 
 
-def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Sequence[int]
+class _Stacks(NamedTuple):
+    """The points of D shapes stacked by point count N (_stacks): `points` by N, (K, N, 2) px of the
+    K shapes of N points; `counts` (D,), each shape's N, and `rows` (D,), its row in that stack;
+    `strokes` (D,) px, each shape's widest stroke."""
+
+    points: dict[int, np.ndarray]
+    counts: np.ndarray
+    rows: np.ndarray
+    strokes: np.ndarray
+
+
+def _stacks(group: Sequence[Shape]) -> _Stacks:
+    """The points of `group` stacked by point count: each shape's array copied once, the pairs' points
+    then gathered from them (_pair_points)."""
+    counts = np.array([len(shape.points) for shape in group], dtype=int)
+    rows = np.empty(len(group), dtype=int)
+    points = {}
+    for count in np.unique(counts).tolist():
+        members = np.flatnonzero(counts == count)
+        rows[members] = np.arange(len(members))
+        points[count] = _stacked([group[index].points for index in members.tolist()])
+    return _Stacks(points, counts, rows, np.array([shape.stroke for shape in group]))
+
+
+def _pair_points(stacks: _Stacks, sources: np.ndarray, targets: np.ndarray
                  ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """The pairs of `shapes` (indices `sources`, `targets`, of one point count each: one skeleton)
-    grouped by point count N, at most PAIR_POINTS points at a time: the pairs' positions (M,) in
-    `sources`, the sources' points and the targets' (M, N, 2)."""
-    counts = np.array([len(shapes[target].points) for target in targets], dtype=int)
+    """The pairs of the shapes of `stacks` (indices `sources`, `targets` (M,), of one point count each:
+    one skeleton) grouped by point count N, at most PAIR_POINTS points at a time: the pairs'
+    positions (M,) in `sources`, the sources' points and the targets' (M, N, 2)."""
+    counts = stacks.counts[targets]
     for count in np.unique(counts).tolist():
         chosen = np.flatnonzero(counts == count)
         step = max(1, PAIR_POINTS // count)
         for start in range(0, len(chosen), step):
             rows = chosen[start:start + step]
-            yield rows, _stacked([shapes[sources[row]].points for row in rows.tolist()]), _stacked(
-                [shapes[targets[row]].points for row in rows.tolist()])
+            yield rows, stacks.points[count][stacks.rows[sources[rows]]], stacks.points[count][stacks.rows[targets[rows]]]
 
 
 def _stacked(points: Sequence[np.ndarray]) -> np.ndarray:
@@ -287,25 +310,69 @@ def _stacked(points: Sequence[np.ndarray]) -> np.ndarray:
     return np.concatenate(points).reshape(len(points), *points[0].shape)
 
 
-def _errors(group: Sequence[Shape], sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
+def _errors(stacks: _Stacks, sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
             scales: np.ndarray) -> np.ndarray:
-    """For pairs of shapes of `group` (indices `sources`, `targets` (M,), of one point count each:
+    """For pairs of the shapes of `stacks` (indices `sources`, `targets` (M,), of one point count each:
     one skeleton), the largest distance (px) of the source's points mapped by `matrices` (M, 2, 3)
     from the target's, plus half the wider stroke times `scales` (M,), the matrix's largest change
     of scale: within it, every edge of the transformed drawing lies near the target's. (M,) px;
     the pairs computed together (_pair_points)."""
     largest = np.empty(len(sources))
-    for rows, source_points, target_points in _pair_points(group, sources.tolist(), targets.tolist()):
-        largest[rows] = np.max(_distances(source_points, matrices[rows], target_points), axis=1)
-    strokes = np.array([shape.stroke for shape in group])
+    for rows, source_points, target_points in _pair_points(stacks, sources, targets):
+        largest[rows] = _largest(source_points, matrices[rows], target_points)
+    strokes = stacks.strokes
     return largest + scales * np.maximum(strokes[sources], strokes[targets]) / 2
 
 
-def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """The distances (M, N) px of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from `targets` (M, N, 2)."""
+def _offsets(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The offsets along x and along y, (M, N) each, of `sources` (M, N, 2) mapped by `matrices`
+    (M, 2, 3) from `targets` (M, N, 2): a x + c y + e - t, summed in that order in the arguments'
+    precision (in place: two arrays made, not eight)."""
     x, y = sources[..., 0], sources[..., 1]
-    a, c, e, b, d, f = (matrices[:, row, column, None] for row in (0, 1) for column in (0, 1, 2))
-    return np.hypot(a * x + c * y + e - targets[..., 0], b * x + d * y + f - targets[..., 1])
+    product = np.empty(x.shape, dtype=np.result_type(sources, matrices))
+    offsets = []
+    for row in (0, 1):
+        offset = x * matrices[:, row, 0, None]
+        offset += np.multiply(y, matrices[:, row, 1, None], out=product)
+        offset += matrices[:, row, 2, None]
+        offset -= targets[..., row]
+        offsets.append(offset)
+    return offsets[0], offsets[1]
+
+
+def _row_maxima(values: np.ndarray) -> np.ndarray:
+    """The largest (M,) of each row of `values` (M, N): by columns when the rows are short (a
+    reduction along a row of a few dozen costs as much as copying it)."""
+    return values.max(axis=1) if values.shape[1] > 64 else np.ascontiguousarray(values.T).max(axis=0)
+
+
+def _largest(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The largest distance (M,) px of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from
+    `targets` (M, N, 2), the hypotenuse of the _offsets: np.max(np.hypot(x, y), axis=1) to the bit,
+    with np.hypot computed only where the squared distance is within 2^-40 of its largest. A point
+    whose hypotenuse is the largest is one of them: np.hypot is within an ulp (2^-52) of the
+    distance r, the square sum x^2 + y^2 within 2^-52 of r^2 (plus 3 * 2^-1075 when a square is
+    subnormal, nothing to a largest of 2^-900 or more: below, every point is taken), so a hypotenuse
+    at least the largest square sum's point's has a square sum within 2^-47 of the largest."""
+    x, y = _offsets(sources, matrices, targets)
+    squares = x * x
+    squares += y * y
+    top = _row_maxima(squares)
+    pairs, points = np.nonzero(squares >= np.where(top >= 2.0 ** -900, top * (1 - 2.0 ** -40), -1.0)[:, None])
+    largest = np.full(len(top), -np.inf)
+    np.maximum.at(largest, pairs, np.hypot(x[pairs, points], y[pairs, points]))
+    return largest
+
+
+def _largest_single(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """_largest's distances (M,) for `sources`, `targets` (M, N, 2) in single precision, `matrices`
+    (M, 2, 3) made single, as the square root of the largest square sum (within _single_slack of
+    _largest's in double precision)."""
+    x, y = _offsets(sources, matrices.astype(np.float32), targets)
+    x *= x
+    y *= y
+    x += y
+    return np.sqrt(_row_maxima(x))
 
 
 def matrix_text(matrix: np.ndarray) -> str:
@@ -327,10 +394,10 @@ def _fixed(units: int, decimals: int) -> str:
     return f"{sign}{whole or ''}.{fraction:0{decimals}d}".rstrip("0")
 
 
-def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndarray, float]],
+def _shortened(stacks: _Stacks, chosen: Sequence[tuple[int, int, np.ndarray, float]],
                tolerance: float) -> list[tuple[str, float]]:
     """The matrix text and error (px, as _errors') of each of `chosen` (a target's and a source's
-    index into `shapes`, their fitted matrix (2, 3) and its error) in the first of FORMS within
+    index into the shapes of `stacks`, their fitted matrix (2, 3) and its error) in the first of FORMS within
     `tolerance`: a..d the fitted ones rounded to its decimals, e and f the middle of the spread of
     the target's points less the source's transformed, rounded to its decimals; the fitted matrix
     where none is (its e and f were fitted on the mean, not the middle). The pairs are checked
@@ -339,9 +406,9 @@ def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndar
         return []
     matrices = np.stack([matrix for _, _, matrix, _ in chosen])  # (P, 2, 3), replaced by the forms that fit
     errors = np.array([error for _, _, _, error in chosen])
-    halves = np.array([max(shapes[target].stroke, shapes[source].stroke) for target, source, _, _ in chosen]) / 2
-    for rows, sources, targets in _pair_points(shapes, [source for _, source, _, _ in chosen],
-                                               [target for target, _, _, _ in chosen]):
+    targets_chosen, sources_chosen = (np.array(indices) for indices in zip(*[(target, source) for target, source, _, _ in chosen]))
+    halves = np.maximum(stacks.strokes[targets_chosen], stacks.strokes[sources_chosen]) / 2
+    for rows, sources, targets in _pair_points(stacks, sources_chosen, targets_chosen):
         # x and y apart: reduced along the points, contiguous (reducing (M, N, 2) along N or 2 is slow)
         (source_x, source_y), (target_x, target_y) = (np.moveaxis(points, 2, 0).copy() for points in (sources, targets))
         left = np.arange(len(rows))  # the chunk's pairs no form fits yet
@@ -387,16 +454,13 @@ def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.nd
     return np.concatenate(later), np.concatenate(earlier), np.concatenate(lags)
 
 
-def _samples(group: Sequence[Shape]) -> np.ndarray:
-    """FIT_POINTS points (F, 2) of each of `group`, spread over its points: (D, F, 2), single
-    precision (1e-4 px)."""
-    by_count: dict[int, list[int]] = {}  # the shapes of N points
-    for index, shape in enumerate(group):
-        by_count.setdefault(len(shape.points), []).append(index)
-    samples = np.empty((len(group), FIT_POINTS, 2), dtype=np.float32)
-    for count, indices in by_count.items():
+def _samples(stacks: _Stacks) -> np.ndarray:
+    """FIT_POINTS points (F, 2) of each of the shapes of `stacks`, spread over its points: (D, F, 2),
+    single precision (1e-4 px)."""
+    samples = np.empty((len(stacks.counts), FIT_POINTS, 2), dtype=np.float32)
+    for count, points in stacks.points.items():
         spread = np.linspace(0, count - 1, FIT_POINTS).round().astype(int)  # FIT_POINTS of the N points
-        samples[indices] = _stacked([group[index].points for index in indices])[:, spread]
+        samples[stacks.counts == count] = points[:, spread]
     return samples
 
 
@@ -412,12 +476,13 @@ def _choose(shapes: Sequence[Shape | None],
     group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
     if len(group) < 2:
         return {}
-    samples = _samples(group)
+    stacks = _stacks(group)
+    samples = _samples(stacks)
     inverses = _inverses(samples)
     later, earlier, ranks = pairs(group, samples, inverses)
     if not len(later):
         return {}
-    strokes = np.array([shape.stroke for shape in group])
+    strokes = stacks.strokes
     # fitted FIT_PAIRS pairs at a time: all at once, a 30-minute recording's temporaries took ~1 GB
     fits = [fit(samples[earlier[start:start + FIT_PAIRS]], inverses[earlier[start:start + FIT_PAIRS]],
                 samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
@@ -428,11 +493,10 @@ def _choose(shapes: Sequence[Shape | None],
     slack = _single_slack(matrices, float(np.max(np.abs(samples))))
     near = widened + single <= tolerance - slack
     unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
-    near[unsure] = widened[unsure] + np.max(_distances(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]),
-                                            axis=1) <= tolerance
+    near[unsure] = widened[unsure] + _largest(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]) <= tolerance
     near = np.flatnonzero(near)
     near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
-    errors = _errors(group, earlier[near], matrices[near], later[near], scales[near]).tolist()
+    errors = _errors(stacks, earlier[near], matrices[near], later[near], scales[near]).tolist()
     written = np.ones(len(group), dtype=bool)
     chosen: list[tuple[int, int, np.ndarray, float]] = []
     for pair, within in zip(near.tolist(), errors, strict=True):
@@ -441,7 +505,7 @@ def _choose(shapes: Sequence[Shape | None],
             chosen.append((target, source, matrices[pair], within))
             written[target] = False
     return {numbers[target]: Reuse(numbers[source], text, error)
-            for (target, source, _, _), (text, error) in zip(chosen, _shortened(group, chosen, tolerance), strict=True)}
+            for (target, source, _, _), (text, error) in zip(chosen, _shortened(stacks, chosen, tolerance), strict=True)}
 
 
 def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
