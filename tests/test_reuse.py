@@ -20,8 +20,8 @@ from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
 from cartoonface.render.pathdata import packed, unpacked
-from cartoonface.render.reuse import (CANDIDATES, TOLERANCE, Shape, _largest, _largest_single, _single_slack, find,
-                                      find_alike, shapes_of)
+from cartoonface.render.reuse import (CANDIDATES, FIT_POINTS, TOLERANCE, Shape, _inverses, _largest, _largest_single,
+                                      _near, _scale_change, _single_slack, find, find_alike, fit, shapes_of)
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.stills import frozen
 
@@ -171,7 +171,7 @@ def test_the_fit_measured_in_single_precision_is_within_its_slack_of_double_prec
     targets = (np.einsum("mij,mnj->mni", matrices[:, :, :2], sources) + matrices[:, None, :, 2]
                + rng.normal(0, 0.3, (count, 24, 2))).astype(np.float32)
     double = _largest(sources, matrices, targets)
-    single = _largest_single(sources, matrices, targets)
+    single = _largest_single(np.transpose(sources, (2, 1, 0)), matrices, np.transpose(targets, (2, 1, 0)))
     largest = float(max(np.abs(sources).max(), np.abs(targets).max()))
     assert np.all(np.abs(single - double) <= _single_slack(matrices, largest))
     assert np.any(single != double), "single precision differs, within the slack"
@@ -205,6 +205,30 @@ def test_the_largest_distance_is_np_hypots_to_the_bit_with_ties_near_ties_and_ti
     identity = np.broadcast_to(np.eye(2, 3), (count, 2, 3))
     assert _largest(np.zeros_like(offsets), identity, -offsets).tobytes() == hypotenuses(
         np.zeros_like(offsets), identity, -offsets).tobytes()
+
+
+def test_the_near_pairs_are_those_within_the_tolerance_on_every_sample_in_double_precision():
+    """reuse._near measures in single precision, on a few samples first, in double precision only
+    near the tolerance: the pairs it finds are those within it (widened by the strokes) measured on
+    every sample in double precision, for pairs on both sides of it and near it."""
+    rng = np.random.default_rng(5)
+    count = 4000
+    earlier_points = rng.uniform(-200, 900, (count, FIT_POINTS, 2))
+    linear = np.eye(2) + rng.normal(0, 0.002, (count, 2, 2))
+    noise = rng.normal(0, 1, earlier_points.shape) * rng.uniform(0, 0.3, (count, 1, 1))
+    later_points = np.einsum("mij,mnj->mni", linear, earlier_points) + rng.uniform(-3, 3, (count, 1, 2)) + noise
+    samples = np.concatenate([earlier_points, later_points]).astype(np.float32)
+    earlier, later = np.arange(count), np.arange(count) + count
+    matrices = fit(_inverses(samples)[earlier], samples[later])
+    strokes = rng.choice([0.0, 1.0, 3.0], 2 * count)
+    near, scales = _near(samples, np.ascontiguousarray(samples.transpose(2, 1, 0)), matrices, earlier, later, strokes,
+                         float(np.max(np.abs(samples))), TOLERANCE)
+    every_scale = _scale_change(matrices[:, :, :2])
+    within = every_scale * np.maximum(strokes[earlier], strokes[later]) / 2 + hypotenuses(
+        samples[earlier].astype(float), matrices, samples[later].astype(float))
+    assert near.tolist() == np.flatnonzero(within <= TOLERANCE).tolist()
+    assert scales.tobytes() == every_scale[near].tobytes()
+    assert count / 10 < len(near) < count * 9 / 10 and np.sum(np.abs(within - TOLERANCE) < 0.01) > 10
 
 
 def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_reference_resolves(documents):

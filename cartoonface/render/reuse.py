@@ -67,6 +67,10 @@ PAIR_POINTS = 1 << 18  # points of the pairs _pair_points stacks at a time (~4 M
 # error is measured on them and, for a pair within the tolerance there, on all the points.
 FIT_POINTS = 24
 FIT_PAIRS = 8192  # candidate pairs fitted together (_choose): ~3 KB of temporaries each
+# The pairs are first measured on COARSE of the samples, evenly spaced: most are far from the
+# tolerance on them already (19 in 20 of the face track's drawings), and only the others are measured
+# on all.
+COARSE = 4
 # A part reused on its own (find_alike: the mouth, whose mix changes in every drawing of the face
 # track) is compared with the ALIKE earlier parts of its skeleton nearest in shape, from all of
 # them; the nearness of ROWS parts to all earlier ones is computed at a time (ROWS x parts floats).
@@ -243,27 +247,51 @@ def _scale_change(linear: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(np.sqrt((squares + root) / 2) - 1), np.abs(np.sqrt(np.maximum(squares - root, 0) / 2) - 1))
 
 
-def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The least-squares affines (M, 2, 3) mapping each of `sources` (M, F, 2; `inverses` their
-    _inverses) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS); the
-    largest change of scale of each (M,); and the largest distance (M,) px of a mapped source point
-    from its target, in single precision (within _single_slack of the one in double precision)."""
-    matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
-    matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
-    matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
-    single = _largest_single(sources, matrices, targets)
-    return matrices, _scale_change(matrices[:, :, :2]), single
+def fit(inverses: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The least-squares affines (M, 2, 3) mapping the samples whose _inverses are `inverses`
+    (M, 3, F) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS)."""
+    transposed = inverses @ targets  # (M, 3, 2): [[a b], [c d], [e f]]
+    transposed[:, :2] = np.round(transposed[:, :2], LINEAR_DECIMALS)
+    transposed[:, 2] = np.round(transposed[:, 2], SHIFT_DECIMALS)
+    return np.transpose(transposed, (0, 2, 1))
+
+
+def _near(samples: np.ndarray, columns: np.ndarray, matrices: np.ndarray, earlier: np.ndarray, later: np.ndarray,
+          strokes: np.ndarray, largest: float, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Of pairs of samples (`earlier` and `later` (M,) index `samples` (D, F, 2), and `columns`, the
+    same as (2, F, D), within `largest` px of 0), those whose `matrices` (M, 2, 3) put every sample of the earlier within
+    `tolerance` px of the later's once widened by half the wider of their `strokes` (D,) times the
+    matrix's largest change of scale: their positions (P,) and changes of scale (P,). Measured in single
+    precision, on COARSE samples first (a pair farther there than the tolerance and the slack is
+    farther on all), in double precision where single precision cannot tell: the same pairs as
+    measured in double precision throughout."""
+    slack = _single_slack(matrices, largest)
+    coarse = columns[:, ::FIT_POINTS // COARSE]
+    # np.take: the pairs last in memory too (an index gives them first, and the points' rows strided)
+    maybe = np.flatnonzero(_largest_single(np.take(coarse, earlier, axis=2), matrices, np.take(coarse, later, axis=2))
+                           - tolerance <= slack)
+    sources, targets, slack = earlier[maybe], later[maybe], slack[maybe]
+    single = _largest_single(np.take(columns, sources, axis=2), matrices[maybe], np.take(columns, targets, axis=2))
+    scales = _scale_change(matrices[maybe, :, :2])
+    widened = scales * np.maximum(strokes[sources], strokes[targets]) / 2
+    near = widened + single <= tolerance - slack
+    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
+    near[unsure] = widened[unsure] + _largest(samples[sources[unsure]], matrices[maybe[unsure]],
+                                              samples[targets[unsure]]) <= tolerance
+    return maybe[near], scales[near]
 
 
 def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
     """How far (M,) px fit's largest distance in single precision may be from the one in double
-    precision, for `matrices` (M, 2, 3) and single precision points within `largest` px of 0: each
+    precision (_largest_single, _largest), for `matrices` (M, 2, 3) and single precision points
+    within `largest` px of 0: each
     of the eight roundings of a x + c y + e - t along an axis (a, c, e to single, two products, two
     sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own (the
     two squares, their sum, its square root: _largest_single) within 2.5 * 2^-24 of the two axes'
     sum: the distance within 10.5 * 2^-24 of that sum, 2^-19 over three times it."""
-    return 2.0 ** -19 * (np.sum(np.abs(matrices[:, :, :2]), axis=(1, 2)) * largest
-                         + np.sum(np.abs(matrices[:, :, 2]), axis=1) + 2 * largest + 1)
+    magnitudes = np.abs(matrices)  # summed by columns (a reduction along 4 numbers costs as much as 4 sums)
+    linear = magnitudes[:, 0, 0] + magnitudes[:, 0, 1] + magnitudes[:, 1, 0] + magnitudes[:, 1, 1]
+    return 2.0 ** -19 * (linear * largest + magnitudes[:, 0, 2] + magnitudes[:, 1, 2] + 2 * largest + 1)
 
 
 class _Stacks(NamedTuple):
@@ -325,17 +353,16 @@ def _errors(stacks: _Stacks, sources: np.ndarray, matrices: np.ndarray, targets:
 
 
 def _offsets(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The offsets along x and along y, (M, N) each, of `sources` (M, N, 2) mapped by `matrices`
-    (M, 2, 3) from `targets` (M, N, 2): a x + c y + e - t, summed in that order in the arguments'
-    precision (in place: two arrays made, not eight)."""
-    x, y = sources[..., 0], sources[..., 1]
-    product = np.empty(x.shape, dtype=np.result_type(sources, matrices))
+    """The offsets along x and along y of points `sources` mapped by `matrices` from `targets` (x and
+    y first: (2, ...) each), the matrices' numbers (2, 3, ...) broadcast against them: a x + c y + e - t,
+    summed in that order in the arguments' precision (in place: two arrays made, not eight)."""
+    product = np.empty(np.broadcast_shapes(sources.shape[1:], matrices.shape[2:]), dtype=np.result_type(sources, matrices))
     offsets = []
     for row in (0, 1):
-        offset = x * matrices[:, row, 0, None]
-        offset += np.multiply(y, matrices[:, row, 1, None], out=product)
-        offset += matrices[:, row, 2, None]
-        offset -= targets[..., row]
+        offset = sources[0] * matrices[row, 0]
+        offset += np.multiply(sources[1], matrices[row, 1], out=product)
+        offset += matrices[row, 2]
+        offset -= targets[row]
         offsets.append(offset)
     return offsets[0], offsets[1]
 
@@ -354,7 +381,7 @@ def _largest(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> 
     distance r, the square sum x^2 + y^2 within 2^-52 of r^2 (plus 3 * 2^-1075 when a square is
     subnormal, nothing to a largest of 2^-900 or more: below, every point is taken), so a hypotenuse
     at least the largest square sum's point's has a square sum within 2^-47 of the largest."""
-    x, y = _offsets(sources, matrices, targets)
+    x, y = _offsets(np.moveaxis(sources, 2, 0), np.moveaxis(matrices, 0, 2)[..., None], np.moveaxis(targets, 2, 0))
     squares = x * x
     squares += y * y
     top = _row_maxima(squares)
@@ -365,22 +392,26 @@ def _largest(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> 
 
 
 def _largest_single(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """_largest's distances (M,) for `sources`, `targets` (M, N, 2) in single precision, `matrices`
-    (M, 2, 3) made single, as the square root of the largest square sum (within _single_slack of
-    _largest's in double precision)."""
-    x, y = _offsets(sources, matrices.astype(np.float32), targets)
+    """_largest's distances (M,) in single precision, for `sources` and `targets` (2, N, M) (x and y,
+    point by point: a reduction over the points is then one pass of elementwise maxima) and
+    `matrices` (M, 2, 3) made single: the square root of the largest square sum (within
+    _single_slack of _largest's in double precision)."""
+    x, y = _offsets(sources, np.moveaxis(matrices.astype(np.float32), 0, 2), targets)
     x *= x
     y *= y
     x += y
-    return np.sqrt(_row_maxima(x))
+    return np.sqrt(x.max(axis=0))
 
 
-def matrix_text(matrix: np.ndarray) -> str:
-    """`matrix` (2, 3), rounded as fit rounds it, as the numbers of SVG's matrix(a b c d e f), short:
-    "1 .0012 -.0012 1 .3 -1.2"."""
-    (a, c, e), (b, d, f) = matrix.tolist()
-    return " ".join([*(_fixed(round(v * 10 ** LINEAR_DECIMALS), LINEAR_DECIMALS) for v in (a, b, c, d)),
-                     *(_fixed(round(v * 10 ** SHIFT_DECIMALS), SHIFT_DECIMALS) for v in (e, f))])
+def _matrix_texts(matrices: np.ndarray) -> list[str]:
+    """`matrices` (P, 2, 3), rounded as fit rounds them, as the numbers of SVG's matrix(a b c d e f),
+    short: "1 .0012 -.0012 1 .3 -1.2". Written once per distinct matrix (most are one of a few shifts)."""
+    # the numbers in units of their last decimal: np.rint rounds halves to even, as round() does
+    units = np.rint(matrices * [10.0 ** LINEAR_DECIMALS, 10.0 ** LINEAR_DECIMALS, 10.0 ** SHIFT_DECIMALS]).astype(np.int64)
+    texts: dict[tuple[int, ...], str] = {}
+    return [texts.get(key) or texts.setdefault(key, " ".join([*(_fixed(number, LINEAR_DECIMALS) for number in key[:4]),
+                                                             *(_fixed(number, SHIFT_DECIMALS) for number in key[4:])]))
+            for key in map(tuple, np.transpose(units, (0, 2, 1)).reshape(len(units), 6).tolist())]
 
 
 @functools.lru_cache(maxsize=4096)
@@ -394,45 +425,40 @@ def _fixed(units: int, decimals: int) -> str:
     return f"{sign}{whole or ''}.{fraction:0{decimals}d}".rstrip("0")
 
 
-def _shortened(stacks: _Stacks, chosen: Sequence[tuple[int, int, np.ndarray, float]],
-               tolerance: float) -> list[tuple[str, float]]:
-    """The matrix text and error (px, as _errors') of each of `chosen` (a target's and a source's
-    index into the shapes of `stacks`, their fitted matrix (2, 3) and its error) in the first of FORMS within
+def _shortened(stacks: _Stacks, targets: np.ndarray, sources: np.ndarray, matrices: np.ndarray, errors: np.ndarray,
+               tolerance: float) -> tuple[list[str], np.ndarray]:
+    """The matrix texts and errors (P,) px, as _errors', of pairs of the shapes of `stacks` (`targets`,
+    `sources` (P,), their fitted `matrices` (P, 2, 3) and its `errors` (P,)) in the first of FORMS within
     `tolerance`: a..d the fitted ones rounded to its decimals, e and f the middle of the spread of
     the target's points less the source's transformed, rounded to its decimals; the fitted matrix
     where none is (its e and f were fitted on the mean, not the middle). The pairs are checked
     together (_pair_points)."""
-    if not chosen:
-        return []
-    matrices = np.stack([matrix for _, _, matrix, _ in chosen])  # (P, 2, 3), replaced by the forms that fit
-    errors = np.array([error for _, _, _, error in chosen])
-    targets_chosen, sources_chosen = (np.array(indices) for indices in zip(*[(target, source) for target, source, _, _ in chosen]))
-    halves = np.maximum(stacks.strokes[targets_chosen], stacks.strokes[sources_chosen]) / 2
-    for rows, sources, targets in _pair_points(stacks, sources_chosen, targets_chosen):
-        # x and y apart: reduced along the points, contiguous (reducing (M, N, 2) along N or 2 is slow)
-        (source_x, source_y), (target_x, target_y) = (np.moveaxis(points, 2, 0).copy() for points in (sources, targets))
+    matrices, errors = matrices.copy(), errors.copy()  # replaced by the forms that fit
+    halves = np.maximum(stacks.strokes[targets], stacks.strokes[sources]) / 2
+    for rows, source_points, target_points in _pair_points(stacks, sources, targets):
+        # x and y apart, point by point (N, M): reduced along the points, contiguous
+        (source_x, source_y), (target_x, target_y) = (np.ascontiguousarray(np.transpose(points, (2, 1, 0)))
+                                                      for points in (source_points, target_points))
         left = np.arange(len(rows))  # the chunk's pairs no form fits yet
         for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
             if not len(left):
                 break
             if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
                 linear = np.round(matrices[rows[left], :, :2], linear_decimals)  # (M, 2, 2)
-                a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
-                x, y = source_x[left], source_y[left]
-                residual = (target_x[left] - (a * x + c * y), target_y[left] - (b * x + d * y))  # (M, N) each
-                middle = np.column_stack([(values.max(axis=1) + values.min(axis=1)) / 2 for values in residual])
+                a, c, b, d = (linear[:, i, j] for i in (0, 1) for j in (0, 1))
+                x, y = source_x[:, left], source_y[:, left]
+                residual = (target_x[:, left] - (a * x + c * y), target_y[:, left] - (b * x + d * y))  # (N, M) each
+                middle = np.column_stack([(values.max(axis=0) + values.min(axis=0)) / 2 for values in residual])
                 scale = _scale_change(linear) * halves[rows[left]]
             shift = np.round(middle, shift_decimals)
-            off_x, off_y = (values - shift[:, axis, None] for axis, values in enumerate(residual))
-            within = np.sqrt(np.max(off_x ** 2 + off_y ** 2, axis=1)) + scale
+            off_x, off_y = (values - shift[:, axis] for axis, values in enumerate(residual))
+            within = np.sqrt(np.max(off_x ** 2 + off_y ** 2, axis=0)) + scale
             fits = within <= tolerance
             matrices[rows[left[fits]]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
             errors[rows[left[fits]]] = within[fits]
             left, linear, middle, scale = (values[~fits] for values in (left, linear, middle, scale))
-            residual = (residual[0][~fits], residual[1][~fits])
-    texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
-    return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
-            for matrix, error in zip(matrices, errors.tolist(), strict=True)]
+            residual = (residual[0][:, ~fits], residual[1][:, ~fits])
+    return _matrix_texts(matrices), errors
 
 
 def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -482,30 +508,30 @@ def _choose(shapes: Sequence[Shape | None],
     later, earlier, ranks = pairs(group, samples, inverses)
     if not len(later):
         return {}
-    strokes = stacks.strokes
+    columns, largest = np.ascontiguousarray(samples.transpose(2, 1, 0)), float(np.max(np.abs(samples)))
     # fitted FIT_PAIRS pairs at a time: all at once, a 30-minute recording's temporaries took ~1 GB
-    fits = [fit(samples[earlier[start:start + FIT_PAIRS]], inverses[earlier[start:start + FIT_PAIRS]],
-                samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
-    matrices, scales, single = (np.concatenate(parts) for parts in zip(*fits, strict=True))
-    widened = scales * np.maximum(strokes[earlier], strokes[later]) / 2
-    # the pairs within the tolerance on the samples, measured in double precision where single
-    # precision cannot tell (the same pairs as measured in double precision throughout)
-    slack = _single_slack(matrices, float(np.max(np.abs(samples))))
-    near = widened + single <= tolerance - slack
-    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
-    near[unsure] = widened[unsure] + _largest(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]) <= tolerance
-    near = np.flatnonzero(near)
-    near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
-    errors = _errors(stacks, earlier[near], matrices[near], later[near], scales[near]).tolist()
-    written = np.ones(len(group), dtype=bool)
-    chosen: list[tuple[int, int, np.ndarray, float]] = []
-    for pair, within in zip(near.tolist(), errors, strict=True):
-        target, source = int(later[pair]), int(earlier[pair])
-        if written[target] and written[source] and within <= tolerance:
-            chosen.append((target, source, matrices[pair], within))
+    found = []  # (the near pairs' positions, their matrices and changes of scale) of each batch
+    for start in range(0, len(later), FIT_PAIRS):
+        sources, targets = earlier[start:start + FIT_PAIRS], later[start:start + FIT_PAIRS]
+        matrices = fit(inverses[sources], samples[targets])
+        near, scales = _near(samples, columns, matrices, sources, targets, stacks.strokes, largest, tolerance)
+        found.append((start + near, matrices[near], scales))
+    near, matrices, scales = (np.concatenate(parts) for parts in zip(*found, strict=True))
+    order = np.lexsort((ranks[near], later[near]))  # by drawing, the first candidate first
+    near, matrices, scales = near[order], matrices[order], scales[order]
+    errors = _errors(stacks, earlier[near], matrices, later[near], scales)
+    within = np.flatnonzero(errors <= tolerance)
+    written = [True] * len(group)
+    chosen = []  # positions in near
+    for position, target, source in zip(within.tolist(), later[near[within]].tolist(), earlier[near[within]].tolist(),
+                                        strict=True):
+        if written[target] and written[source]:
+            chosen.append(position)
             written[target] = False
+    targets, sources = later[near[chosen]], earlier[near[chosen]]
+    texts, errors = _shortened(stacks, targets, sources, matrices[chosen], errors[chosen], tolerance)
     return {numbers[target]: Reuse(numbers[source], text, error)
-            for (target, source, _, _), (text, error) in zip(chosen, _shortened(stacks, chosen, tolerance), strict=True)}
+            for target, source, text, error in zip(targets.tolist(), sources.tolist(), texts, errors.tolist(), strict=True)}
 
 
 def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
