@@ -446,8 +446,9 @@ def _shortened(stacks: _Stacks, targets: np.ndarray, sources: np.ndarray, matric
             if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
                 linear = np.round(matrices[rows[left], :, :2], linear_decimals)  # (M, 2, 2)
                 a, c, b, d = (linear[:, i, j] for i in (0, 1) for j in (0, 1))
-                x, y = source_x[:, left], source_y[:, left]
-                residual = (target_x[:, left] - (a * x + c * y), target_y[:, left] - (b * x + d * y))  # (N, M) each
+                x, y, to_x, to_y = (values if len(left) == len(rows) else values[:, left]  # all at first: not copied
+                                    for values in (source_x, source_y, target_x, target_y))
+                residual = (to_x - (a * x + c * y), to_y - (b * x + d * y))  # (N, M) each
                 middle = np.column_stack([(values.max(axis=0) + values.min(axis=0)) / 2 for values in residual])
                 scale = _scale_change(linear) * halves[rows[left]]
             shift = np.round(middle, shift_decimals)
@@ -464,17 +465,22 @@ def _shortened(stacks: _Stacks, targets: np.ndarray, sources: np.ndarray, matric
 def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every pair of a drawing and one of the last `candidates` drawings of its skeleton before it
     (`skeletons` in order): the later's and the earlier's index, and how many drawings of the
-    skeleton lie back from one to the other (1: the one just before)."""
+    skeleton lie back from one to the other (1: the one just before). By lag, all skeletons at once
+    (the order of the pairs is _choose's to make)."""
     groups: dict[str, list[int]] = {}
     for index, skeleton in enumerate(skeletons):
         groups.setdefault(skeleton, []).append(index)
+    ordered = np.array([index for members in groups.values() for index in members], dtype=int)  # by skeleton
+    sizes = np.array([len(members) for members in groups.values()], dtype=int)
+    places = np.arange(len(ordered)) - np.repeat(np.cumsum(sizes) - sizes, sizes)  # in its skeleton's drawings
     later, earlier, lags = [], [], []
-    for members in groups.values():
-        indices = np.array(members)
-        for lag in range(1, min(candidates, len(members) - 1) + 1):
-            later.append(indices[lag:])
-            earlier.append(indices[:-lag])
-            lags.append(np.full(len(members) - lag, lag))
+    for lag in range(1, candidates + 1):
+        positions = np.flatnonzero(places >= lag)
+        if not len(positions):
+            break
+        later.append(ordered[positions])
+        earlier.append(ordered[positions - lag])
+        lags.append(np.full(len(positions), lag))
     if not later:
         return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     return np.concatenate(later), np.concatenate(earlier), np.concatenate(lags)
