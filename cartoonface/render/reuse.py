@@ -259,12 +259,13 @@ def fit(inverses: np.ndarray, targets: np.ndarray) -> np.ndarray:
 def _near(samples: np.ndarray, columns: np.ndarray, matrices: np.ndarray, earlier: np.ndarray, later: np.ndarray,
           strokes: np.ndarray, largest: float, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
     """Of pairs of samples (`earlier` and `later` (M,) index `samples` (D, F, 2), and `columns`, the
-    same as (2, F, D), within `largest` px of 0), those whose `matrices` (M, 2, 3) put every sample of the earlier within
-    `tolerance` px of the later's once widened by half the wider of their `strokes` (D,) times the
-    matrix's largest change of scale: their positions (P,) and changes of scale (P,). Measured in single
-    precision, on COARSE samples first (a pair farther there than the tolerance and the slack is
-    farther on all), in double precision where single precision cannot tell: the same pairs as
-    measured in double precision throughout."""
+    same as (2, F, D), within `largest` px of 0), those whose `matrices` (M, 2, 3) put every sample
+    of the earlier within `tolerance` px of the later's once widened by half the wider of their
+    `strokes` (D,) times the matrix's largest change of scale: their positions (P,) and changes of
+    scale (P,). Measured in single precision, on COARSE samples first (a sample's distance is the
+    same number there: a pair farther there than the tolerance and the slack is farther on all), in
+    double precision where single precision cannot tell: the same pairs as measured in double
+    precision throughout."""
     slack = _single_slack(matrices, largest)
     coarse = columns[:, ::FIT_POINTS // COARSE]
     # np.take: the pairs last in memory too (an index gives them first, and the points' rows strided)
@@ -284,11 +285,12 @@ def _near(samples: np.ndarray, columns: np.ndarray, matrices: np.ndarray, earlie
 def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
     """How far (M,) px fit's largest distance in single precision may be from the one in double
     precision (_largest_single, _largest), for `matrices` (M, 2, 3) and single precision points
-    within `largest` px of 0: each
-    of the eight roundings of a x + c y + e - t along an axis (a, c, e to single, two products, two
-    sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own (the
-    two squares, their sum, its square root: _largest_single) within 2.5 * 2^-24 of the two axes'
-    sum: the distance within 10.5 * 2^-24 of that sum, 2^-19 over three times it."""
+    within `largest` px of 0: each of the eight roundings of a x + c y + e - t along an axis (a, c,
+    e to single, two products, two sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| +
+    |t|, and the distance's own (the two squares, their sum, its square root: _largest_single)
+    within 2.5 * 2^-24 of the two axes' sum: the distance within 10.5 * 2^-24 of that sum, 2^-19
+    over three times it. (The pairs found are those of double precision whatever the slack's last
+    bits: only a bound is needed.)"""
     magnitudes = np.abs(matrices)  # summed by columns (a reduction along 4 numbers costs as much as 4 sums)
     linear = magnitudes[:, 0, 0] + magnitudes[:, 0, 1] + magnitudes[:, 1, 0] + magnitudes[:, 1, 1]
     return 2.0 ** -19 * (linear * largest + magnitudes[:, 0, 2] + magnitudes[:, 1, 2] + 2 * largest + 1)
@@ -501,9 +503,9 @@ def _choose(shapes: Sequence[Shape | None],
             tolerance: float) -> dict[int, Reuse]:
     """The drawings of `shapes` (in order) shown as a transform of an earlier written one: `pairs`
     (of the shapes with 3 points or more, their _samples and the samples' _inverses) gives the candidate pairs, the later's
-    and the earlier's index and a rank (lower: tried first). All pairs are fitted at once on
-    the samples; for each drawing the first candidate by rank that is written (not itself reused)
-    and within `tolerance` px on all its points is taken."""
+    and the earlier's index and a rank (lower: tried first). The pairs are fitted together on the
+    samples and those near on them found (_near); for each drawing the first candidate by rank that
+    is written (not itself reused) and within `tolerance` px on all its points is taken."""
     numbers = [number for number, shape in enumerate(shapes) if shape is not None and len(shape.points) >= 3]
     group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
     if len(group) < 2:
@@ -550,13 +552,12 @@ def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
     return _choose(shapes, lambda group, samples, inverses: _pairs([shape.skeleton for shape in group], candidates), tolerance)
 
 
-def _normalised(samples: np.ndarray, inverses: np.ndarray) -> np.ndarray:
+def _normalised(samples: np.ndarray, inverses: np.ndarray, references: np.ndarray) -> np.ndarray:
     """`samples` (M, F, 2; `inverses` their _inverses) each moved by the least-squares affine onto
-    the first: (M, 2F). Shapes
-    one affine apart become equal (the fit of T(X) onto R is the fit of X composed with T's
-    inverse), so near ones here are near an affine of each other."""
+    its reference (M, F, 2): (M, 2F). Shapes one affine apart become equal (the fit of T(X) onto R
+    is the fit of X composed with T's inverse), so near ones here are near an affine of each other."""
     design = np.concatenate([samples, np.ones((*samples.shape[:2], 1), dtype=samples.dtype)], axis=2)
-    return (design @ (inverses @ samples[0])).reshape(len(samples), -1).astype(np.float32)
+    return (design @ (inverses @ references)).reshape(len(samples), -1).astype(np.float32)
 
 
 def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, candidates: int) -> tuple[np.ndarray, ...]:
@@ -567,15 +568,19 @@ def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, ca
     groups: dict[str, list[int]] = {}
     for index, shape in enumerate(group):
         groups.setdefault(shape.skeleton, []).append(index)
+    kept = [np.array(members) for members in groups.values() if len(members) >= 2]
+    if not kept:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    # all skeletons normalised at once, each shape onto the first of its skeleton (a few calls, not a few per skeleton)
+    sizes = [len(indices) for indices in kept]
+    everyone = np.concatenate(kept)
+    flats = _normalised(samples[everyone], inverses[everyone], samples[np.repeat([indices[0] for indices in kept], sizes)])
+    squares = np.sum(flats ** 2, axis=1)
     later, earlier, ranks = [], [], []
-    for members in groups.values():
-        if len(members) < 2:
-            continue
-        indices = np.array(members)
-        flat = _normalised(samples[indices], inverses[indices])
-        norms = np.sum(flat ** 2, axis=1)
-        for start in range(1, len(members), ROWS):
-            rows = np.arange(start, min(start + ROWS, len(members)))
+    for indices, end in zip(kept, np.cumsum(sizes).tolist(), strict=True):
+        flat, norms = flats[end - len(indices):end], squares[end - len(indices):end]
+        for start in range(1, len(indices), ROWS):
+            rows = np.arange(start, min(start + ROWS, len(indices)))
             distances = norms[rows, None] + norms[None, :rows[-1]] - 2 * flat[rows] @ flat[:rows[-1]].T  # (R, J)
             inside = distances[:, start:]  # the block's own columns: only the earlier ones count
             inside[np.arange(start, rows[-1])[None, :] >= rows[:, None]] = np.inf
@@ -586,8 +591,6 @@ def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, ca
             later.append(indices[np.broadcast_to(rows[:, None], nearest.shape)[valid]])
             earlier.append(indices[nearest[valid]])
             ranks.append(np.broadcast_to(np.arange(take), nearest.shape)[valid])
-    if not later:
-        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     return np.concatenate(later), np.concatenate(earlier), np.concatenate(ranks)
 
 
