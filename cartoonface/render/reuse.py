@@ -61,7 +61,7 @@ SHIFT_DECIMALS = 1
 # weight".
 FORMS = tuple((linear, shift) for linear in (0, 2, 3, LINEAR_DECIMALS) for shift in (0, SHIFT_DECIMALS))
 IDENTITY = "1 0 0 1 0 0"
-PAIR_POINTS = 1 << 18  # points of the pairs _pair_points stacks at a time (~4 MB an array)
+PAIR_POINTS = 1 << 15  # points of the pairs _pair_points gathers at a time (~0.5 MB an array: in cache)
 # The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
 # dozen points is about as good as on all of them, and the pairs of a track fit in a few batches); the
 # error is measured on them and, for a pair within the tolerance there, on all the points.
