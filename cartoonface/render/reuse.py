@@ -68,8 +68,8 @@ PAIR_POINTS = 1 << 15  # points of the pairs _pair_points gathers at a time (~0.
 FIT_POINTS = 24
 FIT_PAIRS = 8192  # candidate pairs fitted together (_choose): ~3 KB of temporaries each
 # The pairs are first measured on COARSE of the samples, evenly spaced: most are far from the
-# tolerance on them already (19 in 20 of the face track's drawings), and only the others are measured
-# on all.
+# tolerance on them already (19 in 20 of the face track's pairs of drawings, half of its parts'), and
+# only the others are measured on all.
 COARSE = 4
 # A part reused on its own (find_alike: the mouth, whose mix changes in every drawing of the face
 # track) is compared with the ALIKE earlier parts of its skeleton nearest in shape, from all of
