@@ -19,8 +19,9 @@ from cartoonface.face.pose import pose_face, pose_faces
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.animation import MOUTH_TRACK, PARTS_ID, animation_svg
 from cartoonface.render.png import svg_to_png
-from cartoonface.render.reuse import (CANDIDATES, TOLERANCE, Shape, _distances, _recipe, _single_slack, find, find_alike, joined, read_parts,
-                                     shapes_from, shapes_of)
+from cartoonface.render.reuse import (CANDIDATES, FIT_POINTS, TOLERANCE, Shape, _inverses, _largest, _largest_single,
+                                      _near, _recipe, _scale_change, _single_slack, find, find_alike, fit, joined,
+                                      read_parts, shapes_from, shapes_of)
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.stills import frozen
 
@@ -214,11 +215,65 @@ def test_the_fit_measured_in_single_precision_is_within_its_slack_of_double_prec
     matrices = np.round(np.concatenate([linear, rng.uniform(-500, 500, (count, 2, 1))], axis=2), 4)
     targets = (np.einsum("mij,mnj->mni", matrices[:, :, :2], sources) + matrices[:, None, :, 2]
                + rng.normal(0, 0.3, (count, 24, 2))).astype(np.float32)
-    double = np.max(_distances(sources, matrices, targets), axis=1)
-    single = np.max(_distances(sources, matrices.astype(np.float32), targets), axis=1)
+    double = _largest(sources, matrices, targets)
+    single = _largest_single(np.transpose(sources, (2, 1, 0)), matrices, np.transpose(targets, (2, 1, 0)))
     largest = float(max(np.abs(sources).max(), np.abs(targets).max()))
     assert np.all(np.abs(single - double) <= _single_slack(matrices, largest))
     assert np.any(single != double), "single precision differs, within the slack"
+
+
+def hypotenuses(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The largest distance (M,) of each of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from
+    `targets`, np.hypot of every point's offsets: what reuse._largest computes with fewer np.hypot."""
+    mapped = [matrices[:, row, 0, None] * sources[..., 0] + matrices[:, row, 1, None] * sources[..., 1]
+              + matrices[:, row, 2, None] - targets[..., row] for row in (0, 1)]
+    return np.max(np.hypot(*mapped), axis=1)
+
+
+@pytest.mark.parametrize("points", [3, 24, 150])
+def test_the_largest_distance_is_np_hypots_to_the_bit_with_ties_near_ties_and_tiny_offsets(points):
+    """reuse._largest takes np.hypot only where the square sum is near its largest: the same numbers
+    as np.hypot of every point, for pairs in general and for offsets set exactly (sources at 0 under
+    the identity): points at the same distance in other directions, equal or an ulp apart (square
+    sums that may round the other way), and distances whose squares are subnormal or vanish."""
+    rng = np.random.default_rng(points)
+    count = 3000
+    sources = rng.uniform(-300, 700, (count, points, 2))
+    matrices = np.concatenate([np.eye(2) + rng.normal(0, 0.01, (count, 2, 2)), rng.normal(0, 2, (count, 2, 1))], axis=2)
+    targets = (np.einsum("mij,mnj->mni", matrices[:, :, :2], sources) + matrices[:, None, :, 2]
+               + rng.normal(0, 0.3, sources.shape))
+    assert _largest(sources, matrices, targets).tobytes() == hypotenuses(sources, matrices, targets).tobytes()
+    angles = rng.uniform(0, 2 * np.pi, (count, points))
+    radii = 0.4 * (1 + rng.integers(-2, 3, (count, points)) * 2.0 ** -52)
+    scales = np.array([1, 2.0 ** -460, 2.0 ** -530, 2.0 ** -600])[np.arange(count) % 4, None]
+    offsets = (scales * radii)[..., None] * np.stack([np.cos(angles), np.sin(angles)], axis=2)
+    identity = np.broadcast_to(np.eye(2, 3), (count, 2, 3))
+    assert _largest(np.zeros_like(offsets), identity, -offsets).tobytes() == hypotenuses(
+        np.zeros_like(offsets), identity, -offsets).tobytes()
+
+
+def test_the_near_pairs_are_those_within_the_tolerance_on_every_sample_in_double_precision():
+    """reuse._near measures in single precision, on a few samples first, in double precision only
+    near the tolerance: the pairs it finds are those within it (widened by the strokes) measured on
+    every sample in double precision, for pairs on both sides of it and near it."""
+    rng = np.random.default_rng(5)
+    count = 4000
+    earlier_points = rng.uniform(-200, 900, (count, FIT_POINTS, 2))
+    linear = np.eye(2) + rng.normal(0, 0.002, (count, 2, 2))
+    noise = rng.normal(0, 1, earlier_points.shape) * rng.uniform(0, 0.3, (count, 1, 1))
+    later_points = np.einsum("mij,mnj->mni", linear, earlier_points) + rng.uniform(-3, 3, (count, 1, 2)) + noise
+    samples = np.concatenate([earlier_points, later_points]).astype(np.float32)
+    earlier, later = np.arange(count), np.arange(count) + count
+    matrices = fit(_inverses(samples)[earlier], samples[later])
+    strokes = rng.choice([0.0, 1.0, 3.0], 2 * count)
+    near, scales = _near(samples, np.ascontiguousarray(samples.transpose(2, 1, 0)), matrices, earlier, later, strokes,
+                         float(np.max(np.abs(samples))), TOLERANCE)
+    every_scale = _scale_change(matrices[:, :, :2])
+    within = every_scale * np.maximum(strokes[earlier], strokes[later]) / 2 + hypotenuses(
+        samples[earlier].astype(float), matrices, samples[later].astype(float))
+    assert near.tolist() == np.flatnonzero(within <= TOLERANCE).tolist()
+    assert scales.tobytes() == every_scale[near].tobytes()
+    assert count / 10 < len(near) < count * 9 / 10 and np.sum(np.abs(within - TOLERANCE) < 0.01) > 10
 
 
 def test_reused_drawings_point_at_written_drawings_of_their_track_and_every_reference_resolves(documents):

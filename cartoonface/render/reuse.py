@@ -63,12 +63,16 @@ SHIFT_DECIMALS = 1
 # weight".
 FORMS = tuple((linear, shift) for linear in (0, 2, 3, LINEAR_DECIMALS) for shift in (0, SHIFT_DECIMALS))
 IDENTITY = "1 0 0 1 0 0"
-PAIR_POINTS = 1 << 18  # points of the pairs _pair_points stacks at a time (~4 MB an array)
+PAIR_POINTS = 1 << 15  # points of the pairs _pair_points gathers at a time (~0.5 MB an array: in cache)
 # The affines are fitted on FIT_POINTS of each drawing's points, spread over it (a fit on a few
 # dozen points is about as good as on all of them, and the pairs of a track fit in a few batches); the
 # error is measured on them and, for a pair within the tolerance there, on all the points.
 FIT_POINTS = 24
 FIT_PAIRS = 8192  # candidate pairs fitted together (_choose): ~3 KB of temporaries each
+# The pairs are first measured on COARSE of the samples, evenly spaced: most are far from the
+# tolerance on them already (19 in 20 of the face track's pairs of drawings, half of its parts'), and
+# only the others are measured on all.
+COARSE = 4
 # A part reused on its own (find_alike: the mouth, whose mix changes in every drawing of the face
 # track) is compared with the ALIKE earlier parts of its skeleton nearest in shape, from all of
 # them; the nearness of ROWS parts to all earlier ones is computed at a time (ROWS x parts floats).
@@ -361,42 +365,91 @@ def _scale_change(linear: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(np.sqrt((squares + root) / 2) - 1), np.abs(np.sqrt(np.maximum(squares - root, 0) / 2) - 1))
 
 
-def fit(sources: np.ndarray, inverses: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The least-squares affines (M, 2, 3) mapping each of `sources` (M, F, 2; `inverses` their
-    _inverses) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS); the
-    largest change of scale of each (M,); and the largest distance (M,) px of a mapped source point
-    from its target, in single precision (within _single_slack of the one in double precision)."""
-    matrices = np.transpose(inverses @ targets, (0, 2, 1)).astype(float)  # (M, 2, 3): [[a c e], [b d f]]
-    matrices[:, :, :2] = np.round(matrices[:, :, :2], LINEAR_DECIMALS)
-    matrices[:, :, 2] = np.round(matrices[:, :, 2], SHIFT_DECIMALS)
-    single = np.max(_distances(sources, matrices.astype(np.float32), targets), axis=1)
-    return matrices, _scale_change(matrices[:, :, :2]), single
+def fit(inverses: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The least-squares affines (M, 2, 3) mapping the samples whose _inverses are `inverses`
+    (M, 3, F) onto `targets` (M, F, 2), rounded as written (LINEAR_DECIMALS, SHIFT_DECIMALS)."""
+    transposed = inverses @ targets  # (M, 3, 2): [[a b], [c d], [e f]]
+    transposed[:, :2] = np.round(transposed[:, :2], LINEAR_DECIMALS)
+    transposed[:, 2] = np.round(transposed[:, 2], SHIFT_DECIMALS)
+    return np.transpose(transposed, (0, 2, 1))
+
+
+def _near(samples: np.ndarray, columns: np.ndarray, matrices: np.ndarray, earlier: np.ndarray, later: np.ndarray,
+          strokes: np.ndarray, largest: float, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Of pairs of samples (`earlier` and `later` (M,) index `samples` (D, F, 2), and `columns`, the
+    same as (2, F, D), within `largest` px of 0), those whose `matrices` (M, 2, 3) put every sample
+    of the earlier within `tolerance` px of the later's once widened by half the wider of their
+    `strokes` (D,) times the matrix's largest change of scale: their positions (P,) and changes of
+    scale (P,). Measured in single precision, on COARSE samples first (a sample's distance is the
+    same number there: a pair farther there than the tolerance and the slack is farther on all), in
+    double precision where single precision cannot tell: the same pairs as measured in double
+    precision throughout."""
+    slack = _single_slack(matrices, largest)
+    coarse = columns[:, ::FIT_POINTS // COARSE]
+    # np.take: the pairs last in memory too (an index gives them first, and the points' rows strided)
+    maybe = np.flatnonzero(_largest_single(np.take(coarse, earlier, axis=2), matrices, np.take(coarse, later, axis=2))
+                           - tolerance <= slack)
+    sources, targets, slack = earlier[maybe], later[maybe], slack[maybe]
+    single = _largest_single(np.take(columns, sources, axis=2), matrices[maybe], np.take(columns, targets, axis=2))
+    scales = _scale_change(matrices[maybe, :, :2])
+    widened = scales * np.maximum(strokes[sources], strokes[targets]) / 2
+    near = widened + single <= tolerance - slack
+    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
+    near[unsure] = widened[unsure] + _largest(samples[sources[unsure]], matrices[maybe[unsure]],
+                                              samples[targets[unsure]]) <= tolerance
+    return maybe[near], scales[near]
 
 
 def _single_slack(matrices: np.ndarray, largest: float) -> np.ndarray:
     """How far (M,) px fit's largest distance in single precision may be from the one in double
-    precision, for `matrices` (M, 2, 3) and single precision points within `largest` px of 0: each
-    of the eight roundings of a x + c y + e - t along an axis (a, c, e to single, two products, two
-    sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| + |t|, and the distance's own
-    within 2^-24 of the two axes' sum: the distance within 9 * 2^-24 of that sum, 2^-19 over three
-    times it."""
-    return 2.0 ** -19 * (np.sum(np.abs(matrices[:, :, :2]), axis=(1, 2)) * largest
-                         + np.sum(np.abs(matrices[:, :, 2]), axis=1) + 2 * largest + 1)
+    precision (_largest_single, _largest), for `matrices` (M, 2, 3) and single precision points
+    within `largest` px of 0: each of the eight roundings of a x + c y + e - t along an axis (a, c,
+    e to single, two products, two sums, the difference) is within 2^-24 of |a||x| + |c||y| + |e| +
+    |t|, and the distance's own (the two squares, their sum, its square root: _largest_single)
+    within 2.5 * 2^-24 of the two axes' sum: the distance within 10.5 * 2^-24 of that sum, 2^-19
+    over three times it. (The pairs found are those of double precision whatever the slack's last
+    bits: only a bound is needed.)"""
+    magnitudes = np.abs(matrices)  # summed by columns (a reduction along 4 numbers costs as much as 4 sums)
+    linear = magnitudes[:, 0, 0] + magnitudes[:, 0, 1] + magnitudes[:, 1, 0] + magnitudes[:, 1, 1]
+    return 2.0 ** -19 * (linear * largest + magnitudes[:, 0, 2] + magnitudes[:, 1, 2] + 2 * largest + 1)
 
 
-def _pair_points(shapes: Sequence[Shape], sources: Sequence[int], targets: Sequence[int]
+class _Stacks(NamedTuple):
+    """The points of D shapes stacked by point count N (_stacks): `points` by N, (K, N, 2) px of the
+    K shapes of N points; `counts` (D,), each shape's N, and `rows` (D,), its row in that stack;
+    `strokes` (D,) px, each shape's widest stroke."""
+
+    points: dict[int, np.ndarray]
+    counts: np.ndarray
+    rows: np.ndarray
+    strokes: np.ndarray
+
+
+def _stacks(group: Sequence[Shape]) -> _Stacks:
+    """The points of `group` stacked by point count: each shape's array copied once, the pairs' points
+    then gathered from them (_pair_points)."""
+    counts = np.array([len(shape.points) for shape in group], dtype=int)
+    rows = np.empty(len(group), dtype=int)
+    points = {}
+    for count in np.unique(counts).tolist():
+        members = np.flatnonzero(counts == count)
+        rows[members] = np.arange(len(members))
+        points[count] = _stacked([group[index].points for index in members.tolist()])
+    return _Stacks(points, counts, rows, np.array([shape.stroke for shape in group]))
+
+
+def _pair_points(stacks: _Stacks, sources: np.ndarray, targets: np.ndarray
                  ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """The pairs of `shapes` (indices `sources`, `targets`, of one point count each: one skeleton)
-    grouped by point count N, at most PAIR_POINTS points at a time: the pairs' positions (M,) in
-    `sources`, the sources' points and the targets' (M, N, 2)."""
-    counts = np.array([len(shapes[target].points) for target in targets], dtype=int)
+    """The pairs of the shapes of `stacks` (indices `sources`, `targets` (M,), of one point count each:
+    one skeleton) grouped by point count N, at most PAIR_POINTS points at a time: the pairs'
+    positions (M,) in `sources`, the sources' points and the targets' (M, N, 2)."""
+    counts = stacks.counts[targets]
     for count in np.unique(counts).tolist():
         chosen = np.flatnonzero(counts == count)
         step = max(1, PAIR_POINTS // count)
         for start in range(0, len(chosen), step):
             rows = chosen[start:start + step]
-            yield rows, _stacked([shapes[sources[row]].points for row in rows.tolist()]), _stacked(
-                [shapes[targets[row]].points for row in rows.tolist()])
+            yield rows, stacks.points[count][stacks.rows[sources[rows]]], stacks.points[count][stacks.rows[targets[rows]]]
 
 
 def _stacked(points: Sequence[np.ndarray]) -> np.ndarray:
@@ -405,33 +458,80 @@ def _stacked(points: Sequence[np.ndarray]) -> np.ndarray:
     return np.concatenate(points).reshape(len(points), *points[0].shape)
 
 
-def _errors(group: Sequence[Shape], sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
+def _errors(stacks: _Stacks, sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray,
             scales: np.ndarray) -> np.ndarray:
-    """For pairs of shapes of `group` (indices `sources`, `targets` (M,), of one point count each:
+    """For pairs of the shapes of `stacks` (indices `sources`, `targets` (M,), of one point count each:
     one skeleton), the largest distance (px) of the source's points mapped by `matrices` (M, 2, 3)
     from the target's, plus half the wider stroke times `scales` (M,), the matrix's largest change
     of scale: within it, every edge of the transformed drawing lies near the target's. (M,) px;
     the pairs computed together (_pair_points)."""
     largest = np.empty(len(sources))
-    for rows, source_points, target_points in _pair_points(group, sources.tolist(), targets.tolist()):
-        largest[rows] = np.max(_distances(source_points, matrices[rows], target_points), axis=1)
-    strokes = np.array([shape.stroke for shape in group])
+    for rows, source_points, target_points in _pair_points(stacks, sources, targets):
+        largest[rows] = _largest(source_points, matrices[rows], target_points)
+    strokes = stacks.strokes
     return largest + scales * np.maximum(strokes[sources], strokes[targets]) / 2
 
 
-def _distances(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """The distances (M, N) px of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from `targets` (M, N, 2)."""
-    x, y = sources[..., 0], sources[..., 1]
-    a, c, e, b, d, f = (matrices[:, row, column, None] for row in (0, 1) for column in (0, 1, 2))
-    return np.hypot(a * x + c * y + e - targets[..., 0], b * x + d * y + f - targets[..., 1])
+def _offsets(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The offsets along x and along y of points `sources` mapped by `matrices` from `targets` (x and
+    y first: (2, ...) each), the matrices' numbers (2, 3, ...) broadcast against them: a x + c y + e - t,
+    summed in that order in the arguments' precision (in place: two arrays made, not eight)."""
+    product = np.empty(np.broadcast_shapes(sources.shape[1:], matrices.shape[2:]), dtype=np.result_type(sources, matrices))
+    offsets = []
+    for row in (0, 1):
+        offset = sources[0] * matrices[row, 0]
+        offset += np.multiply(sources[1], matrices[row, 1], out=product)
+        offset += matrices[row, 2]
+        offset -= targets[row]
+        offsets.append(offset)
+    return offsets[0], offsets[1]
 
 
-def matrix_text(matrix: np.ndarray) -> str:
-    """`matrix` (2, 3), rounded as fit rounds it, as the numbers of SVG's matrix(a b c d e f), short:
-    "1 .0012 -.0012 1 .3 -1.2"."""
-    (a, c, e), (b, d, f) = matrix.tolist()
-    return " ".join([*(_fixed(round(v * 10 ** LINEAR_DECIMALS), LINEAR_DECIMALS) for v in (a, b, c, d)),
-                     *(_fixed(round(v * 10 ** SHIFT_DECIMALS), SHIFT_DECIMALS) for v in (e, f))])
+def _row_maxima(values: np.ndarray) -> np.ndarray:
+    """The largest (M,) of each row of `values` (M, N): by columns when the rows are short (a
+    reduction along a row of a few dozen costs as much as copying it)."""
+    return values.max(axis=1) if values.shape[1] > 64 else np.ascontiguousarray(values.T).max(axis=0)
+
+
+def _largest(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """The largest distance (M,) px of `sources` (M, N, 2) mapped by `matrices` (M, 2, 3) from
+    `targets` (M, N, 2), the hypotenuse of the _offsets: np.max(np.hypot(x, y), axis=1) to the bit,
+    with np.hypot computed only where the squared distance is within 2^-40 of its largest. A point
+    whose hypotenuse is the largest is one of them: np.hypot is within an ulp (2^-52) of the
+    distance r, the square sum x^2 + y^2 within 2^-52 of r^2 (plus 3 * 2^-1075 when a square is
+    subnormal, nothing to a largest of 2^-900 or more: below, every point is taken), so a hypotenuse
+    at least the largest square sum's point's has a square sum within 2^-47 of the largest."""
+    x, y = _offsets(np.moveaxis(sources, 2, 0), np.moveaxis(matrices, 0, 2)[..., None], np.moveaxis(targets, 2, 0))
+    squares = x * x
+    squares += y * y
+    top = _row_maxima(squares)
+    pairs, points = np.nonzero(squares >= np.where(top >= 2.0 ** -900, top * (1 - 2.0 ** -40), -1.0)[:, None])
+    largest = np.full(len(top), -np.inf)
+    np.maximum.at(largest, pairs, np.hypot(x[pairs, points], y[pairs, points]))
+    return largest
+
+
+def _largest_single(sources: np.ndarray, matrices: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """_largest's distances (M,) in single precision, for `sources` and `targets` (2, N, M) (x and y,
+    point by point: a reduction over the points is then one pass of elementwise maxima) and
+    `matrices` (M, 2, 3) made single: the square root of the largest square sum (within
+    _single_slack of _largest's in double precision)."""
+    x, y = _offsets(sources, np.moveaxis(matrices.astype(np.float32), 0, 2), targets)
+    x *= x
+    y *= y
+    x += y
+    return np.sqrt(x.max(axis=0))
+
+
+def _matrix_texts(matrices: np.ndarray) -> list[str]:
+    """`matrices` (P, 2, 3), rounded as fit rounds them, as the numbers of SVG's matrix(a b c d e f),
+    short: "1 .0012 -.0012 1 .3 -1.2". Written once per distinct matrix (most are one of a few shifts)."""
+    # the numbers in units of their last decimal: np.rint rounds halves to even, as round() does
+    units = np.rint(matrices * [10.0 ** LINEAR_DECIMALS, 10.0 ** LINEAR_DECIMALS, 10.0 ** SHIFT_DECIMALS]).astype(np.int64)
+    texts: dict[tuple[int, ...], str] = {}
+    return [texts.get(key) or texts.setdefault(key, " ".join([*(_fixed(number, LINEAR_DECIMALS) for number in key[:4]),
+                                                             *(_fixed(number, SHIFT_DECIMALS) for number in key[4:])]))
+            for key in map(tuple, np.transpose(units, (0, 2, 1)).reshape(len(units), 6).tolist())]
 
 
 @functools.lru_cache(maxsize=4096)
@@ -445,76 +545,74 @@ def _fixed(units: int, decimals: int) -> str:
     return f"{sign}{whole or ''}.{fraction:0{decimals}d}".rstrip("0")
 
 
-def _shortened(shapes: Sequence[Shape], chosen: Sequence[tuple[int, int, np.ndarray, float]],
-               tolerance: float) -> list[tuple[str, float]]:
-    """The matrix text and error (px, as _errors') of each of `chosen` (a target's and a source's
-    index into `shapes`, their fitted matrix (2, 3) and its error) in the first of FORMS within
+def _shortened(stacks: _Stacks, targets: np.ndarray, sources: np.ndarray, matrices: np.ndarray, errors: np.ndarray,
+               tolerance: float) -> tuple[list[str], np.ndarray]:
+    """The matrix texts and errors (P,) px, as _errors', of pairs of the shapes of `stacks` (`targets`,
+    `sources` (P,), their fitted `matrices` (P, 2, 3) and its `errors` (P,)) in the first of FORMS within
     `tolerance`: a..d the fitted ones rounded to its decimals, e and f the middle of the spread of
     the target's points less the source's transformed, rounded to its decimals; the fitted matrix
     where none is (its e and f were fitted on the mean, not the middle). The pairs are checked
     together (_pair_points)."""
-    if not chosen:
-        return []
-    matrices = np.stack([matrix for _, _, matrix, _ in chosen])  # (P, 2, 3), replaced by the forms that fit
-    errors = np.array([error for _, _, _, error in chosen])
-    halves = np.array([max(shapes[target].stroke, shapes[source].stroke) for target, source, _, _ in chosen]) / 2
-    for rows, sources, targets in _pair_points(shapes, [source for _, source, _, _ in chosen],
-                                               [target for target, _, _, _ in chosen]):
-        # x and y apart: reduced along the points, contiguous (reducing (M, N, 2) along N or 2 is slow)
-        (source_x, source_y), (target_x, target_y) = (np.moveaxis(points, 2, 0).copy() for points in (sources, targets))
+    matrices, errors = matrices.copy(), errors.copy()  # replaced by the forms that fit
+    halves = np.maximum(stacks.strokes[targets], stacks.strokes[sources]) / 2
+    for rows, source_points, target_points in _pair_points(stacks, sources, targets):
+        # x and y apart, point by point (N, M): reduced along the points, contiguous
+        (source_x, source_y), (target_x, target_y) = (np.ascontiguousarray(np.transpose(points, (2, 1, 0)))
+                                                      for points in (source_points, target_points))
         left = np.arange(len(rows))  # the chunk's pairs no form fits yet
         for form, (linear_decimals, shift_decimals) in enumerate(FORMS):  # each on the pairs no earlier form fits
             if not len(left):
                 break
             if not form or linear_decimals != FORMS[form - 1][0]:  # the points moved once per a..d
                 linear = np.round(matrices[rows[left], :, :2], linear_decimals)  # (M, 2, 2)
-                a, c, b, d = (linear[:, i, j, None] for i in (0, 1) for j in (0, 1))
-                x, y = source_x[left], source_y[left]
-                residual = (target_x[left] - (a * x + c * y), target_y[left] - (b * x + d * y))  # (M, N) each
-                middle = np.column_stack([(values.max(axis=1) + values.min(axis=1)) / 2 for values in residual])
+                a, c, b, d = (linear[:, i, j] for i in (0, 1) for j in (0, 1))
+                x, y, to_x, to_y = (values if len(left) == len(rows) else values[:, left]  # all at first: not copied
+                                    for values in (source_x, source_y, target_x, target_y))
+                residual = (to_x - (a * x + c * y), to_y - (b * x + d * y))  # (N, M) each
+                middle = np.column_stack([(values.max(axis=0) + values.min(axis=0)) / 2 for values in residual])
                 scale = _scale_change(linear) * halves[rows[left]]
             shift = np.round(middle, shift_decimals)
-            off_x, off_y = (values - shift[:, axis, None] for axis, values in enumerate(residual))
-            within = np.sqrt(np.max(off_x ** 2 + off_y ** 2, axis=1)) + scale
+            off_x, off_y = (values - shift[:, axis] for axis, values in enumerate(residual))
+            within = np.sqrt(np.max(off_x ** 2 + off_y ** 2, axis=0)) + scale
             fits = within <= tolerance
             matrices[rows[left[fits]]] = np.concatenate([linear[fits], shift[fits, :, None]], axis=2)
             errors[rows[left[fits]]] = within[fits]
             left, linear, middle, scale = (values[~fits] for values in (left, linear, middle, scale))
-            residual = (residual[0][~fits], residual[1][~fits])
-    texts: dict[bytes, str] = {}  # by the matrix's numbers: most are one of a few shifts
-    return [(texts.get(key := matrix.tobytes()) or texts.setdefault(key, matrix_text(matrix)), error)
-            for matrix, error in zip(matrices, errors.tolist(), strict=True)]
+            residual = (residual[0][:, ~fits], residual[1][:, ~fits])
+    return _matrix_texts(matrices), errors
 
 
 def _pairs(skeletons: Sequence[str], candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every pair of a drawing and one of the last `candidates` drawings of its skeleton before it
     (`skeletons` in order): the later's and the earlier's index, and how many drawings of the
-    skeleton lie back from one to the other (1: the one just before)."""
+    skeleton lie back from one to the other (1: the one just before). By lag, all skeletons at once
+    (the order of the pairs is _choose's to make)."""
     groups: dict[str, list[int]] = {}
     for index, skeleton in enumerate(skeletons):
         groups.setdefault(skeleton, []).append(index)
+    ordered = np.array([index for members in groups.values() for index in members], dtype=int)  # by skeleton
+    sizes = np.array([len(members) for members in groups.values()], dtype=int)
+    places = np.arange(len(ordered)) - np.repeat(np.cumsum(sizes) - sizes, sizes)  # in its skeleton's drawings
     later, earlier, lags = [], [], []
-    for members in groups.values():
-        indices = np.array(members)
-        for lag in range(1, min(candidates, len(members) - 1) + 1):
-            later.append(indices[lag:])
-            earlier.append(indices[:-lag])
-            lags.append(np.full(len(members) - lag, lag))
+    for lag in range(1, candidates + 1):
+        positions = np.flatnonzero(places >= lag)
+        if not len(positions):
+            break
+        later.append(ordered[positions])
+        earlier.append(ordered[positions - lag])
+        lags.append(np.full(len(positions), lag))
     if not later:
         return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     return np.concatenate(later), np.concatenate(earlier), np.concatenate(lags)
 
 
-def _samples(group: Sequence[Shape]) -> np.ndarray:
-    """FIT_POINTS points (F, 2) of each of `group`, spread over its points: (D, F, 2), single
-    precision (1e-4 px)."""
-    by_count: dict[int, list[int]] = {}  # the shapes of N points
-    for index, shape in enumerate(group):
-        by_count.setdefault(len(shape.points), []).append(index)
-    samples = np.empty((len(group), FIT_POINTS, 2), dtype=np.float32)
-    for count, indices in by_count.items():
+def _samples(stacks: _Stacks) -> np.ndarray:
+    """FIT_POINTS points (F, 2) of each of the shapes of `stacks`, spread over its points: (D, F, 2),
+    single precision (1e-4 px)."""
+    samples = np.empty((len(stacks.counts), FIT_POINTS, 2), dtype=np.float32)
+    for count, points in stacks.points.items():
         spread = np.linspace(0, count - 1, FIT_POINTS).round().astype(int)  # FIT_POINTS of the N points
-        samples[indices] = _stacked([group[index].points for index in indices])[:, spread]
+        samples[stacks.counts == count] = points[:, spread]
     return samples
 
 
@@ -523,43 +621,43 @@ def _choose(shapes: Sequence[Shape | None],
             tolerance: float) -> dict[int, Reuse]:
     """The drawings of `shapes` (in order) shown as a transform of an earlier written one: `pairs`
     (of the shapes with 3 points or more, their _samples and the samples' _inverses) gives the candidate pairs, the later's
-    and the earlier's index and a rank (lower: tried first). All pairs are fitted at once on
-    the samples; for each drawing the first candidate by rank that is written (not itself reused)
-    and within `tolerance` px on all its points is taken."""
+    and the earlier's index and a rank (lower: tried first). The pairs are fitted together on the
+    samples and those near on them found (_near); for each drawing the first candidate by rank that
+    is written (not itself reused) and within `tolerance` px on all its points is taken."""
     numbers = [number for number, shape in enumerate(shapes) if shape is not None and len(shape.points) >= 3]
     group = [shape for shape in (shapes[number] for number in numbers) if shape is not None]
     if len(group) < 2:
         return {}
-    samples = _samples(group)
+    stacks = _stacks(group)
+    samples = _samples(stacks)
     inverses = _inverses(samples)
     later, earlier, ranks = pairs(group, samples, inverses)
     if not len(later):
         return {}
-    strokes = np.array([shape.stroke for shape in group])
+    columns, largest = np.ascontiguousarray(samples.transpose(2, 1, 0)), float(np.max(np.abs(samples)))
     # fitted FIT_PAIRS pairs at a time: all at once, a 30-minute recording's temporaries took ~1 GB
-    fits = [fit(samples[earlier[start:start + FIT_PAIRS]], inverses[earlier[start:start + FIT_PAIRS]],
-                samples[later[start:start + FIT_PAIRS]]) for start in range(0, len(later), FIT_PAIRS)]
-    matrices, scales, single = (np.concatenate(parts) for parts in zip(*fits, strict=True))
-    widened = scales * np.maximum(strokes[earlier], strokes[later]) / 2
-    # the pairs within the tolerance on the samples, measured in double precision where single
-    # precision cannot tell (the same pairs as measured in double precision throughout)
-    slack = _single_slack(matrices, float(np.max(np.abs(samples))))
-    near = widened + single <= tolerance - slack
-    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
-    near[unsure] = widened[unsure] + np.max(_distances(samples[earlier[unsure]], matrices[unsure], samples[later[unsure]]),
-                                            axis=1) <= tolerance
-    near = np.flatnonzero(near)
-    near = near[np.lexsort((ranks[near], later[near]))]  # by drawing, the first candidate first
-    errors = _errors(group, earlier[near], matrices[near], later[near], scales[near]).tolist()
-    written = np.ones(len(group), dtype=bool)
-    chosen: list[tuple[int, int, np.ndarray, float]] = []
-    for pair, within in zip(near.tolist(), errors, strict=True):
-        target, source = int(later[pair]), int(earlier[pair])
-        if written[target] and written[source] and within <= tolerance:
-            chosen.append((target, source, matrices[pair], within))
+    found = []  # (the near pairs' positions, their matrices and changes of scale) of each batch
+    for start in range(0, len(later), FIT_PAIRS):
+        sources, targets = earlier[start:start + FIT_PAIRS], later[start:start + FIT_PAIRS]
+        matrices = fit(inverses[sources], samples[targets])
+        near, scales = _near(samples, columns, matrices, sources, targets, stacks.strokes, largest, tolerance)
+        found.append((start + near, matrices[near], scales))
+    near, matrices, scales = (np.concatenate(parts) for parts in zip(*found, strict=True))
+    order = np.lexsort((ranks[near], later[near]))  # by drawing, the first candidate first
+    near, matrices, scales = near[order], matrices[order], scales[order]
+    errors = _errors(stacks, earlier[near], matrices, later[near], scales)
+    within = np.flatnonzero(errors <= tolerance)
+    written = [True] * len(group)
+    chosen = []  # positions in near
+    for position, target, source in zip(within.tolist(), later[near[within]].tolist(), earlier[near[within]].tolist(),
+                                        strict=True):
+        if written[target] and written[source]:
+            chosen.append(position)
             written[target] = False
+    targets, sources = later[near[chosen]], earlier[near[chosen]]
+    texts, errors = _shortened(stacks, targets, sources, matrices[chosen], errors[chosen], tolerance)
     return {numbers[target]: Reuse(numbers[source], text, error)
-            for (target, source, _, _), (text, error) in zip(chosen, _shortened(group, chosen, tolerance), strict=True)}
+            for target, source, text, error in zip(targets.tolist(), sources.tolist(), texts, errors.tolist(), strict=True)}
 
 
 def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
@@ -572,13 +670,12 @@ def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
     return _choose(shapes, lambda group, samples, inverses: _pairs([shape.skeleton for shape in group], candidates), tolerance)
 
 
-def _normalised(samples: np.ndarray, inverses: np.ndarray) -> np.ndarray:
+def _normalised(samples: np.ndarray, inverses: np.ndarray, references: np.ndarray) -> np.ndarray:
     """`samples` (M, F, 2; `inverses` their _inverses) each moved by the least-squares affine onto
-    the first: (M, 2F). Shapes
-    one affine apart become equal (the fit of T(X) onto R is the fit of X composed with T's
-    inverse), so near ones here are near an affine of each other."""
+    its reference (M, F, 2): (M, 2F). Shapes one affine apart become equal (the fit of T(X) onto R
+    is the fit of X composed with T's inverse), so near ones here are near an affine of each other."""
     design = np.concatenate([samples, np.ones((*samples.shape[:2], 1), dtype=samples.dtype)], axis=2)
-    return (design @ (inverses @ samples[0])).reshape(len(samples), -1).astype(np.float32)
+    return (design @ (inverses @ references)).reshape(len(samples), -1).astype(np.float32)
 
 
 def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, candidates: int) -> tuple[np.ndarray, ...]:
@@ -589,15 +686,19 @@ def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, ca
     groups: dict[str, list[int]] = {}
     for index, shape in enumerate(group):
         groups.setdefault(shape.skeleton, []).append(index)
+    kept = [np.array(members) for members in groups.values() if len(members) >= 2]
+    if not kept:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    # all skeletons normalised at once, each shape onto the first of its skeleton (a few calls, not a few per skeleton)
+    sizes = [len(indices) for indices in kept]
+    everyone = np.concatenate(kept)
+    flats = _normalised(samples[everyone], inverses[everyone], samples[np.repeat([indices[0] for indices in kept], sizes)])
+    squares = np.sum(flats ** 2, axis=1)
     later, earlier, ranks = [], [], []
-    for members in groups.values():
-        if len(members) < 2:
-            continue
-        indices = np.array(members)
-        flat = _normalised(samples[indices], inverses[indices])
-        norms = np.sum(flat ** 2, axis=1)
-        for start in range(1, len(members), ROWS):
-            rows = np.arange(start, min(start + ROWS, len(members)))
+    for indices, end in zip(kept, np.cumsum(sizes).tolist(), strict=True):
+        flat, norms = flats[end - len(indices):end], squares[end - len(indices):end]
+        for start in range(1, len(indices), ROWS):
+            rows = np.arange(start, min(start + ROWS, len(indices)))
             distances = norms[rows, None] + norms[None, :rows[-1]] - 2 * flat[rows] @ flat[:rows[-1]].T  # (R, J)
             inside = distances[:, start:]  # the block's own columns: only the earlier ones count
             inside[np.arange(start, rows[-1])[None, :] >= rows[:, None]] = np.inf
@@ -608,8 +709,6 @@ def _alike(group: Sequence[Shape], samples: np.ndarray, inverses: np.ndarray, ca
             later.append(indices[np.broadcast_to(rows[:, None], nearest.shape)[valid]])
             earlier.append(indices[nearest[valid]])
             ranks.append(np.broadcast_to(np.arange(take), nearest.shape)[valid])
-    if not later:
-        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     return np.concatenate(later), np.concatenate(earlier), np.concatenate(ranks)
 
 
