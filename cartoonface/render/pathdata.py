@@ -212,17 +212,28 @@ def _texts(limit: int) -> np.ndarray:
     return np.array([str(v) for v in values] + [str(v) if v < 0 else f",{v}" for v in values], dtype=object)
 
 
+@functools.lru_cache(maxsize=64)
+def _lettered_texts(prefixes: tuple[str, ...], limit: int) -> np.ndarray:
+    """_texts(limit), then for each of `prefixes` (command letters) the plain number texts
+    after it ('c5', 'c-5'): ((2 + len(prefixes)) (2 limit + 1),) texts, a block each."""
+    texts = _texts(limit)
+    plain = texts[:2 * limit + 1]
+    return np.concatenate([texts, *(prefix + plain for prefix in prefixes)])
+
+
 def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     """Path texts of the rows of `rounded` (n, 2P) integer absolute coordinates."""
     values = rounded[:, plan.columns]
     bases = np.where(plan.references >= 0, rounded[:, np.maximum(plan.references, 0)], 0)
     relative = values - bases
     limit = 1 << max(int(np.abs(relative).max(initial=0)).bit_length(), 10)
-    # one look-up in the plain texts then the comma ones; the letters added only where there are
-    # some (most numbers have none)
-    numbers = _texts(limit)[relative + limit + np.where(plan.after_letter, 0, 2 * limit + 1)]
-    lettered = np.flatnonzero(plan.prefixes != "")
-    numbers[:, lettered] = plan.prefixes[lettered] + numbers[:, lettered]
+    # each number one look-up: in the plain texts, the comma ones or those after its letters
+    # (_lettered_texts' blocks), a block chosen per column
+    prefixes = plan.prefixes.tolist()
+    blocks = {prefix: block for block, prefix in enumerate(dict.fromkeys(filter(None, prefixes)), 2)}
+    starts = np.array([blocks[prefix] if prefix else 1 - after for prefix, after in zip(prefixes, plan.after_letter.tolist(),
+                                                                                        strict=True)])
+    numbers = _lettered_texts(tuple(blocks), limit)[relative + limit + starts * (2 * limit + 1)]
     return ["".join(row) + plan.tail for row in numbers.tolist()]
 
 
@@ -240,11 +251,11 @@ def taken_or_read(paths: Sequence[str], tenths: Tenths, read: Callable[[list[str
     (tenths / 10 is the value strtod reads of the tenths' text, both the double nearest the
     decimal, but for the sign of a zero, which no one here sees), the others read by `read` ((m, k)
     of m path data, or None); None when `read` gives None or the paths hold different counts."""
-    known = [tenths.get(d) for d in paths]
+    known = list(map(tenths.get, paths))
     unknown = [index for index, row in enumerate(known) if row is None]
     read_rows = read([paths[index] for index in unknown]) if unknown else None
     rows = [row for row in known if row is not None]
-    counts = {len(row) for row in rows} | ({read_rows.shape[1]} if read_rows is not None else set())
+    counts = set(map(len, rows)) | ({read_rows.shape[1]} if read_rows is not None else set())
     if unknown and read_rows is None or len(counts) != 1:
         return None
     numbers = np.empty((len(paths), counts.pop()))
@@ -418,7 +429,8 @@ def _compact_group(skeleton: str, members: list[str], done: Compacted,
     `rounded`, when given, all their numbers rounded to whole pixels, a row per member in their
     (sorted) order: they are not read; `kept`, when given, _kept of the first's (Compacted.kept)."""
     if rounded is None:
-        members.sort()
+        if "L" in skeleton:  # the first's points are kept in all (_kept); else no member's order counts
+            members.sort()
         if "#" in skeleton:
             texts = [_NUMBER.findall(d) for d in members]
             numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
@@ -464,4 +476,4 @@ def _extents(plan: _Plan, rounded: np.ndarray) -> list[Extent]:
     """The box of the points `plan` writes of each row of `rounded` (n, 2P) absolute coordinates."""
     xs, ys = (rounded[:, plan.columns[plan.columns % 2 == axis]] for axis in (0, 1))
     boxes = np.column_stack([xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)]).astype(float)
-    return [(x0, y0, x1, y1) for x0, y0, x1, y1 in boxes.tolist()]
+    return list(map(tuple, boxes.tolist()))
