@@ -202,13 +202,18 @@ def _formed_values(form: Form, slots: Sequence[tuple[str, ...]], compact: Mappin
     paths = [list(map(compact.__getitem__, columns[slot])) for slot in form.paths]
     fields = [itertools.repeat(value) if slot < 0 else map(_whole if position else _as_written, columns[slot])
               for slot, value, position in form.fields]
-    sizes = [map(_plain, columns[slot]) for slot, _, position in form.fields if slot >= 0 and not position]
-    fine: Iterable[bool] = map(all, zip(*sizes)) if sizes else itertools.repeat(True, len(slots))
-    if len(paths) > 1:
-        fine = [ok and len(set(row)) == len(row) for ok, row in zip(fine, zip(*paths))]
+    # per part: its sizes plain numbers, its path data's compact forms distinct
+    checks: list[Iterable[bool]] = [map(_plain, columns[slot]) for slot, _, position in form.fields
+                                    if slot >= 0 and not position]
+    if len(paths) == 2:
+        checks.append(map(operator.ne, *paths))
+    elif len(paths) > 2:
+        checks.append(len(set(row)) == len(row) for row in zip(*paths))
+    fine = map(all, zip(*checks)) if checks else itertools.repeat(True, len(slots))
     return [row if ok else None for ok, *row in zip(fine, *paths, *fields)]
 
 
+@functools.lru_cache(maxsize=1 << 12)
 def _plain(value: str) -> bool:
     """Whether a size's text `value` is a plain number (digits, at most one "."), as _skeleton_of takes one."""
     return value.replace(".", "", 1).isdigit()
@@ -228,7 +233,7 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = Fa
     fields = [(part.name, part.text, part.clips) for part in parts]
     given: list[Formed | None] = [None] * len(parts) if formed is None else list(map(formed.get, parts))
     by_form: dict[Form, tuple[list[int], list[tuple[str, ...]]]] = {}  # each Form's parts and slots (a few dozen)
-    cuts = {}
+    cuts: dict[int, list[str]] = {}
     for number, known in enumerate(given):
         if known is None:  # cut at its values once (_VALUE), for its path data and its skeleton; its
             # elements end in ">": a path data in two cannot match
@@ -253,7 +258,7 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = Fa
     forms = []
     for number, skeleton_values in enumerate(made):
         if skeleton_values is None:  # no Form, or not its skeleton: cut
-            cut = cuts.pop(number, None) or _VALUE.split("".join((fields[number][1], *fields[number][2])))
+            cut = cuts.pop(number) if number in cuts else _VALUE.split("".join((fields[number][1], *fields[number][2])))
             skeleton_values = _skeleton_of(cut, done.compact)
         forms.append((skeletons.setdefault(skeleton_values[0], len(skeletons)), skeleton_values[1]))
     # the parts holding a first path data (few), each's in the order of firsts
