@@ -16,8 +16,8 @@ from cartoonface.face.pose import PosedFaces, pose_face, pose_faces, rig, unroll
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import _extent, part_paths
 from cartoonface.render.geometry import all_face_shapes, face_shapes
-from cartoonface.render.mouth import (ROWS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts, mouth_outlines,
-                                      mouth_texts)
+from cartoonface.render.mouth import (ROWS, TEXTS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts,
+                                      mouth_outlines, mouth_texts)
 from cartoonface.render.pathdata import _alike_rows, _groups, compacted, merged
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.conftest import ROOT
@@ -96,7 +96,7 @@ def test_shapes_mouths_and_parts_in_a_batch_as_alone(face):
     assert {o.tongue[3] == 0 for o in outlines} == {True, False}  # shut and open mouths built together
     texts = all_mouth_texts(outlines)
     distinct, which = drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d)
-    assert [distinct[number] for number in which] == texts
+    assert [dict(zip(TEXTS, distinct[number], strict=True)) for number in which] == texts  # in TEXTS order
     assert len(distinct) == len({tuple(mouth.items()) for mouth in texts})  # each mouth written once
     parts = all_face_parts(face, posed, "u")
     for index in range(len(states)):

@@ -23,6 +23,8 @@ render/sheet.py, render/diagram.py and render/png.py.
 from __future__ import annotations
 
 import functools
+import operator
+import re
 from collections.abc import Callable, Hashable, Sequence
 from typing import TypeVar
 
@@ -40,7 +42,7 @@ from cartoonface.render.geometry import all_face_shape_columns, hypots
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import TEXTS as MOUTH_TEXTS
 from cartoonface.render.mouth import drawn_mouth_texts
-from cartoonface.render.numbers import number_text, number_texts
+from cartoonface.render.numbers import fill, number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
 
@@ -240,9 +242,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
                    lambda key: _formed(Part("cheeks", _cheeks(key, style)), made["cheeks"], key, forms))
     return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
                     paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
-                    *eye_parts, _drawn_once([_formed(_mouth(mouth, uid, style), _mouth_form(face, uid, mouth),
-                                                     tuple(map(mouth.__getitem__, MOUTH_TEXTS)), forms)
-                                             for mouth in mouths], mouth_of),
+                    *eye_parts, _drawn_once([_mouth_part(face, uid, mouth, forms) for mouth in mouths], mouth_of),
                     strict=True))
 
 
@@ -261,7 +261,7 @@ def _path_part(name: str, d: str, style: str) -> Part:
 @functools.lru_cache(maxsize=16)
 def _forms(face: FaceModel, uid: str) -> dict[str, Form]:
     """The Form (render/compact.py's form_of) of each part all_face_parts draws of `face` with
-    clip ids ending in `uid`, by name, but the mouth's (_mouth_form): the path parts (_PATHS, slot:
+    clip ids ending in `uid`, by name, but the mouth's (_mouth_kind): the path parts (_PATHS, slot:
     the path data), the eyes (_eye's outline, lid and texts) and the cheeks (_cheeks' texts)."""
     style = _style_texts(face)
     forms = {name: form_of(functools.partial(_slot_path_part, name, style[kind]), 1) for name, (_, kind) in _PATHS.items()}
@@ -282,25 +282,54 @@ def _slot_eye(side: str, uid: str, style: dict[str, str], slots: Sequence[str]) 
 
 
 # The mouth's texts that _mouth writes into what its skeleton keeps (render/compact.py: stroke widths)
-# or reads (whether a piece is drawn): its Forms differ by them.
-_KEPT = ("tongue_ry", "lower_width", "upper_width", "bite_width")
+# or reads (whether a piece is drawn): its Forms and templates differ by them. Their places in MOUTH_TEXTS.
+_KEPT = tuple(MOUTH_TEXTS.index(name) for name in ("tongue_ry", "lower_width", "upper_width", "bite_width"))
 
 
-def _mouth_form(face: FaceModel, uid: str, text: dict[str, str]) -> Form:
-    """The Form of _mouth's part of the mouth `text` (render/mouth.py's texts; slots: its texts in
-    mouth.TEXTS order): one for each set of pieces drawn and widths (whole pixels: a few), made once."""
-    return _kept_mouth_form(face, uid, text["tongue_ry"] == "0", tuple(map(text.__getitem__, _KEPT[1:])))
+def _mouth_part(face: FaceModel, uid: str, texts: tuple[str, ...], forms: dict[Part, Formed] | None) -> Part:
+    """_mouth's part of the mouth `texts` (render/mouth.py's, in its TEXTS order), filled into the
+    templates of its kind (_mouth_kind), put into `forms` (when given) with its Form and the texts."""
+    form, text, clips = _mouth_kind(face, uid, texts[_KEPT[0]] == "0", _KEPT_WIDTHS(texts))
+    return _formed(Part("mouth", text(texts), tuple(clip(texts) for clip in clips)), form, texts, forms)
+
+
+_KEPT_WIDTHS = operator.itemgetter(*_KEPT[1:])
+_Filled = Callable[[Sequence[str]], str]  # a text written from a mouth's texts (_filled)
 
 
 @functools.lru_cache(maxsize=1024)
-def _kept_mouth_form(face: FaceModel, uid: str, shut: bool, widths: tuple[str, ...]) -> Form:
-    """_mouth_form of the mouths with no tongue drawn (`shut`) or one, and the `widths` of _KEPT[1:]."""
+def _mouth_kind(face: FaceModel, uid: str, shut: bool, widths: tuple[str, ...]) -> tuple[Form, _Filled, tuple[_Filled, ...]]:
+    """The mouths with no tongue drawn (`shut`) or one and the `widths` of _KEPT[1:] (whole pixels: a
+    few dozen kinds), which _mouth draws alike from their other texts: their Form (render/compact.py's
+    form_of; slots: the texts in MOUTH_TEXTS order), and _mouth's text and clips as functions of the
+    texts (_filled: one join a text instead of _mouth's pieces), made once."""
     fixed = dict(zip(_KEPT[1:], widths, strict=True))
     if shut:
-        fixed["tongue_ry"] = "0"
+        fixed[_KEPT[0]] = "0"
     style = _style_texts(face)
-    return form_of(lambda slots: _mouth({name: fixed.get(name, slot) for name, slot in zip(MOUTH_TEXTS, slots, strict=True)},
-                                        uid, style), len(MOUTH_TEXTS))
+
+    def draw(slots: Sequence[str]) -> Part:
+        return _mouth(dict(zip(MOUTH_TEXTS, [fixed.get(place, slot) for place, slot in enumerate(slots)], strict=True)),
+                      uid, style)
+
+    part = draw([f"{_MARK}{place}{_MARK}" for place in range(len(MOUTH_TEXTS))])
+    return form_of(draw, len(MOUTH_TEXTS)), _filled(part.text), tuple(map(_filled, part.clips))
+
+
+_MARK = "\x00"  # around a text's place where _mouth_kind draws a mouth: in no text _mouth writes
+_MARKED = re.compile(f"{_MARK}(\\d+){_MARK}")
+
+
+def _filled(marked: str) -> _Filled:
+    """The text `marked` (_mouth_kind's: the places of the texts marked) as a function of the
+    texts: its pieces between the marks joined with the texts they mark (numbers.fill)."""
+    cut = _MARKED.split(marked)
+    frame = tuple(text if index % 2 == 0 else "" for index, text in enumerate(cut))
+    places = [int(place) for place in cut[1::2]]
+    if len(places) == 1:  # itemgetter of one place gives the text, not a tuple
+        return lambda texts: fill(frame, (texts[places[0]],))
+    taken = operator.itemgetter(*places)
+    return lambda texts: fill(frame, taken(texts))
 
 
 def _formed(part: Part, form: Form, slots: tuple[str, ...], forms: dict[Part, Formed] | None) -> Part:
