@@ -213,12 +213,9 @@ def _texts(limit: int) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=64)
-def _lettered_texts(prefixes: tuple[str, ...], limit: int) -> np.ndarray:
-    """_texts(limit), then for each of `prefixes` (command letters) the plain number texts
-    after it ('c5', 'c-5'): ((2 + len(prefixes)) (2 limit + 1),) texts, a block each."""
-    texts = _texts(limit)
-    plain = texts[:2 * limit + 1]
-    return np.concatenate([texts, *(prefix + plain for prefix in prefixes)])
+def _lettered_texts(letters: str, limit: int) -> np.ndarray:
+    """The plain number texts of _texts(limit) after command `letters` ('c5', 'c-5'): (2 limit + 1,)."""
+    return letters + _texts(limit)[:2 * limit + 1]
 
 
 def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
@@ -227,14 +224,21 @@ def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     bases = np.where(plan.references >= 0, rounded[:, np.maximum(plan.references, 0)], 0)
     relative = values - bases
     limit = 1 << max(int(np.abs(relative).max(initial=0)).bit_length(), 10)
-    # each number one look-up: in the plain texts, the comma ones or those after its letters
-    # (_lettered_texts' blocks), a block chosen per column
-    prefixes = plan.prefixes.tolist()
-    blocks = {prefix: block for block, prefix in enumerate(dict.fromkeys(filter(None, prefixes)), 2)}
-    starts = np.array([blocks[prefix] if prefix else 1 - after for prefix, after in zip(prefixes, plan.after_letter.tolist(),
-                                                                                        strict=True)])
-    numbers = _lettered_texts(tuple(blocks), limit)[relative + limit + starts * (2 * limit + 1)]
+    # one look-up in the plain texts then the comma ones; the numbers after letters (few) looked up
+    # again in the texts after those letters (made once: no string added per number)
+    numbers = _texts(limit)[relative + limit + np.where(plan.after_letter, 0, 2 * limit + 1)]
+    lettered = np.flatnonzero(plan.prefixes != "")
+    for letters, columns in _by_letters(plan.prefixes[lettered].tolist(), lettered.tolist()).items():
+        numbers[:, columns] = _lettered_texts(letters, limit)[relative[:, columns] + limit]
     return ["".join(row) + plan.tail for row in numbers.tolist()]
+
+
+def _by_letters(letters: list[str], columns: list[int]) -> dict[str, list[int]]:
+    """The `columns` by the `letters` before their numbers."""
+    grouped: dict[str, list[int]] = {}
+    for prefix, column in zip(letters, columns, strict=True):
+        grouped.setdefault(prefix, []).append(column)
+    return grouped
 
 
 def _plain_numbers(paths: list[str], tenths: Tenths | None = None) -> np.ndarray | None:
