@@ -69,9 +69,16 @@ def number_texts(values: np.ndarray) -> tuple[str, ...]:
     return tenths_texts(rounded_tenths(values))
 
 
+_NARROW = np.iinfo(np.int32)
+
+
 def rounded_tenths(values: np.ndarray) -> np.ndarray:
-    """Any float array (pixels) in whole tenths of a pixel, as number_texts rounds them (int64, same shape)."""
-    return np.rint(np.asarray(values, dtype=float) * TENTHS).astype(np.int64)
+    """Any float array (pixels) in whole tenths of a pixel, as number_texts rounds them (same shape):
+    int32 where they all fit (a drawing's always: the rows the drawing compares and keeps by the
+    thousand are half as many bytes), else int64."""
+    scaled = np.rint(np.asarray(values, dtype=float) * TENTHS)
+    fits = not scaled.size or _NARROW.min <= scaled.min() and scaled.max() <= _NARROW.max
+    return scaled.astype(np.int32 if fits else np.int64)
 
 
 def tenths_texts(tenths: np.ndarray) -> tuple[str, ...]:

@@ -290,7 +290,7 @@ def _read_numbers(paths: list[str]) -> np.ndarray | None:
 
 
 # Path data written from whole tenths of a pixel (render/geometry.py), by their text: those numbers
-# in the order written ((k,) int64), as render/numbers.py's tenths_texts wrote them.
+# in the order written ((k,) integers: numbers.rounded_tenths'), as render/numbers.py's tenths_texts wrote them.
 Tenths = Mapping[str, np.ndarray]
 Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data's points
 
