@@ -211,7 +211,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     zipped from those columns. Written as text: the hot path of render/animation.py. `tenths`,
     when given, gets the numbers of the path data of geometry's shapes, the mouths and the chin shadows as written (render/pathdata.py's
     Tenths: what compacting them would read again). `forms`, when given, gets the Form and slots
-    (render/compact.py's Formed) of each part drawn but the chin shadows: its path data, positions and
+    (render/compact.py's Formed) of each part drawn but the uncut chin shadows: its path data, positions and
     sizes, for compacting without cutting its text apart again (compact.drawn_parts)."""
     style, made = _style_texts(face), _forms(face, uid)
     shapes = all_face_shape_columns(posed)
@@ -240,7 +240,8 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
                                                                made[f"eye-{key[0]}"], key[1:], forms)))
     cheeks = _once(list(zip(*numbers[:_CHEEK_COUNT], strict=True)),
                    lambda key: _formed(Part("cheeks", _cheeks(key, style)), made["cheeks"], key, forms))
-    return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
+    return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"],
+                    _once(shadows, lambda text: _chin_shadow(text, made["chin-shadow"], forms)),
                     paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
                     *eye_parts, _drawn_once([_mouth_part(face, uid, mouth, forms) for mouth in mouths], mouth_of),
                     strict=True))
@@ -262,13 +263,32 @@ def _path_part(name: str, d: str, style: str) -> Part:
 def _forms(face: FaceModel, uid: str) -> dict[str, Form]:
     """The Form (render/compact.py's form_of) of each part all_face_parts draws of `face` with
     clip ids ending in `uid`, by name, but the mouth's (_mouth_kind): the path parts (_PATHS, slot:
-    the path data), the eyes (_eye's outline, lid and texts) and the cheeks (_cheeks' texts)."""
+    the path data), the eyes (_eye's outline, lid and texts), the cheeks (_cheeks' texts) and a cut
+    chin shadow (_chin_shadow: its path data)."""
     style = _style_texts(face)
     forms = {name: form_of(functools.partial(_slot_path_part, name, style[kind]), 1) for name, (_, kind) in _PATHS.items()}
     for side in EYES:
         forms[f"eye-{side}"] = form_of(functools.partial(_slot_eye, side, uid, style), 2 + _EYE_COUNT)
     forms["cheeks"] = form_of(lambda slots: Part("cheeks", _cheeks(slots, style)), _CHEEK_COUNT)
+    forms["chin-shadow"] = form_of(lambda slots: Part("chin-shadow", _SHADOW_HEAD + slots[0] + _SHADOW_TAIL), 1)
     return forms
+
+
+# A cut chin shadow's text as render/scenery.py's chin_shadows writes it with the paint _CHIN_SHADOW:
+# its path data between these two.
+_SHADOW_HEAD, _SHADOW_TAIL = '<path d="', f'"{_CHIN_SHADOW}/>'
+
+
+def _chin_shadow(text: str, form: Form, forms: dict[Part, Formed] | None) -> Part:
+    """The chin shadow `text` (render/scenery.py's chin_shadows') as a part; a cut one (a path) put
+    into `forms` (when given) with its `form` and its path data, read off between the two ends its
+    text always has (an ellipse's text is cut by compact.drawn_parts)."""
+    part = Part("chin-shadow", text)
+    if text.startswith(_SHADOW_HEAD) and text.endswith(_SHADOW_TAIL):
+        d = text[len(_SHADOW_HEAD):-len(_SHADOW_TAIL)]
+        if '"' not in d:  # the path data alone
+            _formed(part, form, (d,), forms)
+    return part
 
 
 def _slot_path_part(name: str, style: str, slots: Sequence[str]) -> Part:
