@@ -228,7 +228,8 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
                                shapes[shape][2])
              for name, (shape, kind) in _PATHS.items()}
     if tenths is not None:
-        tenths.update(pair for texts, rows, _ in shapes.values() for pair in zip(texts, rows, strict=True))
+        for written, rows, _ in shapes.values():
+            tenths.update(zip(written, rows, strict=True))
     # each state's numbers (CHEEK_COUNT, then EYE_COUNT per eye) as columns: number j of every state
     numbers = [texts[j::per_state] for j in range(per_state)]
     eye_parts = []
