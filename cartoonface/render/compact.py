@@ -209,8 +209,12 @@ def _formed_values(form: Form, slots: Sequence[tuple[str, ...]], compact: Mappin
         checks.append(map(operator.ne, *paths))
     elif len(paths) > 2:
         checks.append(len(set(row)) == len(row) for row in zip(*paths))
-    fine = map(all, zip(*checks)) if checks else itertools.repeat(True, len(slots))
-    return [row if ok else None for ok, *row in zip(fine, *paths, *fields)]
+    rows = zip(*paths, *fields) if paths or fields else itertools.repeat(())  # a part a row
+    values: list[list[str] | None] = list(map(list, itertools.islice(rows, len(slots))))
+    if checks:
+        for number in compress(range(len(values)), map(operator.not_, map(all, zip(*checks)))):
+            values[number] = None
+    return values
 
 
 @functools.lru_cache(maxsize=1 << 12)
