@@ -214,3 +214,19 @@ def test_path_data_compacted_from_its_numbers_as_drawn_as_from_its_text(face):
     assert compacted(paths, tenths=tenths) == compacted(paths)
     partly = dict(list(tenths.items())[::2])  # a skeleton's paths some taken from tenths, some read
     assert compacted(paths, tenths=partly) == compacted(paths)
+
+
+def test_a_mouth_filled_into_its_kinds_templates_is_what_the_mouth_drawing_writes(face):
+    """render/svg.py draws each distinct mouth by filling the templates of its kind (tongue drawn or
+    not, widths of the teeth and the bite) with its texts: the part render/svg.py's _mouth writes of
+    them, for mixed states and every mouth shape alone."""
+    from cartoonface.render.svg import _mouth, _mouth_part, _style_texts
+
+    states = random_states(40, 13) + [FaceState(mouth=((symbol, 1.0),), lips=0.5) for symbol in MOUTH_SYMBOLS]
+    posed = pose_faces(lift(face), states)
+    shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
+    mouths, _ = drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d)
+    kinds = {(texts[TEXTS.index("tongue_ry")] == "0", texts[TEXTS.index("bite_width")] == "0") for texts in mouths}
+    assert len(kinds) >= 3  # shut and open mouths, with and without a bite
+    for texts in mouths:
+        assert _mouth_part(face, "u", texts, None) == _mouth(dict(zip(TEXTS, texts, strict=True)), "u", _style_texts(face))
