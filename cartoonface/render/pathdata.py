@@ -428,8 +428,8 @@ def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
 
 def _compact_group(skeleton: str, members: list[str], done: Compacted,
                    tenths: Tenths | None = None, rounded: np.ndarray | None = None, kept: list[bool] | None = None) -> None:
-    """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
-    the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them;
+    """Compact the distinct path data `members` of one `skeleton` into `done` (a skeleton with
+    linetos: sorted in place, the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them;
     `rounded`, when given, all their numbers rounded to whole pixels, a row per member in their
     (sorted) order: they are not read; `kept`, when given, _kept of the first's (Compacted.kept)."""
     if rounded is None:
