@@ -16,8 +16,8 @@ from cartoonface.face.pose import PosedFaces, pose_face, pose_faces, rig, unroll
 from cartoonface.face.state import FaceState, Pose
 from cartoonface.render.compact import _extent, part_paths
 from cartoonface.render.geometry import all_face_shapes, face_shapes
-from cartoonface.render.mouth import (ROWS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts, mouth_outlines,
-                                      mouth_texts)
+from cartoonface.render.mouth import (ROWS, TEXTS, all_mouth_outlines, all_mouth_texts, drawn_mouth_texts,
+                                      mouth_outlines, mouth_texts)
 from cartoonface.render.pathdata import _alike_rows, _groups, compacted, merged
 from cartoonface.render.svg import all_face_parts, face_parts
 from tests.conftest import ROOT
@@ -96,7 +96,7 @@ def test_shapes_mouths_and_parts_in_a_batch_as_alone(face):
     assert {o.tongue[3] == 0 for o in outlines} == {True, False}  # shut and open mouths built together
     texts = all_mouth_texts(outlines)
     distinct, which = drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d)
-    assert [distinct[number] for number in which] == texts
+    assert [dict(zip(TEXTS, distinct[number], strict=True)) for number in which] == texts  # in TEXTS order
     assert len(distinct) == len({tuple(mouth.items()) for mouth in texts})  # each mouth written once
     parts = all_face_parts(face, posed, "u")
     for index in range(len(states)):
@@ -155,17 +155,18 @@ def test_alike_rows_group_equal_rows():
 
 
 def test_parts_handed_on_with_their_forms_make_what_cutting_their_text_makes(face):
-    """The Form and slots all_face_parts hands on with each part it draws (but the chin shadows) give
-    compact.drawn_parts the path data, skeletons and values that cutting the parts' texts apart
-    gives: the same Drawn, for mixed states and every mouth shape alone (tongue, teeth, bite drawn
-    or not)."""
+    """The Form and slots all_face_parts hands on with each part it draws (but the chin shadows drawn
+    as ellipses) give compact.drawn_parts the path data, skeletons and values that cutting the parts'
+    texts apart gives: the same Drawn, for mixed states and every mouth shape alone (tongue, teeth,
+    bite drawn or not)."""
     from cartoonface.render.compact import drawn_parts
 
     states = random_states(40, 11) + [FaceState(mouth=((symbol, 1.0),), lips=0.5) for symbol in MOUTH_SYMBOLS]
     forms: dict = {}
     drawn = all_face_parts(face, pose_faces(lift(face), states), "u", forms=forms)
     parts = list(dict.fromkeys(part for parts in drawn for part in parts))
-    assert {part.name for part in parts if part not in forms} == {"chin-shadow"}
+    assert {part.text[:8] for part in parts if part not in forms} == {"<ellipse"}  # the uncut chin shadows
+    assert any(part.name == "chin-shadow" for part in forms)  # and the cut ones (paths) handed on
     assert len({form for part, (form, _) in forms.items() if part.name == "mouth"}) >= 4
     assert drawn_parts(parts, formed=forms) == drawn_parts(parts)
 
@@ -213,3 +214,19 @@ def test_path_data_compacted_from_its_numbers_as_drawn_as_from_its_text(face):
     assert compacted(paths, tenths=tenths) == compacted(paths)
     partly = dict(list(tenths.items())[::2])  # a skeleton's paths some taken from tenths, some read
     assert compacted(paths, tenths=partly) == compacted(paths)
+
+
+def test_a_mouth_filled_into_its_kinds_templates_is_what_the_mouth_drawing_writes(face):
+    """render/svg.py draws each distinct mouth by filling the templates of its kind (tongue drawn or
+    not, widths of the teeth and the bite) with its texts: the part render/svg.py's _mouth writes of
+    them, for mixed states and every mouth shape alone."""
+    from cartoonface.render.svg import _mouth, _mouth_part, _style_texts
+
+    states = random_states(40, 13) + [FaceState(mouth=((symbol, 1.0),), lips=0.5) for symbol in MOUTH_SYMBOLS]
+    posed = pose_faces(lift(face), states)
+    shown = (posed.mouth[:, None, :] @ shown_parts())[:, 0]
+    mouths, _ = drawn_mouth_texts(posed.xy[:, ROWS], shown, face.fapu.d)
+    kinds = {(texts[TEXTS.index("tongue_ry")] == "0", texts[TEXTS.index("bite_width")] == "0") for texts in mouths}
+    assert len(kinds) >= 3  # shut and open mouths, with and without a bite
+    for texts in mouths:
+        assert _mouth_part(face, "u", texts, None) == _mouth(dict(zip(TEXTS, texts, strict=True)), "u", _style_texts(face))

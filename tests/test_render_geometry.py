@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 from cartoonface.render.geometry import arc, chaikin, chaikin_closed_operator, contour
-from cartoonface.render.numbers import fill, number_text, number_texts, template_frame
+from cartoonface.render.numbers import fill, number_text, number_texts, rounded_tenths, template_frame
 
 
 def bezier(start: np.ndarray, pieces: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -237,3 +237,10 @@ def test_neutral_pose_draws_the_model_points() -> None:
     # the mouth: tests/test_mouth_drawing.py
     for part, names in (("eye_l", ("3.12", "3.2", "3.8", "3.4", "3.12")), ("eye_r", ("3.7", "3.1", "3.11", "3.3", "3.7"))):
         np.testing.assert_allclose(anchors(shapes[part]), [face.point(n) for n in names], atol=0.051)
+
+
+def test_rounded_tenths_are_narrow_where_they_fit_and_exact_beyond() -> None:
+    # a drawing's tenths are int32 (half the bytes to compare); a number beyond int32 keeps int64
+    assert rounded_tenths(np.array([[12.34, -0.05], [400.0, 3276.8]])).dtype == np.int32
+    wide = rounded_tenths(np.array([3e8, -1.25]))
+    assert wide.dtype == np.int64 and wide.tolist() == [3_000_000_000, -12]

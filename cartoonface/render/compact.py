@@ -192,34 +192,35 @@ def form_of(draw: Callable[[list[str]], Part], slots: int) -> Form:
 _PLACED = re.compile(rf' ([^\s=]+)="{str(SENTINEL)[:-3]}\d{{3}}"')  # a position's or size's placeholder
 
 
-def _form_values(form: Form, slots: Sequence[str], compact: Mapping[str, str]) -> list[str] | None:
-    """The values (_skeleton's) of the part written from `slots` by the drawing function of `form`,
-    whose skeleton is form.skeleton; None when it is not (two of its path data compact alike, a size
-    is no plain number): its text is cut then."""
-    values = [compact[slots[slot]] for slot in form.paths]
-    if len(set(values)) < len(values):
-        return None
-    for slot, value, position in form.fields:
-        if slot < 0:
-            values.append(value)
-        elif position:
-            values.append(_whole(slots[slot]))
-        elif slots[slot].replace(".", "", 1).isdigit():
-            values.append(_as_written(slots[slot]))
-        else:
-            return None
+def _formed_values(form: Form, slots: Sequence[tuple[str, ...]], compact: Mapping[str, str]) -> list[list[str] | None]:
+    """The values (_skeleton's) of each part the drawing function of `form` wrote from `slots` (its
+    slots' texts, a tuple a part), whose skeleton is form.skeleton; None for a part whose skeleton
+    it is not (two of its path data compact alike, a size is no plain number): its text is cut then.
+    Slot by slot over all the parts (C loops: map, zip), not part by part."""
+    columns = {slot: list(map(operator.itemgetter(slot), slots))
+               for slot in {*form.paths, *(slot for slot, _, _ in form.fields if slot >= 0)}}
+    paths = [list(map(compact.__getitem__, columns[slot])) for slot in form.paths]
+    fields = [itertools.repeat(value) if slot < 0 else map(_whole if position else _as_written, columns[slot])
+              for slot, value, position in form.fields]
+    # per part: its sizes plain numbers, its path data's compact forms distinct
+    checks: list[Iterable[bool]] = [map(_plain, columns[slot]) for slot, _, position in form.fields
+                                    if slot >= 0 and not position]
+    if len(paths) == 2:
+        checks.append(map(operator.ne, *paths))
+    elif len(paths) > 2:
+        checks.append(len(set(row)) == len(row) for row in zip(*paths))
+    rows = zip(*paths, *fields) if paths or fields else itertools.repeat(())  # a part a row
+    values: list[list[str] | None] = list(map(list, itertools.islice(rows, len(slots))))
+    if checks:
+        for number in compress(range(len(values)), map(operator.not_, map(all, zip(*checks)))):
+            values[number] = None
     return values
 
 
-def _part_skeleton(known: Formed | None, cut: list[str] | None, part: tuple[str, str, tuple[str, ...]],
-                   compact: dict[str, str]) -> tuple[str, list[str]]:
-    """The skeleton and values (_skeleton's) of `part` (name, text, clips): from its Form and slots
-    `known` where they give them, else from its text's `cut` (_VALUE.split; None: cut here)."""
-    if known is not None:
-        values = _form_values(*known, compact)
-        if values is not None:
-            return known[0].skeleton, values
-    return _skeleton_of(cut or _VALUE.split("".join((part[1], *part[2]))), compact)
+@functools.lru_cache(maxsize=1 << 12)
+def _plain(value: str) -> bool:
+    """Whether a size's text `value` is a plain number (digits, at most one "."), as _skeleton_of takes one."""
+    return value.replace(".", "", 1).isdigit()
 
 
 def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = False,
@@ -231,31 +232,54 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = Fa
     of a skeleton with a first; Writer.finish makes them again), so done.compact keeps only theirs
     (~a fifth of the bytes sent less; were every part's needed again, Writer.finish compacts them
     from their text). `formed`: the Form and slots of some parts (render/svg.py's all_face_parts'),
-    whose path data, skeleton and values are taken from them, not cut out of their text."""
+    whose path data, skeleton and values are taken from them, not cut out of their text: the parts
+    of each Form together (_formed_values)."""
     fields = [(part.name, part.text, part.clips) for part in parts]
     given: list[Formed | None] = [None] * len(parts) if formed is None else list(map(formed.get, parts))
-    # each other part's text cut at its values once (_VALUE), for its path data and its skeleton;
-    # its elements end in ">": a path data in two cannot match
-    cuts = [None if known else _VALUE.split("".join((text, *clips))) for (_, text, clips), known in zip(fields, given)]
-    paths = [[_text(cut[index + 1]) for index in range(1, len(cut), 3) if cut[index] == "d"] if cut is not None
-             else [known[1][slot] for slot in known[0].paths] if known else []
-             for cut, known in zip(cuts, given, strict=True)]
-    done = compacted((d for part_paths_ in paths for d in part_paths_), tenths=tenths)
-    rank = {d: place for place, d in enumerate(done.firsts.values())}  # holds keep firsts' order
-    numbers: dict[str, int] = {}
+    by_form: dict[Form, tuple[list[int], list[tuple[str, ...]]]] = {}  # each Form's parts and slots (a few dozen)
+    cuts: dict[int, list[str]] = {}
+    for number, known in enumerate(given):
+        if known is None:  # cut at its values once (_VALUE), for its path data and its skeleton; its
+            # elements end in ">": a path data in two cannot match
+            cuts[number] = _VALUE.split("".join((fields[number][1], *fields[number][2])))
+        else:
+            numbers, slots = by_form.setdefault(known[0], ([], []))
+            numbers.append(number)
+            slots.append(known[1])
+    # the path data of the parts (and whose each is): of each Form's a column per path slot, of each other part a list
+    columns = [(numbers, list(map(operator.itemgetter(slot), slots)))
+               for form, (numbers, slots) in by_form.items() for slot in form.paths]
+    for number, cut in cuts.items():
+        paths = [_text(cut[index + 1]) for index in range(1, len(cut), 3) if cut[index] == "d"]
+        columns.append(([number] * len(paths), paths))
+    done = compacted(chain.from_iterable(column for _, column in columns), tenths=tenths)
+    made: list[tuple[str, list[str]] | None] = [None] * len(parts)
+    for form, (numbers, slots) in by_form.items():
+        for number, values in zip(numbers, _formed_values(form, slots, done.compact), strict=True):
+            if values is not None:
+                made[number] = (form.skeleton, values)
+    skeletons: dict[str, int] = {}
     forms = []
-    holds = {}
-    for number, (cut, known, part_paths_) in enumerate(zip(cuts, given, paths, strict=True)):
-        skeleton, values = _part_skeleton(known, cut, fields[number], done.compact)
-        forms.append((numbers.setdefault(skeleton, len(numbers)), values))
-        held = {d for d in part_paths_ if d in rank}
-        if held:
-            holds[number] = tuple(sorted(held, key=rank.__getitem__))
+    for number, skeleton_values in enumerate(made):
+        if skeleton_values is None:  # no Form, or not its skeleton: cut
+            cut = cuts.pop(number) if number in cuts else _VALUE.split("".join((fields[number][1], *fields[number][2])))
+            skeleton_values = _skeleton_of(cut, done.compact)
+        forms.append((skeletons.setdefault(skeleton_values[0], len(skeletons)), skeleton_values[1]))
+    # the parts holding a first path data (few), each's in the order of firsts
+    rank = {d: place for place, d in enumerate(done.firsts.values())}
+    held: dict[int, set[str]] = {}
+    for numbers, column in columns:
+        for number, d in compress(zip(numbers, column), map(rank.__contains__, column)):
+            held.setdefault(number, set()).add(d)
+    holds = {number: tuple(sorted(paths, key=rank.__getitem__)) for number, paths in held.items()}
     if sent:
         members = {d for skeleton_members in done.members.values() for d in skeleton_members}
-        done = replace(done, compact={d: done.compact[d] for part_paths_ in paths
-                                       if not members.isdisjoint(part_paths_) for d in part_paths_})
-    return Drawn(fields, list(numbers), forms, done, holds)
+        sending: set[int] = set()
+        for numbers, column in columns:
+            sending.update(compress(numbers, map(members.__contains__, column)))
+        done = replace(done, compact={d: done.compact[d] for numbers, column in columns
+                                      for number, d in zip(numbers, column) if number in sending})
+    return Drawn(fields, list(skeletons), forms, done, holds)
 
 
 class Writer:

@@ -324,10 +324,10 @@ def all_face_shapes(posed: Posed) -> list[dict[str, str]]:
 def all_face_shape_columns(posed: Posed) -> dict[str, tuple[list[str], list[np.ndarray], list[int]]]:
     """The path data of S posed faces (as all_face_shapes reads them) by part, in face_shapes'
     order: the part's distinct path data, their numbers in whole tenths of a pixel as written
-    ((k,) int64 each: render/pathdata.py's Tenths) and, per face, the number of its own among them. The
-    maps are applied to all faces by stacked products (each slice the product of one face, so
-    the same numbers), the hair's to each distinct hair outline once (a pose shown with many
-    mouths has one). A part whose numbers, in tenths, are those of another face of the stack
+    ((k,) integers each, numbers.rounded_tenths': render/pathdata.py's Tenths) and, per face, the
+    number of its own among them. The maps are applied to all faces by stacked products (each
+    slice the product of one face, so the same numbers), the hair's to each distinct hair outline
+    once (a pose shown with many mouths has one). A part whose numbers, in tenths, are those of another face of the stack
     (the hair, the ears, the nose under one pose with another mouth) is written once (_written)."""
     count = len(posed.xy)
     hair = np.asarray(posed.hair, dtype=float)

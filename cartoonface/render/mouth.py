@@ -245,9 +245,9 @@ TEXTS = ("lips", "opening", "upper_teeth", "lower_teeth", "bite", "upper_width",
 _PATHS = ((6, "Z"), (4, "Z"), (1, ""), (1, ""), (1, ""))  # the path data's cubic pieces and close
 _TEMPLATE = template_frame("|".join(["M%s %s" + "C%s %s %s %s %s %s" * pieces + close for pieces, close in _PATHS]
                                     + ["%s"] * 11))
-# where each path data's numbers lie among a mouth's numbers (_texts: Tenths)
+# where each path data's numbers lie among a mouth's numbers (_texts: Tenths): its place in TEXTS, its slice
 _PATH_ENDS = np.cumsum([2 + 6 * pieces for pieces, _ in _PATHS]).tolist()
-_PATH_SLICES = tuple(zip(TEXTS, [0, *_PATH_ENDS[:-1]], _PATH_ENDS))
+_PATH_SLICES = tuple(zip(range(len(_PATHS)), [0, *_PATH_ENDS[:-1]], _PATH_ENDS))
 
 
 def mouth_texts(outlines: MouthOutlines) -> dict[str, str]:
@@ -264,24 +264,24 @@ def all_mouth_texts(outlines: Sequence[MouthOutlines]) -> list[dict[str, str]]:
     sizes = np.array([[o.upper_width, o.lower_width, o.bite_width, *o.tongue[2:], *o.gloss[2:]] for o in outlines],
                      dtype=float).reshape(-1, 7)
     texts, which = _texts(np.concatenate([rows, places], axis=1), sizes)
-    return [texts[number] for number in which]
+    return [dict(zip(TEXTS, texts[number], strict=True)) for number in which]
 
 
 def drawn_mouth_texts(points: np.ndarray, shown: np.ndarray, d: float,
-                      tenths: dict[str, np.ndarray] | None = None) -> tuple[list[dict[str, str]], list[int]]:
+                      tenths: dict[str, np.ndarray] | None = None) -> tuple[list[tuple[str, ...]], list[int]]:
     """all_mouth_texts(all_mouth_outlines(points, shown, d)) without the MouthOutlines between,
     each distinct mouth written once: the texts of the distinct mouths among S (`points` (S, 8, 2),
-    `shown` (S, 4)) straight from _drawn's arrays, in the order first seen, and each mouth's number
-    among them (S). `tenths`: as _texts'."""
+    `shown` (S, 4)) straight from _drawn's arrays, each in TEXTS order (what render/svg.py draws a
+    mouth from), in the order first seen, and each mouth's number among them (S). `tenths`: as _texts'."""
     return _texts(*_drawn(points, shown, d), tenths)
 
 
 def _texts(images: np.ndarray, sizes: np.ndarray,
-           tenths: dict[str, np.ndarray] | None = None) -> tuple[list[dict[str, str]], list[int]]:
+           tenths: dict[str, np.ndarray] | None = None) -> tuple[list[tuple[str, ...]], list[int]]:
     """The mouth_texts of the distinct mouths among S from _drawn's `images` (S, 46, 2) and `sizes`
-    (S, 7) pixels, those whose numbers written differ (a pose shown many times: ~a third fewer),
-    in the order first seen, and each mouth's number among them (S). `tenths`, when given, gets
-    the numbers of their path data as written (render/pathdata.py's Tenths)."""
+    (S, 7) pixels, each in TEXTS order, those whose numbers written differ (a pose shown many times:
+    ~a third fewer), in the order first seen, and each mouth's number among them (S). `tenths`, when
+    given, gets the numbers of their path data as written (render/pathdata.py's Tenths)."""
     sizes = np.rint(sizes)
     places = images[:, 44:].reshape(-1, 4)
     numbers = np.concatenate([images[:, :44].reshape(len(images), -1), sizes[:, :3], places[:, :2], sizes[:, 3:5],
@@ -289,9 +289,9 @@ def _texts(images: np.ndarray, sizes: np.ndarray,
     rounded, which = distinct_rows(rounded_tenths(numbers))
     texts = tenths_texts(rounded)
     count = numbers.shape[1]
-    drawn = [dict(zip(TEXTS, fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|")))
+    drawn = [tuple(fill(_TEMPLATE, texts[index * count:(index + 1) * count]).replace(" -", "-").split("|"))
              for index in range(len(rounded))]
     if tenths is not None:
-        for name, start, end in _PATH_SLICES:
-            tenths.update(zip([mouth[name] for mouth in drawn], rounded[:, start:end], strict=True))
+        for place, start, end in _PATH_SLICES:
+            tenths.update(zip([mouth[place] for mouth in drawn], rounded[:, start:end], strict=True))
     return drawn, which

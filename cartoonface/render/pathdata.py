@@ -212,18 +212,33 @@ def _texts(limit: int) -> np.ndarray:
     return np.array([str(v) for v in values] + [str(v) if v < 0 else f",{v}" for v in values], dtype=object)
 
 
+@functools.lru_cache(maxsize=64)
+def _lettered_texts(letters: str, limit: int) -> np.ndarray:
+    """The plain number texts of _texts(limit) after command `letters` ('c5', 'c-5'): (2 limit + 1,)."""
+    return letters + _texts(limit)[:2 * limit + 1]
+
+
 def _write(plan: _Plan, rounded: np.ndarray) -> list[str]:
     """Path texts of the rows of `rounded` (n, 2P) integer absolute coordinates."""
     values = rounded[:, plan.columns]
     bases = np.where(plan.references >= 0, rounded[:, np.maximum(plan.references, 0)], 0)
     relative = values - bases
     limit = 1 << max(int(np.abs(relative).max(initial=0)).bit_length(), 10)
-    # one look-up in the plain texts then the comma ones; the letters added only where there are
-    # some (most numbers have none)
+    # one look-up in the plain texts then the comma ones; the numbers after letters (few) looked up
+    # again in the texts after those letters (made once: no string added per number)
     numbers = _texts(limit)[relative + limit + np.where(plan.after_letter, 0, 2 * limit + 1)]
     lettered = np.flatnonzero(plan.prefixes != "")
-    numbers[:, lettered] = plan.prefixes[lettered] + numbers[:, lettered]
+    for letters, columns in _by_letters(plan.prefixes[lettered].tolist(), lettered.tolist()).items():
+        numbers[:, columns] = _lettered_texts(letters, limit)[relative[:, columns] + limit]
     return ["".join(row) + plan.tail for row in numbers.tolist()]
+
+
+def _by_letters(letters: list[str], columns: list[int]) -> dict[str, list[int]]:
+    """The `columns` by the `letters` before their numbers."""
+    grouped: dict[str, list[int]] = {}
+    for prefix, column in zip(letters, columns, strict=True):
+        grouped.setdefault(prefix, []).append(column)
+    return grouped
 
 
 def _plain_numbers(paths: list[str], tenths: Tenths | None = None) -> np.ndarray | None:
@@ -240,11 +255,11 @@ def taken_or_read(paths: Sequence[str], tenths: Tenths, read: Callable[[list[str
     (tenths / 10 is the value strtod reads of the tenths' text, both the double nearest the
     decimal, but for the sign of a zero, which no one here sees), the others read by `read` ((m, k)
     of m path data, or None); None when `read` gives None or the paths hold different counts."""
-    known = [tenths.get(d) for d in paths]
+    known = list(map(tenths.get, paths))
     unknown = [index for index, row in enumerate(known) if row is None]
     read_rows = read([paths[index] for index in unknown]) if unknown else None
     rows = [row for row in known if row is not None]
-    counts = {len(row) for row in rows} | ({read_rows.shape[1]} if read_rows is not None else set())
+    counts = set(map(len, rows)) | ({read_rows.shape[1]} if read_rows is not None else set())
     if unknown and read_rows is None or len(counts) != 1:
         return None
     numbers = np.empty((len(paths), counts.pop()))
@@ -275,7 +290,7 @@ def _read_numbers(paths: list[str]) -> np.ndarray | None:
 
 
 # Path data written from whole tenths of a pixel (render/geometry.py), by their text: those numbers
-# in the order written ((k,) int64), as render/numbers.py's tenths_texts wrote them.
+# in the order written ((k,) integers: numbers.rounded_tenths'), as render/numbers.py's tenths_texts wrote them.
 Tenths = Mapping[str, np.ndarray]
 Extent = tuple[float, float, float, float]  # x0, y0, x1, y1: a box of path data's points
 
@@ -386,12 +401,13 @@ def _groups(paths: Iterable[str]) -> dict[str, list[str]]:
 
 def _compact_group(skeleton: str, members: list[str], done: Compacted,
                    tenths: Tenths | None = None, rounded: np.ndarray | None = None, kept: list[bool] | None = None) -> None:
-    """Compact the distinct path data `members` of one `skeleton` into `done` (sorted in place:
-    the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them;
+    """Compact the distinct path data `members` of one `skeleton` into `done` (a skeleton with
+    linetos: sorted in place, the first one's points kept in all); `tenths` (Tenths) has the numbers of some of them;
     `rounded`, when given, all their numbers rounded to whole pixels, a row per member in their
     (sorted) order: they are not read; `kept`, when given, _kept of the first's (Compacted.kept)."""
     if rounded is None:
-        members.sort()
+        if "L" in skeleton:  # the first's points are kept in all (_kept); else no member's order counts
+            members.sort()
         if "#" in skeleton:
             texts = [_NUMBER.findall(d) for d in members]
             numbers = np.array(texts, dtype=float) if len({len(row) for row in texts}) == 1 else None
@@ -437,4 +453,4 @@ def _extents(plan: _Plan, rounded: np.ndarray) -> list[Extent]:
     """The box of the points `plan` writes of each row of `rounded` (n, 2P) absolute coordinates."""
     xs, ys = (rounded[:, plan.columns[plan.columns % 2 == axis]] for axis in (0, 1))
     boxes = np.column_stack([xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)]).astype(float)
-    return [(x0, y0, x1, y1) for x0, y0, x1, y1 in boxes.tolist()]
+    return list(map(tuple, boxes.tolist()))

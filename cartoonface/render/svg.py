@@ -23,6 +23,8 @@ render/sheet.py, render/diagram.py and render/png.py.
 from __future__ import annotations
 
 import functools
+import operator
+import re
 from collections.abc import Callable, Hashable, Sequence
 from typing import TypeVar
 
@@ -40,7 +42,7 @@ from cartoonface.render.geometry import all_face_shape_columns, hypots
 from cartoonface.render.mouth import ROWS as MOUTH_ROWS
 from cartoonface.render.mouth import TEXTS as MOUTH_TEXTS
 from cartoonface.render.mouth import drawn_mouth_texts
-from cartoonface.render.numbers import number_text, number_texts
+from cartoonface.render.numbers import fill, number_text, number_texts
 from cartoonface.render.scenery import (COLOURS, JAW_SHADOW_OPACITY, background_layer, chin_shadows, clothes_layer,
                                         Figure, desk_layer, figure_of, lean, lean_transform, neck_middle)
 
@@ -209,7 +211,7 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
     zipped from those columns. Written as text: the hot path of render/animation.py. `tenths`,
     when given, gets the numbers of the path data of geometry's shapes, the mouths and the chin shadows as written (render/pathdata.py's
     Tenths: what compacting them would read again). `forms`, when given, gets the Form and slots
-    (render/compact.py's Formed) of each part drawn but the chin shadows: its path data, positions and
+    (render/compact.py's Formed) of each part drawn but the uncut chin shadows: its path data, positions and
     sizes, for compacting without cutting its text apart again (compact.drawn_parts)."""
     style, made = _style_texts(face), _forms(face, uid)
     shapes = all_face_shape_columns(posed)
@@ -226,7 +228,8 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
                                shapes[shape][2])
              for name, (shape, kind) in _PATHS.items()}
     if tenths is not None:
-        tenths.update(pair for texts, rows, _ in shapes.values() for pair in zip(texts, rows, strict=True))
+        for written, rows, _ in shapes.values():
+            tenths.update(zip(written, rows, strict=True))
     # each state's numbers (CHEEK_COUNT, then EYE_COUNT per eye) as columns: number j of every state
     numbers = [texts[j::per_state] for j in range(per_state)]
     eye_parts = []
@@ -238,11 +241,10 @@ def all_face_parts(face: FaceModel, posed: PosedFaces, uid: str, neck_lean: floa
                                                                made[f"eye-{key[0]}"], key[1:], forms)))
     cheeks = _once(list(zip(*numbers[:_CHEEK_COUNT], strict=True)),
                    lambda key: _formed(Part("cheeks", _cheeks(key, style)), made["cheeks"], key, forms))
-    return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"], _once(shadows, lambda text: Part("chin-shadow", text)),
+    return list(zip(paths["hair"], paths["ear-l"], paths["ear-r"],
+                    _once(shadows, lambda text: _chin_shadow(text, made["chin-shadow"], forms)),
                     paths["face"], paths["fringe"], cheeks, paths["nose"], paths["brow-l"], paths["brow-r"],
-                    *eye_parts, _drawn_once([_formed(_mouth(mouth, uid, style), _mouth_form(face, uid, mouth),
-                                                     tuple(map(mouth.__getitem__, MOUTH_TEXTS)), forms)
-                                             for mouth in mouths], mouth_of),
+                    *eye_parts, _drawn_once([_mouth_part(face, uid, mouth, forms) for mouth in mouths], mouth_of),
                     strict=True))
 
 
@@ -261,14 +263,33 @@ def _path_part(name: str, d: str, style: str) -> Part:
 @functools.lru_cache(maxsize=16)
 def _forms(face: FaceModel, uid: str) -> dict[str, Form]:
     """The Form (render/compact.py's form_of) of each part all_face_parts draws of `face` with
-    clip ids ending in `uid`, by name, but the mouth's (_mouth_form): the path parts (_PATHS, slot:
-    the path data), the eyes (_eye's outline, lid and texts) and the cheeks (_cheeks' texts)."""
+    clip ids ending in `uid`, by name, but the mouth's (_mouth_kind): the path parts (_PATHS, slot:
+    the path data), the eyes (_eye's outline, lid and texts), the cheeks (_cheeks' texts) and a cut
+    chin shadow (_chin_shadow: its path data)."""
     style = _style_texts(face)
     forms = {name: form_of(functools.partial(_slot_path_part, name, style[kind]), 1) for name, (_, kind) in _PATHS.items()}
     for side in EYES:
         forms[f"eye-{side}"] = form_of(functools.partial(_slot_eye, side, uid, style), 2 + _EYE_COUNT)
     forms["cheeks"] = form_of(lambda slots: Part("cheeks", _cheeks(slots, style)), _CHEEK_COUNT)
+    forms["chin-shadow"] = form_of(lambda slots: Part("chin-shadow", _SHADOW_HEAD + slots[0] + _SHADOW_TAIL), 1)
     return forms
+
+
+# A cut chin shadow's text as render/scenery.py's chin_shadows writes it with the paint _CHIN_SHADOW:
+# its path data between these two.
+_SHADOW_HEAD, _SHADOW_TAIL = '<path d="', f'"{_CHIN_SHADOW}/>'
+
+
+def _chin_shadow(text: str, form: Form, forms: dict[Part, Formed] | None) -> Part:
+    """The chin shadow `text` (render/scenery.py's chin_shadows') as a part; a cut one (a path) put
+    into `forms` (when given) with its `form` and its path data, read off between the two ends its
+    text always has (an ellipse's text is cut by compact.drawn_parts)."""
+    part = Part("chin-shadow", text)
+    if text.startswith(_SHADOW_HEAD) and text.endswith(_SHADOW_TAIL):
+        d = text[len(_SHADOW_HEAD):-len(_SHADOW_TAIL)]
+        if '"' not in d:  # the path data alone
+            _formed(part, form, (d,), forms)
+    return part
 
 
 def _slot_path_part(name: str, style: str, slots: Sequence[str]) -> Part:
@@ -282,25 +303,54 @@ def _slot_eye(side: str, uid: str, style: dict[str, str], slots: Sequence[str]) 
 
 
 # The mouth's texts that _mouth writes into what its skeleton keeps (render/compact.py: stroke widths)
-# or reads (whether a piece is drawn): its Forms differ by them.
-_KEPT = ("tongue_ry", "lower_width", "upper_width", "bite_width")
+# or reads (whether a piece is drawn): its Forms and templates differ by them. Their places in MOUTH_TEXTS.
+_KEPT = tuple(MOUTH_TEXTS.index(name) for name in ("tongue_ry", "lower_width", "upper_width", "bite_width"))
 
 
-def _mouth_form(face: FaceModel, uid: str, text: dict[str, str]) -> Form:
-    """The Form of _mouth's part of the mouth `text` (render/mouth.py's texts; slots: its texts in
-    mouth.TEXTS order): one for each set of pieces drawn and widths (whole pixels: a few), made once."""
-    return _kept_mouth_form(face, uid, text["tongue_ry"] == "0", tuple(map(text.__getitem__, _KEPT[1:])))
+def _mouth_part(face: FaceModel, uid: str, texts: tuple[str, ...], forms: dict[Part, Formed] | None) -> Part:
+    """_mouth's part of the mouth `texts` (render/mouth.py's, in its TEXTS order), filled into the
+    templates of its kind (_mouth_kind), put into `forms` (when given) with its Form and the texts."""
+    form, text, clips = _mouth_kind(face, uid, texts[_KEPT[0]] == "0", _KEPT_WIDTHS(texts))
+    return _formed(Part("mouth", text(texts), tuple(clip(texts) for clip in clips)), form, texts, forms)
+
+
+_KEPT_WIDTHS = operator.itemgetter(*_KEPT[1:])
+_Filled = Callable[[Sequence[str]], str]  # a text written from a mouth's texts (_filled)
 
 
 @functools.lru_cache(maxsize=1024)
-def _kept_mouth_form(face: FaceModel, uid: str, shut: bool, widths: tuple[str, ...]) -> Form:
-    """_mouth_form of the mouths with no tongue drawn (`shut`) or one, and the `widths` of _KEPT[1:]."""
+def _mouth_kind(face: FaceModel, uid: str, shut: bool, widths: tuple[str, ...]) -> tuple[Form, _Filled, tuple[_Filled, ...]]:
+    """The mouths with no tongue drawn (`shut`) or one and the `widths` of _KEPT[1:] (whole pixels: a
+    few dozen kinds), which _mouth draws alike from their other texts: their Form (render/compact.py's
+    form_of; slots: the texts in MOUTH_TEXTS order), and _mouth's text and clips as functions of the
+    texts (_filled: one join a text instead of _mouth's pieces), made once."""
     fixed = dict(zip(_KEPT[1:], widths, strict=True))
     if shut:
-        fixed["tongue_ry"] = "0"
+        fixed[_KEPT[0]] = "0"
     style = _style_texts(face)
-    return form_of(lambda slots: _mouth({name: fixed.get(name, slot) for name, slot in zip(MOUTH_TEXTS, slots, strict=True)},
-                                        uid, style), len(MOUTH_TEXTS))
+
+    def draw(slots: Sequence[str]) -> Part:
+        return _mouth(dict(zip(MOUTH_TEXTS, [fixed.get(place, slot) for place, slot in enumerate(slots)], strict=True)),
+                      uid, style)
+
+    part = draw([f"{_MARK}{place}{_MARK}" for place in range(len(MOUTH_TEXTS))])
+    return form_of(draw, len(MOUTH_TEXTS)), _filled(part.text), tuple(map(_filled, part.clips))
+
+
+_MARK = "\x00"  # around a text's place where _mouth_kind draws a mouth: in no text _mouth writes
+_MARKED = re.compile(f"{_MARK}(\\d+){_MARK}")
+
+
+def _filled(marked: str) -> _Filled:
+    """The text `marked` (_mouth_kind's: the places of the texts marked) as a function of the
+    texts: its pieces between the marks joined with the texts they mark (numbers.fill)."""
+    cut = _MARKED.split(marked)
+    frame = tuple(text if index % 2 == 0 else "" for index, text in enumerate(cut))
+    places = [int(place) for place in cut[1::2]]
+    if len(places) == 1:  # itemgetter of one place gives the text, not a tuple
+        return lambda texts: fill(frame, (texts[places[0]],))
+    taken = operator.itemgetter(*places)
+    return lambda texts: fill(frame, taken(texts))
 
 
 def _formed(part: Part, form: Form, slots: tuple[str, ...], forms: dict[Part, Formed] | None) -> Part:
