@@ -57,6 +57,7 @@ import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 from lxml import etree
@@ -269,8 +270,10 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()])
                    if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
                    else ([], range(len(names))))
+    # the child reads the path data's numbers through a view, which _search does not empty: in a fork
+    # emptying frees no memory of this process's and copied the dict's pages first (~20 ms there)
     theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
-                    tolerance, None, tenths)
+                    tolerance, None, None if tenths is None else MappingProxyType(tenths))
 
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
         drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress,
@@ -562,7 +565,12 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     half = round(len(states) * FIRST_SHARE)
     with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
         other = offloaded(pool, _draw_sent, face, states[half:], through=through)
-        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE), tenths)
+        # the helper draws its part meanwhile: this one's share done is about the whole's, and once it
+        # is drawn the helper's core is about to be free (generate's ffmpeg begins then, on it); with
+        # no helper, its part is drawn here after
+        own = 1.0 if pool is not None else FIRST_SHARE
+        numbered, drawn = _draw_compacted(face, states[:half], lambda done: progress(done * own), tenths)
+        progress(own)
         raw = _collected(writer, numbered, drawn, where, [])
         writer.prepare()
         done = drawn.done
