@@ -222,11 +222,12 @@ def _send(sender: Connection, fn: Callable[..., object], args: tuple[object, ...
     sender.close()
 
 
-def shares(costs: Sequence[float]) -> tuple[list[int], list[int]]:
+def shares(costs: Sequence[float], besides: float = 0.0) -> tuple[list[int], list[int]]:
     """Indices of `costs` split into two lists of about equal total (the largest first, each to
-    the lighter side; ties to the first), each list in increasing order."""
+    the lighter side; ties to the first), each list in increasing order; `besides`: the cost of
+    other work the second list's process does (in the same units), counted in its total."""
     sides: tuple[list[int], list[int]] = ([], [])
-    totals = [0.0, 0.0]
+    totals = [0.0, besides]
     for index in sorted(range(len(costs)), key=lambda i: -costs[i]):
         side = 0 if totals[0] <= totals[1] else 1
         sides[side].append(index)

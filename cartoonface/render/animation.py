@@ -132,6 +132,12 @@ MIN_BATCH = 32
 # each to draw; starting the process and sending the drawings back take ~0.1 s), and searches the
 # reused drawings in two (_reuse) from this many distinct drawings of all tracks.
 POOL_STATES = 400
+# _reuse splits the tracks by their distinct parts (the search's cost grows with them); this process
+# also makes the tidy drawings meanwhile (Writer.drawings), at this share of the search's cost per part
+# per tidy part: 0.11 s for 15,600 tidy parts, against 0.33 s for the search of 6,900 parts here (the
+# 190 s bench book, 2026-11-27, fifth session: docs/BENCHMARKS.md, "gaps"). To be measured again when
+# either changes (with the search's points read in the drawing processes the share grows).
+TIDY_PART_COST = 0.14
 # The share of the distinct states this process draws when a helper draws the rest (_drawings): the
 # helper's part must also be pickled, sent and unpickled (~0.1 s for the 2,400 of the 190 s bench
 # book through the pool's pipe, ~0.05 s through a memory file: docs/BENCHMARKS.md, "xfer") while this
@@ -253,7 +259,7 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     poses. A drawing's parts are tidy part numbers; `mapping` gives the tidy number of each of
     `writer`'s raw parts, the first of which is the part's geometry as drawn (the others differ by
     less than the whole-pixel rounding). A part belongs to one track, so the tracks are searched
-    apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts) by a child forked now
+    apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts, TIDY_PART_COST) by a child forked now
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts. `tenths` (pathdata.Tenths): the numbers
@@ -267,7 +273,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     names = list(tracks)
     # split by the parts to read and fit; the child takes the side with the largest track (the face's, its
     # mouths the most), as this process makes the tidy drawings meanwhile
-    there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()])
+    there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()],
+                          TIDY_PART_COST * (max(mapping, default=-1) + 1))  # this process makes the tidy drawings too
                    if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
                    else ([], range(len(names))))
     # the child reads the path data's numbers through a view, which _search does not empty: in a fork
