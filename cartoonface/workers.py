@@ -20,6 +20,7 @@ import mmap
 import multiprocessing
 import os
 import pickle
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -181,7 +182,7 @@ def from_both_ends(pool: Executor | None, jobs: Sequence[tuple[Callable[..., T],
 def forked(workers: int, fn: Callable[..., T], *args: object) -> Callable[[], T]:
     """fn(*args) begun in a child process forked now when `workers` is 2 or more: the child holds
     `args` as they are here (nothing is pickled but the result, sent back through a pipe). Returns
-    a function giving the result, waiting for the child; computed in this process instead when
+    a function giving the result, waiting for it (not for the child's exit); computed in this process instead when
     `workers` < 2 or fork is missing, or the child could not start or did not send a result (no
     memory, killed, `fn` raised: the exception is then raised here by computing it again). A child
     whose result is never asked for waits on its pipe (daemonic: it ends with this process)."""
@@ -203,7 +204,8 @@ def forked(workers: int, fn: Callable[..., T], *args: object) -> Callable[[], T]
             value = fn(*args)
         finally:
             receiver.close()
-            child.join()
+            # its exit (a few ms of letting go of its address space) waited for by a thread, not here
+            threading.Thread(target=child.join, daemon=True).start()
         return value
 
     return result
@@ -220,11 +222,12 @@ def _send(sender: Connection, fn: Callable[..., object], args: tuple[object, ...
     sender.close()
 
 
-def shares(costs: Sequence[float]) -> tuple[list[int], list[int]]:
+def shares(costs: Sequence[float], besides: float = 0.0) -> tuple[list[int], list[int]]:
     """Indices of `costs` split into two lists of about equal total (the largest first, each to
-    the lighter side; ties to the first), each list in increasing order."""
+    the lighter side; ties to the first), each list in increasing order; `besides`: the cost of
+    other work the second list's process does (in the same units), counted in its total."""
     sides: tuple[list[int], list[int]] = ([], [])
-    totals = [0.0, 0.0]
+    totals = [0.0, besides]
     for index in sorted(range(len(costs)), key=lambda i: -costs[i]):
         side = 0 if totals[0] <= totals[1] else 1
         sides[side].append(index)

@@ -45,13 +45,15 @@ def _dies_in_a_child(parent: int) -> int:
     return parent
 
 
+@pytest.mark.parametrize("besides", [0.0, 0.3])
 @pytest.mark.parametrize("seed", range(5))
-def test_shares_split_every_index_once_about_evenly(seed):
+def test_shares_split_every_index_once_about_evenly(seed, besides):
     costs = np.random.default_rng(seed).uniform(0.1, 5.0, size=3 + 4 * seed).tolist()
-    first, second = shares(costs)
+    other = besides * sum(costs)  # work the second side does besides, counted with its share
+    first, second = shares(costs, other)
     assert sorted(first + second) == list(range(len(costs)))
     assert first == sorted(first) and second == sorted(second)
-    assert abs(sum(costs[i] for i in first) - sum(costs[i] for i in second)) <= max(costs)
+    assert abs(sum(costs[i] for i in first) - sum(costs[i] for i in second) - other) <= max(costs)
 
 
 def test_the_helper_is_forked_at_once_and_computes_the_same(tmp_path):

@@ -134,6 +134,12 @@ MIN_BATCH = 32
 # each to draw; starting the process and sending the drawings back take ~0.1 s), and searches the
 # reused drawings in two (_reuse) from this many distinct drawings of all tracks.
 POOL_STATES = 400
+# _reuse splits the tracks by their distinct parts (the search's cost grows with them); this process
+# also makes the tidy drawings meanwhile (Writer.drawings), at this share of the search's cost per part
+# per tidy part: 0.11 s for 15,600 tidy parts, against 0.33 s for the search of 6,900 parts here (the
+# 190 s bench book, 2026-11-27, fifth session: docs/BENCHMARKS.md, "gaps"). To be measured again when
+# either changes (with the search's points read in the drawing processes the share grows).
+TIDY_PART_COST = 0.14
 # The share of the distinct states this process draws when a helper draws the rest (_drawings): the
 # helper's part must also be pickled, sent and unpickled (~0.1 s for the 2,400 of the 190 s bench
 # book through the pool's pipe, ~0.05 s through a memory file: docs/BENCHMARKS.md, "xfer") while this
@@ -148,9 +154,10 @@ FIRST_SHARE = 0.56
 # when the shared parts are found and when the tracks are written; the rest makes the document's
 # bytes (measured 2026-11-27, fourth session, processor time of this process in generate, on the
 # sample story and bench/generate.py's 190 s input: docs/BENCHMARKS.md, "Issue 16, where it stands
-# (end of the fourth session"). REUSE_STEPS: shares of the reuse step done when the
+# (end of the fourth session"; DRAWN_SHARE again in the fifth, once told as this process's part is
+# drawn: "gaps"). REUSE_STEPS: shares of the reuse step done when the
 # points are read and when the tracks' drawings are searched (the parts' search is the rest).
-DRAWN_SHARE = 0.5
+DRAWN_SHARE = 0.42
 TIDIED_SHARE = 0.65
 REUSED_SHARE = 0.91
 SHARED_SHARE = 0.96
@@ -257,7 +264,7 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     poses. A drawing's parts are tidy part numbers; `mapping` gives the tidy number of each of
     `writer`'s raw parts, the first of which is the part's geometry as drawn (the others differ by
     less than the whole-pixel rounding). A part belongs to one track, so the tracks are searched
-    apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts) by a child forked now
+    apart: with `workers` 2 and POOL_STATES drawings or more, about half of them (by distinct parts, TIDY_PART_COST) by a child forked now
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts. `parts_read` (_drawings'): the parts as the
@@ -270,7 +277,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     names = list(tracks)
     # split by the parts to read and fit; the child takes the side with the largest track (the face's, its
     # mouths the most), as this process makes the tidy drawings meanwhile
-    there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()])
+    there, here = (shares([len({number for drawing in track.drawings for number in drawing}) for track in tracks.values()],
+                          TIDY_PART_COST * (max(mapping, default=-1) + 1))  # this process makes the tidy drawings too
                    if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
                    else ([], range(len(names))))
     theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
@@ -612,7 +620,12 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     half = round(len(states) * FIRST_SHARE)
     with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
         other = offloaded(pool, _draw_sent, face, states[half:], through=through)
-        numbered, drawn, unread = _draw_compacted(face, states[:half], lambda done: progress(done * FIRST_SHARE))
+        # the helper draws its part meanwhile: this one's share done is about the whole's, and once it
+        # is drawn the helper's core is about to be free (generate's ffmpeg begins then, on it); with
+        # no helper, its part is drawn here after
+        own = 1.0 if pool is not None else FIRST_SHARE
+        numbered, drawn, unread = _draw_compacted(face, states[:half], lambda done: progress(done * own))
+        progress(own)
         raw = _collected(writer, numbered, drawn, where, [], numbers)
         writer.prepare()
         done = drawn.done
