@@ -24,7 +24,7 @@ from pathlib import Path
 
 import cartoonface.speech.analyse as analyse
 from bench.generate import build_input
-from cartoonface.pipeline import recording_pitch
+from cartoonface.animate.prosody import recording_pitch
 from cartoonface.speech.audio import Audio, load_audio
 from cartoonface.speech.records import Sentence
 from cartoonface.speech.sentences import Span
