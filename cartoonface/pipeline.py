@@ -27,7 +27,7 @@ from cartoonface.animate.behaviour import emotion_actions, marked_spans, schedul
 from cartoonface.animate.body import body_motion
 from cartoonface.animate.frames import FPS_RANGE, frame_times, on_twos, sample_breaths, sample_frames, states_at
 from cartoonface.animate.idle import sway
-from cartoonface.animate.prosody import pitch_peaks, pitch_track
+from cartoonface.animate.prosody import pitch_peaks, recording_pitch
 from cartoonface.animate.style import PAGE_STYLES, STYLES
 from cartoonface.animate.timeline import build_timeline
 from cartoonface.errors import AlignmentError, OptionError, TranscriptError
@@ -196,12 +196,6 @@ def clip_sound(clip: Clip, staging: Path) -> tuple[Path, Audio]:
     return wav, Audio(samples=samples, rate=SILENT_RATE, source=str(clip.path))
 
 
-def recording_pitch(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """prosody.pitch_track (times (m,) s, f0 (m,) Hz) of the recording at `path`, decoded here."""
-    recording = load_audio(path)
-    return pitch_track(recording.samples, recording.rate)
-
-
 @collector_paused()  # the job's many containers hold no cycles (workers.collector_paused)
 def generate(
     face: Path | FaceModel,
@@ -211,6 +205,7 @@ def generate(
     options: Options = Options(),
     progress: Callable[[str, float], None] | None = None,
     video: Path | None = None,
+    pitch: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> Result:
     """Make the page folder `out_dir` from a face model, a recording and its transcript.
 
@@ -226,6 +221,9 @@ def generate(
     sound is the recording, and the head, eyes, brows and mouth follow the face in it
     (video/track.py, video/drive.py; tracked during the "decode" stage); a clip without sound
     makes a silent page (said in the notes).
+
+    `pitch`: a getter of `audio`'s prosody.recording_pitch begun elsewhere (the command begins it
+    in a process of its own before its imports: cli/generate.py `begun`); None: the helper computes it.
     """
     started = time.perf_counter()
     names = [name for name, _ in STAGES]
@@ -249,8 +247,8 @@ def generate(
     marks = () if text is None else emotion_marks(text, source)
     clip = None if video is None else video_input(video, text)
     report("decode")
-    # A forked helper (workers.py) computes the pitch track, then aligns parts as this process does
-    # (none for a web job: its CPU-time limit counts per process). The page's compressed audio is
+    # A forked helper (workers.py) computes the pitch track (unless `pitch` was begun before), then
+    # aligns parts as this process does (none for a web job: its CPU-time limit counts per process). The page's compressed audio is
     # made by ffmpeg in a thread once the frames are drawn (the pool is left, waiting for ffmpeg,
     # before its folder is removed).
     with (helper_pool(processes()) as helper,
@@ -268,8 +266,10 @@ def generate(
             raise OptionError("no recording: expected an audio file or a video")
         # the helper decodes the recording itself for the pitch track, while this process does,
         # rather than wait for it and be sent the samples (12 MB for 3 minutes, ~0.1 s of piping)
-        pitch = (offloaded(helper, recording_pitch, sound) if helper is not None and options.actions is None
-                 else None)
+        if options.actions is not None:  # edited actions: no pitch peaks needed
+            pitch = None
+        elif pitch is None or clip is not None:  # none begun for this recording (a clip's sound is made here)
+            pitch = None if helper is None else offloaded(helper, recording_pitch, sound)
         recording = load_audio(sound) if decoded is None else decoded
         duration = recording.duration
         if clip is not None and not clip.has_audio:

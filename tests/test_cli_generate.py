@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
+from cartoonface.cli.generate import begun
 from tests.conftest import run_cli, spoken_inputs
 
 pytestmark = pytest.mark.skipif(not shutil.which("espeak-ng"), reason="needs espeak-ng")
@@ -97,3 +100,36 @@ def test_unwritable_output_is_a_one_line_error(inputs, tmp_path):
     assert done.returncode == 2
     assert "Traceback" not in done.stderr and "cannot write the output folder" in done.stderr
     assert blocker.read_text(encoding="utf-8") == "keep"
+
+
+STORY = ROOT / "samples" / "speech" / "story.wav"
+# A fresh interpreter begins the track as `cartoonface generate` does, before the library's imports;
+# prints whether numpy was imported by then, the children it had, whether the track is the one
+# prosody computes here and whether this process ever imported parselmouth to get it.
+BEGUN = """
+import multiprocessing, sys
+from cartoonface.cli.generate import begun
+recording, pitch = begun(sys.argv[1:])
+print("numpy" in sys.modules, len(multiprocessing.active_children()))
+times, f0 = pitch()
+taken_here = "parselmouth" in sys.modules
+import numpy as np
+from cartoonface.animate.prosody import recording_pitch
+mine = recording_pitch(recording)
+print(np.array_equal(times, mine[0]) and np.array_equal(f0, mine[1], equal_nan=True), taken_here)
+"""
+
+
+@pytest.mark.parametrize("form", ["--audio PATH", "--audio=PATH"])
+def test_the_pitch_track_is_begun_in_a_child_before_the_librarys_imports(form):
+    audio = ["--audio", str(STORY)] if form == "--audio PATH" else [f"--audio={STORY}"]
+    done = subprocess.run([sys.executable, "-c", BEGUN, "--face", str(FACE), *audio, "-o", "out"],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["False", "1", "True", "False"]
+
+
+@pytest.mark.parametrize("argv", [["--face", str(FACE), "-o", "out"], ["--video", "clip.mp4", "-o", "out"],
+                                  ["--audio", str(STORY), "--actions", "edited.json"], ["--audio"]])
+def test_no_track_is_begun_without_a_recording_or_with_edited_actions(argv):
+    assert begun(argv) is None  # the edited actions need no pitch peaks

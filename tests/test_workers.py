@@ -184,8 +184,10 @@ def test_analyse_with_a_helper_gives_the_one_process_alignment():
 
 def test_generate_with_its_helper_makes_what_one_process_makes(tmp_path, monkeypatch):
     """The helper decodes the recording itself for the pitch track and aligns parts: the
-    page folder is the one a single process (a web job's) makes, byte for byte."""
+    page folder is the one a single process (a web job's) makes, byte for byte; so is the one
+    made with the track begun elsewhere (the command's, cli/generate.py begun), taken once."""
     from cartoonface import pipeline
+    from cartoonface.animate.prosody import recording_pitch
 
     if pipeline.processes() < 2:
         pytest.skip("no second process on this machine")
@@ -193,8 +195,13 @@ def test_generate_with_its_helper_makes_what_one_process_makes(tmp_path, monkeyp
     pipeline.generate(*inputs, tmp_path / "two")
     monkeypatch.setattr(pipeline, "processes", lambda: 1)
     pipeline.generate(*inputs, tmp_path / "one")
+    taken = []
+    begun = forked(2, recording_pitch, STORY / "story.wav")
+    pipeline.generate(*inputs, tmp_path / "begun", pitch=lambda: taken.append(1) or begun())
+    assert taken == [1]
     for name in ("alignment.TextGrid", "actions.json", "animation.svg", "index.html"):
         assert (tmp_path / "two" / name).read_bytes() == (tmp_path / "one" / name).read_bytes(), name
+        assert (tmp_path / "begun" / name).read_bytes() == (tmp_path / "one" / name).read_bytes(), name
 
 def test_sampled_states_out_of_range_are_still_refused():
     alignment = synthetic_talk(30.0, seed=2)

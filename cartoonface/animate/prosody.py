@@ -17,8 +17,11 @@ the intonation, which is what an accent raises.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
+
+from cartoonface.speech.audio import load_audio
 
 # Praat's pitch analysis settings (our choice): 20 ms steps (a syllable of
 # 150-300 ms gets 7-15 frames; a peak's time is then known to 10 ms, well inside
@@ -44,6 +47,13 @@ def pitch_track(samples: np.ndarray, rate: int) -> tuple[np.ndarray, np.ndarray]
     f0 = np.array(pitch.selected_array["frequency"], dtype=float)
     f0[f0 <= 0] = np.nan
     return np.array(pitch.xs(), dtype=float), f0
+
+
+def recording_pitch(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
+    """pitch_track (times (m,) s, f0 (m,) Hz) of the recording at `path`, decoded here (a process
+    of its own: generate's helper, or the one the command forks before its imports)."""
+    recording = load_audio(path)
+    return pitch_track(recording.samples, recording.rate)
 
 
 def pitch_peaks(audio, alignment, track: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[float, ...]:

@@ -45,8 +45,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the process exit code (0 ok, 2 bad input)."""
     argv = sys.argv[1:] if argv is None else argv
+    # generate's pitch track begun before the parser imports the library (cli/generate.py begun)
+    early = generate.begun(argv[1:]) if argv[:1] == ["generate"] else None
     parser = build_parser(argv[0] if argv else None)
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv, namespace=argparse.Namespace(begun=early))
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
