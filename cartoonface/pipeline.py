@@ -318,9 +318,10 @@ def generate(
 
         def drawing(done: float) -> None:
             """Tell `progress` the svg stage's share `done`; begin the page's compressed audio once the
-            frames are drawn (render/animation.DRAWN_SHARE). ffmpeg (0.3 s of CPU for 3 minutes) then
-            runs on the core the drawing's two processes leave idle while this one tidies, not beside
-            the analysis's two or the drawing's two (docs/BENCHMARKS.md, "ffmpeg between the stages")."""
+            frames are drawn (render/animation.DRAWN_SHARE: this process's part; the drawing helper's
+            ends about then). ffmpeg (0.4-0.5 s of CPU for 3 minutes) then runs on the core the drawing
+            helper leaves idle while this one tidies, not beside the analysis's two or the drawing's two
+            (docs/BENCHMARKS.md, "ffmpeg between the stages" and "gaps")."""
             nonlocal compressed
             report("svg", done)
             if compressed is None and done >= DRAWN_SHARE:
