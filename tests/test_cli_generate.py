@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -133,3 +136,41 @@ def test_the_pitch_track_is_begun_in_a_child_before_the_librarys_imports(form):
                                   ["--audio", str(STORY), "--actions", "edited.json"], ["--audio"]])
 def test_no_track_is_begun_without_a_recording_or_with_edited_actions(argv):
     assert begun(argv) is None  # the edited actions need no pitch peaks
+
+
+def _processes_naming(text: str) -> list[int]:
+    """The processes whose command line holds `text` (the command and the helpers it forked)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            if entry.name.isdigit() and text in (entry / "cmdline").read_bytes().decode(errors="replace"):
+                found.append(int(entry.name))
+        except OSError:  # ended meanwhile
+            continue
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
+def test_sigterm_during_the_analysis_ends_the_command_and_its_helpers(tmp_path):
+    out = tmp_path / "terminated-site"
+    transcript = STORY.with_suffix(".txt")
+    with subprocess.Popen([sys.executable, "-m", "cartoonface", *generate_args(STORY, transcript, out)],
+                          stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, cwd=ROOT) as command:
+        try:
+            assert command.stderr is not None
+            for line in command.stderr:  # a line per stage when stderr is no terminal
+                if "segment" in line:
+                    break
+            assert len(_processes_naming(str(out))) >= 2  # the command and a helper it forked
+            command.send_signal(signal.SIGTERM)
+            assert command.wait(timeout=30) == 128 + signal.SIGTERM  # the signal's default: -15
+            deadline = time.monotonic() + 10
+            while _processes_naming(str(out)) and time.monotonic() < deadline:
+                time.sleep(0.1)
+            assert not _processes_naming(str(out))  # no helper left waiting to send its result
+            assert "terminated" in command.stderr.read()  # read once no helper holds the pipe
+            assert not out.exists()
+        finally:
+            command.kill()
+            for pid in _processes_naming(str(out)):
+                os.kill(pid, signal.SIGKILL)

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import argparse
 import gc
+import signal
 import sys
+from types import FrameType
 
 from cartoonface import __version__
 from cartoonface.cli import align, batch, face, generate, serve, worker
@@ -66,7 +68,19 @@ def command() -> int:
     """The `cartoonface` command (and `python -m cartoonface`): main() on sys.argv, its exit code.
     The heap is frozen (gc.freeze) before the process exits, so the interpreter's last collection
     skips what the job left behind: ~0.05 s of CPU after a 3-minute book (docs/BENCHMARKS.md,
-    "Issue 16, where it stands (end of the fourth session of 2026-11-27)")."""
+    "Issue 16, where it stands (end of the fourth session of 2026-11-27)").
+
+    SIGTERM (`kill`, `timeout`) ends the command as an exception does (_terminated), so its helper
+    processes end with it and nothing half-written is left; `serve` and `worker` set their own."""
+    signal.signal(signal.SIGTERM, _terminated)
     code = main()
     gc.freeze()
     return code
+
+
+def _terminated(signum: int, frame: FrameType | None) -> None:
+    """SIGTERM's handler: exit 143 (128 + 15) through the interpreter's exit, not the signal's
+    default. The default ended this process alone: the helpers that `generate` forks (workers.py)
+    then waited forever to send their results, and its staging folder stayed behind."""
+    print("cartoonface: terminated", file=sys.stderr)
+    raise SystemExit(128 + signum)
