@@ -54,7 +54,7 @@ def documents(face):
 
 def part_shape(face, state: FaceState, name: str) -> Shape:
     parts = {part.name: part for part in face_parts(face, pose_face(lift(face), state), "u")}
-    shape = shapes_of([(parts[name].text, *parts[name].clips)], {})[0]
+    shape = shapes_of([(parts[name].text, *parts[name].clips)])[0]
     assert shape is not None and len(shape.points) > 10
     return shape
 
@@ -149,12 +149,12 @@ def test_the_points_taken_from_the_numbers_as_drawn_are_those_read_from_the_text
     parts = [(part.text, *part.clips) for drawing in drawn for part in drawing]
     parts[5:5] = [('<g class="x" transform="rotate(3)"><path d="M1 2L3 4"/></g>',), ('<rect width="2" height="3"/>',)]
     some = dict(list(tenths.items())[::2])
-    read = shapes_of(parts, {})
+    read = shapes_of(parts)
     assert [index for index, shape in enumerate(read) if shape is None] == [5, 6], "what is not read"
     assert len({shape.skeleton for shape in read if shape is not None}) > 5
     chosen = np.random.default_rng(3).permutation(len(parts))[:len(parts) // 2].tolist()
     sent = pickle.loads(pickle.dumps(read_parts(parts, {}, tenths)))
-    for taken_shapes, wanted in ((shapes_of(parts, {}, tenths), range(len(parts))), (shapes_of(parts, {}, some), range(len(parts))),
+    for taken_shapes, wanted in ((shapes_of(parts, tenths), range(len(parts))), (shapes_of(parts, some), range(len(parts))),
                                  (shapes_from(sent, chosen), chosen)):
         for index, taken in zip(wanted, taken_shapes, strict=True):
             shape = read[index]
@@ -190,7 +190,7 @@ def test_a_drawing_s_shape_is_its_parts_one_after_another(face):
     """joined puts each drawing's parts' points together in one go for drawings alike: as
     concatenated one by one, the skeletons joined, the widest stroke; None where a part is."""
     drawn = all_face_parts(face, pose_faces(lift(face), nodding(12)), "u")
-    shapes = shapes_of([(part.text, *part.clips) for drawing in drawn for part in drawing], {})
+    shapes = shapes_of([(part.text, *part.clips) for drawing in drawn for part in drawing])
     drawings = [shapes[start:start + len(drawn[0])] for start in range(0, len(shapes), len(drawn[0]))]
     drawings += [drawings[0][::-1], drawings[1][:3], [*drawings[2][:2], None]]
     for parts, shape in zip(drawings, joined(drawings), strict=True):

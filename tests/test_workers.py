@@ -133,14 +133,18 @@ def test_a_result_handed_back_through_a_memory_file_is_the_one_computed_there(tm
     assert offloaded(None, _pid_and_arrays, 10, through=through)()[0] == os.getpid()
 
 
-def test_a_result_that_cannot_be_read_from_its_memory_file_is_computed_here():
+def test_a_result_that_cannot_be_read_from_its_memory_file_is_computed_here(tmp_path):
     """The helper writes its result into the file, but this process can no longer map it (its
     descriptor closed): the result is computed here, not an error."""
+    flag = tmp_path / "begun"
     through = os.memfd_create("cartoonface-test")  # inherited by the helper forked next
     with helper_pool(2) as pool:
         assert pool is not None
-        getter = offloaded(pool, _pid_and_arrays, 1000, through=through)
-        time.sleep(0.5)  # begun there, most likely: taken back otherwise, computed here all the same
+        getter = offloaded(pool, _pid_and_arrays, 1000, str(flag), through=through)
+        deadline = time.monotonic() + 60
+        while not flag.exists() and time.monotonic() < deadline:  # begun there: its result goes to the file
+            time.sleep(0.01)
+        assert flag.exists()
         os.close(through)
         pid, arrays, _ = getter()
     assert pid == os.getpid() and len(arrays["numbers"]) == 1000

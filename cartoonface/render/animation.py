@@ -56,7 +56,7 @@ import math
 import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from itertools import chain
 from typing import NamedTuple
 
@@ -191,12 +191,12 @@ def track_of(name: str) -> str:
 
 @dataclass
 class _Track:
-    """One track being filled: its distinct drawings (tidy part numbers), the drawing number of
-    every frame, and the dominant mouth symbol of each drawing (mouth track only)."""
+    """One track: its distinct drawings (tidy part numbers), the drawing number of every frame,
+    and the dominant mouth symbol of each drawing (mouth track only)."""
 
-    drawings: list[list[int]] = field(default_factory=list)
-    keys: list[int] = field(default_factory=list)
-    shapes: list[str] = field(default_factory=list)
+    drawings: list[list[int]]
+    keys: list[int]
+    shapes: list[str]
 
 
 def _tracks(raw: Sequence[tuple[int, ...]], states: Sequence[FaceState], shown: Sequence[int],
@@ -253,8 +253,7 @@ def _key_times(frames: int, fps: int) -> tuple[np.ndarray, str]:
 
 
 def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
-           progress: Callable[[float], None], workers: int = 1,
-           parts_read: Read | None = None) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
+           progress: Callable[[float], None], parts_read: Read, workers: int = 1) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
     """A getter of the drawings of each of `tracks` shown as a transform of an earlier drawing of
     their track within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing
     number; and of the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings
@@ -282,11 +281,11 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
                    if workers >= 2 and sum(len(track.drawings) for track in tracks.values()) >= POOL_STATES
                    else ([], range(len(names))))
     theirs = forked(workers if there else 1, _search, {names[index]: tracks[names[index]] for index in there}, writer, first,
-                    tolerance, None, parts_read)
+                    tolerance, parts_read)
 
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
-        drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, progress,
-                                  parts_read)
+        drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, parts_read,
+                                  progress)
         other_drawings, other_moved = theirs()
         both = {**drawings, **other_drawings}
         return {name: both[name] for name in names}, {**moved, **other_moved}
@@ -294,9 +293,8 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     return result
 
 
-def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], tolerance: float,
-            progress: Callable[[float], None] | None = None,
-            parts_read: Read | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], tolerance: float, parts_read: Read,
+            progress: Callable[[float], None] | None = None) -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
     """_reuse's search for `tracks` alone (`first`: the first raw part of each tidy part number),
     the parts' points taken from `parts_read` (_drawings') or read from their texts (_shapes). Its
     readings are let go once the points are made (a search computed after it in this process,
@@ -305,8 +303,7 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
     raws = {number: writer.raw[first[number]]
             for number in dict.fromkeys(number for track in tracks.values() for drawing in track.drawings for number in drawing)}
     parts = dict(zip(raws, _shapes(writer.raw, [first[number] for number in raws], parts_read), strict=True))
-    if parts_read is not None:  # let go before the fits (a few MB less at the peak, docs/BENCHMARKS.md "xfer")
-        parts_read.readings.clear()
+    parts_read.readings.clear()  # let go before the fits (a few MB less at the peak, docs/BENCHMARKS.md "xfer")
     read, searched = REUSE_STEPS
     report(read)
     drawings = {}
@@ -324,12 +321,12 @@ def _search(tracks: dict[str, _Track], writer: Writer, first: dict[int, int], to
                       if reuse.matrix == IDENTITY or raws[alone[number]].element.startswith(ALONE)}
 
 
-def _shapes(raw: Sequence[RawPart], numbers: Sequence[int], read: Read | None) -> list[Shape | None]:
+def _shapes(raw: Sequence[RawPart], numbers: Sequence[int], read: Read) -> list[Shape | None]:
     """The Shape (render/reuse.py) of each of the raw parts `numbers` (of `raw`, a Writer's): from
     the drawing process that drew it (`read`: its readings, reuse.shapes_from, or its parts as drawn
     read now, reuse.read_parts), or read from their texts (reuse.shapes_of) once they are let go."""
-    if read is None or not read.readings:
-        return shapes_of([(raw[number].element, *raw[number].definitions) for number in numbers], {})
+    if not read.readings:
+        return shapes_of([(raw[number].element, *raw[number].definitions) for number in numbers])
     which, number = read.which[numbers], read.number[numbers]
     layouts: Layouts = {}  # of the skeletons the helper met: not made again
     for readings in read.readings:
@@ -616,7 +613,8 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     numbers: list[np.ndarray] = []  # per process, each of its raw parts' number among its distinct parts
     if workers < 2 or len(states) < POOL_STATES:
         numbered, drawn, unread = _draw_compacted(face, states, progress)
-        return _collected(writer, numbered, drawn, where, [], numbers), drawn.done, Read([unread], *_sources(numbers))
+        raw = _collected(writer, numbered, drawn, where, [], numbers)
+        return raw, drawn.done, Read([unread], *_sources(numbers))
     half = round(len(states) * FIRST_SHARE)
     with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
         other = offloaded(pool, _draw_sent, face, states[half:], through=through)
@@ -638,7 +636,7 @@ def _sources(numbers: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Read's `which` and `number` of raw parts collected in turn from drawing processes whose parts'
     `numbers` (_collected's, one array per process) are given in that order."""
     return (np.repeat(np.arange(len(numbers), dtype=np.int8), [len(own) for own in numbers]),
-            np.concatenate(numbers) if numbers else np.zeros(0, dtype=np.int32))
+            np.concatenate(numbers))
 
 
 def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[DrawingKey, int],
@@ -651,11 +649,8 @@ def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[Dra
     firsts = [where.setdefault(key, index) for index, (key, _) in enumerate(drawings, len(raw))]
     own = [index for index, first in enumerate(firsts, len(raw)) if first == index]
     parts = [drawings[index - len(raw)][1] for index in own]
-    before = len(writer.raw)
     collected = writer.collected(drawn, parts)
-    numbers.append(np.empty(len(writer.raw) - before, dtype=np.int32))
-    numbers[-1][np.fromiter(chain.from_iterable(collected), dtype=np.intp) - before] = np.fromiter(chain.from_iterable(parts),
-                                                                                                 dtype=np.int32)
+    numbers.append(np.fromiter(dict.fromkeys(chain.from_iterable(parts)), dtype=np.int32))  # as collected: first shown first
     mine = dict(zip(own, collected))
     return raw + [mine[first] if first in mine else raw[first] for first in firsts]
 
@@ -708,7 +703,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
     reuse = _reuse(tracks, writer, mapping, tolerance,
-                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), workers, read)
+                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), read, workers)
     tidy = writer.drawings()
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)

@@ -99,7 +99,9 @@ _CLASS = re.compile(r' class="([^"]*)"')  # a style class in a tidy drawing's te
 _VALUE = re.compile(rf' (d|{"|".join(sorted(POSITIONS | SIZES))})="([^"]*)"')
 _TOKEN = re.compile(r'="@(\d+)@"')
 SENTINEL = 1_000_000_000  # a part has fewer than 1000 positions and sizes
-_FIELD = re.compile(rf'="(?:@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}}))"')
+# A skeleton's geometry value: a path data's token "@k@" (group 1: k) or a placeholder (group 2: SENTINEL + j).
+PLACEHOLDER = rf"@(\d+)@|({str(SENTINEL)[:-3]}\d{{3}})"
+_FIELD = re.compile(rf'="(?:{PLACEHOLDER})"')
 # A local definition's id ("c0", "c1_") where a tidy drawing's text names it: as an id, in a
 # url() reference or a <use>'s href. Writer.finish writes the drawing's own prefix in its place
 # (short_id("k", its number); LOCAL while drawings are compared).
@@ -177,7 +179,7 @@ def form_of(draw: Callable[[list[str]], Part], slots: int) -> Form:
     part = draw(marks)
     where = {mark: slot for slot, mark in enumerate(marks)}
     try:  # the marks as their own compact forms
-        skeleton, values = _skeleton_of(_VALUE.split("".join((part.text, *part.clips))), dict(zip(marks, marks)))
+        skeleton, values = _skeleton((part.text, *part.clips), dict(zip(marks, marks)))
     except KeyError as error:
         raise ValueError(f"path data of {part.name} not from a slot: {error}") from None
     if any(mark in skeleton for mark in marks):
@@ -262,8 +264,8 @@ def drawn_parts(parts: list[Part], tenths: Tenths | None = None, sent: bool = Fa
     forms = []
     for number, skeleton_values in enumerate(made):
         if skeleton_values is None:  # no Form, or not its skeleton: cut
-            cut = cuts.pop(number) if number in cuts else _VALUE.split("".join((fields[number][1], *fields[number][2])))
-            skeleton_values = _skeleton_of(cut, done.compact)
+            skeleton_values = (_skeleton_of(cuts.pop(number), done.compact) if number in cuts
+                               else _skeleton((fields[number][1], *fields[number][2]), done.compact))
         forms.append((skeletons.setdefault(skeleton_values[0], len(skeletons)), skeleton_values[1]))
     # the parts holding a first path data (few), each's in the order of firsts
     rank = {d: place for place, d in enumerate(done.firsts.values())}
@@ -540,7 +542,7 @@ def _skeleton_of(cut: list[str], compact: dict[str, str]) -> tuple[str, list[str
         name, value = cut[index], cut[index + 1]
         if name == "d":
             cut[index] = _path_token(distinct.setdefault(compact[_text(value)], len(distinct)))
-        elif name in POSITIONS or value.replace(".", "", 1).isdigit():
+        elif name in POSITIONS or _plain(value):
             cut[index] = _position_token(name, len(positions))
             positions.append(_whole(value) if name in POSITIONS else _as_written(value))
         else:  # a size that is not a plain number stays in the skeleton

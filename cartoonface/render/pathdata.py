@@ -361,9 +361,9 @@ def merged(first: Compacted, second: Compacted) -> Compacted:
             continue
         if one != other:  # the later side's members compacted again from their rows, after the earlier first's
             earlier, later = (first, second) if one < other else (second, first)
-            rows = np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64)
             done.firsts[skeleton], done.kept[skeleton] = earlier.firsts[skeleton], earlier.kept[skeleton]
             if earlier.kept[skeleton] != later.kept[skeleton]:  # else the later side's forms stand
+                rows = np.concatenate((earlier.rows[skeleton][:1], later.rows[skeleton])).astype(np.int64)
                 _compact_group(skeleton, [earlier.firsts[skeleton], *later.members[skeleton]], done, rounded=rows,
                                kept=earlier.kept[skeleton])
         done.members[skeleton], done.rows[skeleton] = first.members[skeleton], first.rows[skeleton]

@@ -42,7 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from cartoonface.render.compact import SENTINEL, Form, Formed
+from cartoonface.render.compact import PLACEHOLDER, SENTINEL, Form, Formed
 from cartoonface.render.pathdata import Tenths, taken_or_read
 
 
@@ -127,7 +127,7 @@ class _Layout:
     paths: tuple[bool, ...]
 
 
-Layouts = dict[str, _Layout | None]  # _layout of each skeleton met (shapes_of's cache)
+Layouts = dict[str, _Layout | None]  # _layout of each skeleton met (read_parts' cache)
 
 
 def _layout(names: Sequence[str], values: Sequence[str], rest: str) -> _Layout | None:
@@ -192,14 +192,13 @@ class Readings:
     row: np.ndarray
 
 
-def shapes_of(parts: Sequence[Sequence[str]], layouts: Layouts,
-              tenths: Tenths | None = None) -> list[Shape | None]:
+def shapes_of(parts: Sequence[Sequence[str]], tenths: Tenths | None = None) -> list[Shape | None]:
     """The Shape of each of `parts` as render/svg.py's face_parts drew it (the texts of its element
     and of the definitions, clip paths, it refers to; coordinates in tenths of a pixel). None for
     a part holding an element or attribute this does not read (a transform, an arc, a rect, ...).
-    shapes_from of read_parts: `layouts` caches _layout by skeleton; `tenths` (render/pathdata.py's
-    Tenths): the numbers of some of the path data as drawn, taken rather than read again."""
-    return shapes_from(read_parts(parts, layouts, tenths), range(len(parts)))
+    shapes_from of read_parts; `tenths` (render/pathdata.py's Tenths): the numbers of some of the
+    path data as drawn, taken rather than read again."""
+    return shapes_from(read_parts(parts, {}, tenths), range(len(parts)))
 
 
 def read_parts(parts: Sequence[Sequence[str]], layouts: Layouts, tenths: Tenths | None = None,
@@ -218,7 +217,9 @@ def read_parts(parts: Sequence[Sequence[str]], layouts: Layouts, tenths: Tenths 
         known = formed[index] if formed is not None else None
         recipe = None
         if known is not None:
-            recipe = recipes[known[0]] if known[0] in recipes else recipes.setdefault(known[0], _recipe(*known, texts))
+            if known[0] not in recipes:
+                recipes[known[0]] = _recipe(*known, texts)
+            recipe = recipes[known[0]]
         if recipe is None or known is None:
             names, values, rest = _pieces(texts)
         else:
@@ -261,7 +262,7 @@ def _stripped(values: Sequence[str]) -> str:
 _Recipe = tuple[str, list[str], list[tuple[int, str]]]
 # A geometry value of a Form's skeleton (compact._skeleton's): a path data's token "@k@" (the
 # Form's k-th path slot), a position's or size's placeholder (SENTINEL + j: its j-th field).
-_PLACEHOLDER = re.compile(rf"@(\d+)@|{str(SENTINEL)[:-3]}(\d{{3}})")
+_PLACEHOLDER = re.compile(PLACEHOLDER)
 
 
 def _recipe(form: Form, slots: Sequence[str], texts: Sequence[str]) -> _Recipe | None:
@@ -279,7 +280,7 @@ def _recipe(form: Form, slots: Sequence[str], texts: Sequence[str]) -> _Recipe |
         elif match.group(1) is not None:
             sources.append((form.paths[int(match.group(1))], ""))
         else:
-            placed.add(field := int(match.group(2)))
+            placed.add(field := int(match.group(2)) - SENTINEL)
             sources.append(form.fields[field][:2])
     if (pieces[1::3] != names or any(slot >= 0 for field, (slot, _, _) in enumerate(form.fields) if field not in placed)
             or [slots[slot] if slot >= 0 else text for slot, text in sources] != values):
@@ -393,8 +394,9 @@ def _near(samples: np.ndarray, columns: np.ndarray, matrices: np.ndarray, earlie
     single = _largest_single(np.take(columns, sources, axis=2), matrices[maybe], np.take(columns, targets, axis=2))
     scales = _scale_change(matrices[maybe, :, :2])
     widened = scales * np.maximum(strokes[sources], strokes[targets]) / 2
-    near = widened + single <= tolerance - slack
-    unsure = np.flatnonzero(np.abs(widened + single - tolerance) <= slack)
+    total = widened + single
+    near = total <= tolerance - slack
+    unsure = np.flatnonzero(np.abs(total - tolerance) <= slack)
     near[unsure] = widened[unsure] + _largest(samples[sources[unsure]], matrices[maybe[unsure]],
                                               samples[targets[unsure]]) <= tolerance
     return maybe[near], scales[near]
@@ -664,7 +666,7 @@ def find(shapes: Sequence[Shape | None], tolerance: float = TOLERANCE,
          candidates: int = CANDIDATES) -> dict[int, Reuse]:
     """For the drawings of one track (`shapes`, in order of first use), the ones that can be shown
     as a transform of an earlier written drawing: drawing number -> Reuse. Each drawing is fitted
-    (all pairs at once, on FIT_POINTS points of each) to the last `candidates` drawings of its
+    (the pairs together in batches, _choose, on FIT_POINTS points of each) to the last `candidates` drawings of its
     skeleton before it; the nearest in time that is written (not itself reused) and within
     `tolerance` px on all its points is taken."""
     return _choose(shapes, lambda group, samples, inverses: _pairs([shape.skeleton for shape in group], candidates), tolerance)
