@@ -91,9 +91,12 @@ def power_spectrum(samples: np.ndarray) -> np.ndarray:
     hop = int(RATE * HOP)
     count = 1 + (x.size - WINDOW) // hop
     power = np.empty((count, NFFT // 2 + 1))
+    windows = np.zeros((min(SPECTRUM_ROWS, count), NFFT))  # zero-padded to NFFT once, not by each rfft
     for first in range(0, count, SPECTRUM_ROWS):
         index = np.arange(WINDOW)[None, :] + hop * np.arange(first, min(first + SPECTRUM_ROWS, count))[:, None]
-        power[first:first + SPECTRUM_ROWS] = np.abs(np.fft.rfft(x[index] * _HANN, n=NFFT, axis=1)) ** 2
+        rows = windows[:len(index)]
+        np.multiply(x[index], _HANN, out=rows[:, :WINDOW])
+        power[first:first + SPECTRUM_ROWS] = np.abs(np.fft.rfft(rows, axis=1)) ** 2
     return power
 
 
