@@ -328,11 +328,13 @@ def _duration_scores(ends: np.ndarray, d: np.ndarray, mean: float, pace: np.ndar
 
 def _before(x: np.ndarray, ends: np.ndarray, d: np.ndarray, fill: float) -> np.ndarray:
     """(T,) values, (K,) consecutive positions, (D,) consecutive ascending durations -> (K, D)
-    x[ends[j] - d[m]], `fill` where that position is negative: a read-only view of `x` padded in
-    front (no index arrays: the DP's candidates cost a pass over memory, not a gather)."""
-    padded = np.concatenate([np.full(d[-1], fill), x])
-    windows = np.lib.stride_tricks.as_strided(padded[ends[0]:], (ends.size, d.size), padded.strides * 2, writeable=False)
-    return windows[:, ::-1]
+    x[ends[j] - d[m]], `fill` where that position is negative: a read-only view of `x` reversed and
+    padded (no index arrays: the DP's candidates cost a pass over memory, not a gather; each row
+    runs forwards through memory, which numpy copies ~1.2x as fast as backwards)."""
+    padded = np.concatenate([x[::-1], np.full(d[-1], fill)])  # padded[p] = x[T - 1 - p]
+    first = len(x) - 1 - ends[-1] + d[0]  # the last row's first value
+    windows = np.lib.stride_tricks.as_strided(padded[first:], (ends.size, d.size), padded.strides * 2, writeable=False)
+    return windows[::-1]
 
 
 @dataclass(frozen=True)
