@@ -293,11 +293,15 @@ def _voiced_frames(audio: Audio, groups: list[tuple[int, int]]) -> list[np.ndarr
     starts = np.minimum((every * hop).astype(np.int64), len(low) - 1)
     result = np.empty(len(every), dtype=bool)
     correction = window / (window - np.arange(lag_lo, lag_hi + 1))
+    taper = np.hanning(window)
+    windows = np.zeros((min(VOICING_CHUNK, len(every)), nfft))  # zero-padded to nfft once, not by each rfft
     for chunk in range(0, len(every), VOICING_CHUNK):
         idx = starts[chunk : chunk + VOICING_CHUNK, None] + np.arange(window)
         block = padded[idx]
         block = block - block.mean(axis=1, keepdims=True)
-        spectrum = np.fft.rfft(block * np.hanning(window), n=nfft, axis=1)
+        rows = windows[: len(idx)]
+        np.multiply(block, taper, out=rows[:, :window])
+        spectrum = np.fft.rfft(rows, axis=1)
         acf = np.fft.irfft(spectrum.real ** 2 + spectrum.imag ** 2, n=nfft, axis=1)  # no square root
         energy = np.maximum(acf[:, 0], 1e-12)
         peak = np.max(acf[:, lag_lo : lag_hi + 1] * correction, axis=1) / energy
