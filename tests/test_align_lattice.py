@@ -139,3 +139,11 @@ def test_the_programmes_cut_to_whole_cuts_give_what_the_whole_tables_give(names,
     assert np.array_equal(posterior, align._onset_posteriors(*soft_args))
     # the paragraph is read at more than one pace: some priors were scored per cell, not on one row
     assert (max(priors) > 1) == (len(names) == 5)
+
+
+def test_the_candidates_view_reads_each_start_or_the_fill_before_the_part():
+    x = np.random.default_rng(3).standard_normal(40)
+    for ends, d in ((np.arange(0, 40), np.arange(3, 9)), (np.arange(12, 30), np.arange(3, 20)), (np.arange(39, 40), np.arange(1, 3))):
+        view = align._before(x, ends, d, -7.0)
+        start = ends[:, None] - d[None, :]
+        assert np.array_equal(view, np.where(start >= 0, x[np.maximum(start, 0)], -7.0))
