@@ -5,7 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-DEB_PACKAGES=(espeak-ng libespeak-ng1 chromium fonts-noto-cjk sox redis-server)
+# python3-venv: Debian's interpreter and its venv module (below).
+DEB_PACKAGES=(espeak-ng libespeak-ng1 chromium fonts-noto-cjk sox redis-server python3-venv)
 missing=()
 for pkg in "${DEB_PACKAGES[@]}"; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
@@ -20,7 +21,17 @@ if [ ${#missing[@]} -gt 0 ]; then
   fi
 fi
 
-PYTHON=${PYTHON:-python3}
+# The interpreter: Debian's python3 when it is 3.11 or newer, else the first python3 on PATH
+# (PYTHON=... chooses another). Debian builds it with profile-guided and link-time optimisation; an
+# interpreter built without them (pyenv's default build, this machine kind's python3) runs
+# `cartoonface generate` with ~3 % more CPU and pure-Python loops ~1.4x slower
+# (docs/BENCHMARKS.md, "The interpreter").
+if [ -z "${PYTHON:-}" ]; then
+  PYTHON=python3
+  if /usr/bin/python3 -c 'import sys, venv; sys.exit(sys.version_info < (3, 11))' 2>/dev/null; then
+    PYTHON=/usr/bin/python3
+  fi
+fi
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
