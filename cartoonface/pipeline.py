@@ -301,6 +301,7 @@ def generate(
             if AUDIO_ONLY_NOTE in alignment.notes:  # the face's mouth follows the video, not the audio
                 alignment = dataclasses.replace(alignment, notes=tuple(
                     VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
+        del recording, decoded  # the samples (12 MB for 3 minutes) let go before the frames and drawing: a lower peak
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:
