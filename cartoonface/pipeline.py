@@ -331,8 +331,8 @@ def generate(
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                             wide=options.page == "announcer", title=options.title, body=body,
                             progress=drawing, workers=processes(), helper=helper)
-        if helper.pool is not None:
-            helper.pool.shutdown(wait=False)  # its work is done: it ends on its own meanwhile
+        if helper.pool is not None:  # shut down by animation_svg once it has drawn; not when it drew none
+            helper.pool.shutdown(wait=False)  # (few frames): it ends on its own meanwhile
         report("pages")
         try:
             with atomic_directory(target) as folder:

@@ -155,9 +155,12 @@ def _written(through: int, fn: Callable[..., object], args: tuple[object, ...]) 
 
 
 def _read(through: int, size: int) -> object:
-    """The object pickled into the first `size` bytes of the memory file `through` (_written)."""
+    """The object pickled into the first `size` bytes of the memory file `through` (_written); the
+    file is emptied then (its memory let go while it stays open for the next result)."""
     with mmap.mmap(through, size, access=mmap.ACCESS_READ) as view:
-        return pickle.loads(view)
+        value = pickle.loads(view)
+    os.ftruncate(through, 0)
+    return value
 
 
 def from_both_ends(pool: Executor | None, jobs: Sequence[tuple[Callable[..., T], tuple[object, ...], Callable[[], T]]],

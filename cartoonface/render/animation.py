@@ -606,8 +606,8 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     numbers of each drawing, the path data compacted (pathdata.merged of the processes'), and the
     parts as the processes read them (Read). In one go, or with `workers` 2 and at least
     POOL_STATES states in two parts (FIRST_SHARE of them first), the second drawn by a helper
-    (_draw_sent) meanwhile: `helper`'s, or one forked now (workers.helper_process) that ends on its
-    own; the first is collected and its templates and tidy texts made (Writer.prepare) while the
+    (_draw_sent) meanwhile: `helper`'s, or one forked now (workers.helper_process), which ends on its
+    own once its part is back; the first is collected and its templates and tidy texts made (Writer.prepare) while the
     second comes. The helper's part comes back through its memory file (workers.memory_file: no
     pipe). When the helper cannot be started, has not begun or fails, its part is drawn here
     (workers.offloaded)."""
@@ -631,6 +631,8 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
         writer.prepare()
         done = drawn.done
         numbered, drawn, sent = other()
+        if pool is not None:  # its last job: it ends on its own, its memory let go before the search's child
+            pool.shutdown(wait=False)
     raw = _collected(writer, numbered, drawn, where, raw, numbers)
     return raw, merged(done, drawn.done), Read([unread, sent], *_sources(numbers))
 
@@ -679,7 +681,8 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `helper` (workers.helper_process's, with `workers` 2): the process that draws the second part
     (_drawings), forked before (generate's analysis helper) rather than now: a fork of this
     process, large by then, makes every page it writes after the fork a fault (a copy while the
-    child lives), ~9,000 on the 3-minute bench book (docs/BENCHMARKS.md, "mainmem").
+    child lives), ~7,600 on the 3-minute bench book (docs/BENCHMARKS.md, "mainmem"). Its pool
+    is shut down once that part is back (the process ends on its own).
     `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
     shown as that (render/reuse.py); 0: every distinct drawing written in full.
     """
