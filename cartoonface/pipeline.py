@@ -249,9 +249,9 @@ def generate(
     report("decode")
     # A forked helper (workers.py) computes the pitch track (unless `pitch` was begun before), then
     # aligns parts as this process does (none for a web job: its CPU-time limit counts per process),
-    # then draws part of the frames (render/animation.py: no fork of this process, large by then). The page's compressed audio is
-    # made by ffmpeg in a thread once the frames are drawn (the pool is left, waiting for ffmpeg,
-    # before its folder is removed).
+    # then draws part of the frames (render/animation.py: no fork of this process, large by then).
+    # The page's compressed audio is made by ffmpeg in a thread once the frames are drawn (the pool
+    # is left, waiting for ffmpeg, before its folder is removed).
     with (helper_process(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None

@@ -607,10 +607,10 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
     parts as the processes read them (Read). In one go, or with `workers` 2 and at least
     POOL_STATES states in two parts (FIRST_SHARE of them first), the second drawn by a helper
     (_draw_sent) meanwhile: `helper`'s, or one forked now (workers.helper_process), which ends on its
-    own once its part is back; the first is collected and its templates and tidy texts made (Writer.prepare) while the
-    second comes. The helper's part comes back through its memory file (workers.memory_file: no
-    pipe). When the helper cannot be started, has not begun or fails, its part is drawn here
-    (workers.offloaded)."""
+    own once its part is back; the first is collected and its templates and tidy texts made
+    (Writer.prepare) while the second comes. The helper's part comes back through its memory file
+    (workers.memory_file: no pipe). When the helper cannot be started, has not begun or fails, its
+    part is drawn here (workers.offloaded)."""
     where: dict[DrawingKey, int] = {}
     numbers: list[np.ndarray] = []  # per process, each of its raw parts' number among its distinct parts
     if workers < 2 or len(states) < POOL_STATES:
@@ -681,7 +681,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `helper` (workers.helper_process's, with `workers` 2): the process that draws the second part
     (_drawings), forked before (generate's analysis helper) rather than now: a fork of this
     process, large by then, makes every page it writes after the fork a fault (a copy while the
-    child lives), ~7,600 on the 3-minute bench book (docs/BENCHMARKS.md, "mainmem"). Its pool
+    child lives), ~8,500 on the 3-minute bench book (docs/BENCHMARKS.md, "mainmem"). Its pool
     is shut down once that part is back (the process ends on its own).
     `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
     shown as that (render/reuse.py); 0: every distinct drawing written in full.
