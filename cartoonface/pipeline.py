@@ -48,7 +48,7 @@ from cartoonface.speech.audio import Audio, load_audio, page_copy
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
-from cartoonface.workers import collector_paused, helper_pool, offloaded, processes
+from cartoonface.workers import collector_paused, helper_process, offloaded, processes
 
 # Share of the whole job done when each stage starts (measured 2026-11-27, fourth session,
 # processor time of the job's process, on the sample story and on bench/generate.py's 190 s input:
@@ -248,10 +248,11 @@ def generate(
     clip = None if video is None else video_input(video, text)
     report("decode")
     # A forked helper (workers.py) computes the pitch track (unless `pitch` was begun before), then
-    # aligns parts as this process does (none for a web job: its CPU-time limit counts per process). The page's compressed audio is
-    # made by ffmpeg in a thread once the frames are drawn (the pool is left, waiting for ffmpeg,
-    # before its folder is removed).
-    with (helper_pool(processes()) as helper,
+    # aligns parts as this process does (none for a web job: its CPU-time limit counts per process),
+    # then draws part of the frames (render/animation.py: no fork of this process, large by then).
+    # The page's compressed audio is made by ffmpeg in a thread once the frames are drawn (the pool
+    # is left, waiting for ffmpeg, before its folder is removed).
+    with (helper_process(processes()) as helper,
           tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
         tracking = None
         decoded = None
@@ -269,7 +270,7 @@ def generate(
         if options.actions is not None:  # edited actions: no pitch peaks needed
             pitch = None
         elif pitch is None or clip is not None:  # none begun for this recording (a clip's sound is made here)
-            pitch = None if helper is None else offloaded(helper, recording_pitch, sound)
+            pitch = None if helper.pool is None else offloaded(helper.pool, recording_pitch, sound)
         recording = load_audio(sound) if decoded is None else decoded
         duration = recording.duration
         if clip is not None and not clip.has_audio:
@@ -280,7 +281,7 @@ def generate(
             alignment = edited_alignment(options.alignment, duration)
         else:
             alignment = analyse(recording, text, pause=options.pause, progress=report, source=source,
-                                language=options.language, pool=helper)
+                                language=options.language, pool=helper.pool)
         report("schedule")
         style = STYLES[options.style or PAGE_STYLES[options.page]]
         if options.actions is not None:
@@ -300,8 +301,7 @@ def generate(
             if AUDIO_ONLY_NOTE in alignment.notes:  # the face's mouth follows the video, not the audio
                 alignment = dataclasses.replace(alignment, notes=tuple(
                     VIDEO_MOUTH_NOTE if note == AUDIO_ONLY_NOTE else note for note in alignment.notes))
-        if helper is not None:
-            helper.shutdown()  # its work is done: the process ends now, not after the drawing
+        del recording, decoded  # the samples (12 MB for 3 minutes) let go before the frames and drawing: a lower peak
         report("frames")
         timeline = build_timeline(alignment, actions)
         if tracking is not None:
@@ -330,7 +330,9 @@ def generate(
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                             wide=options.page == "announcer", title=options.title, body=body,
-                            progress=drawing, workers=processes())
+                            progress=drawing, workers=processes(), helper=helper)
+        if helper.pool is not None:  # shut down by animation_svg once it has drawn; not when it drew none
+            helper.pool.shutdown(wait=False)  # (few frames): it ends on its own meanwhile
         report("pages")
         try:
             with atomic_directory(target) as folder:

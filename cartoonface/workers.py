@@ -5,7 +5,7 @@ decides, e.g. by `processes()`: no pool for a process with a CPU-time limit,
 whose limit counts per process); `offloaded(pool, fn, *args)` queues `fn(*args)` there and
 returns a getter of its result that computes it here instead when the pool has not begun it, is
 None, could not start, or broke (no memory, a killed child), its result handed back through a
-`memory_file` when given one; `forked(workers, fn, *args)` runs
+`memory_file` when given one (`helper_process`: a pool with its memory file); `forked(workers, fn, *args)` runs
 `fn(*args)` in a child forked there and then, which inherits the arguments instead of receiving
 them pickled (work on a large state built in this process); `from_both_ends(pool, jobs)` shares a
 list of jobs with the pool as they go; `shares(costs)` splits work in two.
@@ -26,7 +26,7 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from multiprocessing.connection import Connection
-from typing import Any, TypeVar, cast
+from typing import Any, NamedTuple, TypeVar, cast
 
 T = TypeVar("T")
 # Jobs `from_both_ends` keeps given to the pool and not done: one under way and one waiting, so the
@@ -77,6 +77,23 @@ def helper_pool(workers: int, wait: bool = True) -> Iterator[Executor | None]:
         yield pool
     finally:
         pool.shutdown(wait=wait, cancel_futures=True)
+
+
+class Helper(NamedTuple):
+    """A one-process pool (helper_pool's; None: none) and a memory file its process inherited
+    (memory_file's; None: none), for offloaded's `through`."""
+
+    pool: Executor | None
+    through: int | None
+
+
+@contextmanager
+def helper_process(workers: int, wait: bool = True) -> Iterator[Helper]:
+    """helper_pool(workers, wait) and a memory_file made before its fork, which its process holds: a
+    helper to hand large results back from (offloaded's `through`) for more than one job (generate's
+    analysis helper then draws half the frames: render/animation.py)."""
+    with memory_file() as through, helper_pool(workers, wait) as pool:
+        yield Helper(pool, through)
 
 
 @contextmanager
@@ -138,9 +155,12 @@ def _written(through: int, fn: Callable[..., object], args: tuple[object, ...]) 
 
 
 def _read(through: int, size: int) -> object:
-    """The object pickled into the first `size` bytes of the memory file `through` (_written)."""
+    """The object pickled into the first `size` bytes of the memory file `through` (_written); the
+    file is emptied then (its memory let go while it stays open for the next result)."""
     with mmap.mmap(through, size, access=mmap.ACCESS_READ) as view:
-        return pickle.loads(view)
+        value = pickle.loads(view)
+    os.ftruncate(through, 0)
+    return value
 
 
 def from_both_ends(pool: Executor | None, jobs: Sequence[tuple[Callable[..., T], tuple[object, ...], Callable[[], T]]],

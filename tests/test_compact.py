@@ -192,6 +192,32 @@ def test_two_processes_draw_the_same_bytes(face):
     assert animation_svg(face, states, FPS, workers=2) == animation_svg(face, states, FPS)
 
 
+def test_a_helper_begun_before_draws_the_same_bytes(face, monkeypatch):
+    """A helper process forked before (generate's analysis helper, workers.helper_process) draws the
+    second part, handed back through its memory file, which is emptied then: the document one
+    process gives; its pool is shut down after (no new work), its process ends on its own."""
+    import os
+
+    import cartoonface.workers as workers
+    from cartoonface.render.animation import POOL_STATES
+    from cartoonface.workers import helper_process
+
+    read = []
+    original = workers._read
+    monkeypatch.setattr(workers, "_read", lambda through, size: read.append(size) or original(through, size))
+    states = talking_about(POOL_STATES + 50)
+    expected = animation_svg(face, states, FPS)
+    with helper_process(2) as helper:
+        assert helper.pool is not None and helper.through is not None  # Linux, as the tests run
+        helper_pid = helper.pool.submit(os.getpid).result()
+        assert helper_pid != os.getpid()
+        assert animation_svg(face, states, FPS, workers=2, helper=helper) == expected
+        assert len(read) == 1 and read[0] > 0  # its part came through the memory file,
+        assert os.fstat(helper.through).st_size == 0  # which holds nothing after
+        with pytest.raises(RuntimeError):
+            helper.pool.submit(os.getpid)
+
+
 def test_no_second_process_under_a_cpu_limit():
     """A process with a CPU-time limit (a web job) draws alone: the limit counts per process."""
     import resource

@@ -56,6 +56,7 @@ import math
 import operator
 import re
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass
 from itertools import chain
 from typing import NamedTuple
@@ -77,7 +78,7 @@ from cartoonface.render.reuse import (IDENTITY, TOLERANCE, Layouts, Readings, Re
 from cartoonface.render.scenery import (LEAN_DECIMALS, Figure, background_layer, clothes_layer, desk_layer, figure_of, lean,
                                         neck_pivot, torso_pivot, torso_shift)
 from cartoonface.render.svg import all_face_parts, face_defs
-from cartoonface.workers import collector_paused, forked, helper_pool, memory_file, offloaded, shares
+from cartoonface.workers import Helper, collector_paused, forked, helper_process, offloaded, shares
 
 # The track of each part of render/svg.py's face_parts (by its name), in drawing order.
 # Parts that change together share a track; a part of another class gets a track of its own.
@@ -600,15 +601,16 @@ class Read(NamedTuple):
 
 
 def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progress: Callable[[float], None],
-              writer: Writer) -> tuple[list[tuple[int, ...]], Compacted, Read]:
+              writer: Writer, helper: Helper | None = None) -> tuple[list[tuple[int, ...]], Compacted, Read]:
     """_draw_compacted of `states` collected by `writer` in order (_collected): the raw part
     numbers of each drawing, the path data compacted (pathdata.merged of the processes'), and the
     parts as the processes read them (Read). In one go, or with `workers` 2 and at least
-    POOL_STATES states in two parts (FIRST_SHARE of them first), the second drawn by a forked helper
-    (workers.helper_pool, _draw_sent) meanwhile; the first is collected and its templates and tidy
-    texts made (Writer.prepare) while the second comes. The helper's part comes back through a
-    memory file (workers.memory_file: no pipe), and the helper ends on its own. When the helper
-    cannot be started, has not begun or fails, its part is drawn here (workers.offloaded)."""
+    POOL_STATES states in two parts (FIRST_SHARE of them first), the second drawn by a helper
+    (_draw_sent) meanwhile: `helper`'s, or one forked now (workers.helper_process), which ends on its
+    own once its part is back; the first is collected and its templates and tidy texts made
+    (Writer.prepare) while the second comes. The helper's part comes back through its memory file
+    (workers.memory_file: no pipe). When the helper cannot be started, has not begun or fails, its
+    part is drawn here (workers.offloaded)."""
     where: dict[DrawingKey, int] = {}
     numbers: list[np.ndarray] = []  # per process, each of its raw parts' number among its distinct parts
     if workers < 2 or len(states) < POOL_STATES:
@@ -616,7 +618,8 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
         raw = _collected(writer, numbered, drawn, where, [], numbers)
         return raw, drawn.done, Read([unread], *_sources(numbers))
     half = round(len(states) * FIRST_SHARE)
-    with memory_file() as through, helper_pool(workers, wait=False) as pool:  # every result taken before leaving
+    # every result taken before leaving: a helper forked here ends on its own
+    with nullcontext(helper) if helper is not None else helper_process(workers, wait=False) as (pool, through):
         other = offloaded(pool, _draw_sent, face, states[half:], through=through)
         # the helper draws its part meanwhile: this one's share done is about the whole's, and once it
         # is drawn the helper's core is about to be free (generate's ffmpeg begins then, on it); with
@@ -628,6 +631,8 @@ def _drawings(face: FaceModel, states: Sequence[FaceState], workers: int, progre
         writer.prepare()
         done = drawn.done
         numbered, drawn, sent = other()
+        if pool is not None:  # its last job: it ends on its own, its memory let go before the search's child
+            pool.shutdown(wait=False)
     raw = _collected(writer, numbered, drawn, where, raw, numbers)
     return raw, merged(done, drawn.done), Read([unread, sent], *_sources(numbers))
 
@@ -659,7 +664,7 @@ def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[Dra
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
                   body: BodyMotion | None = None, progress: Callable[[float], None] | None = None,
-                  workers: int = 1, tolerance: float = TOLERANCE) -> bytes:
+                  workers: int = 1, tolerance: float = TOLERANCE, helper: Helper | None = None) -> bytes:
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
@@ -673,6 +678,11 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `progress(fraction)`, when given, is told the share 0..1 of the work done as the frames are
     drawn (every BATCH distinct states) and tidied, and 1.0 at the end.
     `workers`: processes to draw with (workers.processes(); 1: this one alone), same bytes.
+    `helper` (workers.helper_process's, with `workers` 2): the process that draws the second part
+    (_drawings), forked before (generate's analysis helper) rather than now: a fork of this
+    process, large by then, makes every page it writes after the fork a fault (a copy while the
+    child lives), ~8,500 on the 3-minute bench book (docs/BENCHMARKS.md, "mainmem"). Its pool
+    is shut down once that part is back (the process ends on its own).
     `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
     shown as that (render/reuse.py); 0: every distinct drawing written in full.
     """
@@ -698,7 +708,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     numbers: dict[FaceState, int] = {}
     shown = [numbers.setdefault(state, len(numbers)) for state in states]  # each state hashed once
     distinct = list(numbers)
-    raw, done, read = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer)
+    raw, done, read = _drawings(face, distinct, workers, lambda done: report(DRAWN_SHARE * done), writer, helper)
     mapping = writer.finish(lambda tidied: report(DRAWN_SHARE + (TIDIED_SHARE - DRAWN_SHARE) * tidied), done)
     tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
