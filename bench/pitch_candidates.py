@@ -1,0 +1,161 @@
+"""Pitch peaks with fewer candidates per frame in Praat's To Pitch (ac), on real recordings.
+
+`prosody.pitch_peaks` (the accent peaks that raise the brows and nod the head) is computed for every
+recording here that the analysis aligns, with the pitch track of Praat's default 15 candidates per
+frame and with each smaller count down to 6 (Praat raises any count below pitch ceiling / pitch floor,
+500 / 75 Hz, to 6). Against 15, per count: the share of recordings with the same peak tuple, the
+peaks added, removed and moved (the same syllable's peak at another frame) and by how much, as a
+share of all syllables, the share of voiced frames with another F0, and the track's CPU on the 190 s
+book (median of 3).
+
+Recordings (../shared/bench, read in place): Biaobei 000001-000070, the two AISHELL-3 sentences,
+the five THCHS-30 sentences with a Hanzi transcript, the English ones bench/english.py aligns
+(reference words as transcript), the project's sample story, and the 190 s THCHS-30 book of
+bench/generate.py. The recordings but the book (its sentences are THCHS-30's, repeated), sorted by
+name: the even-numbered half tunes (the count is chosen on it), the odd-numbered half is held out
+(reported); the book on its own line, with the track's CPU.
+
+Run: `.venv/bin/python -m bench pitch_candidates` from the project root (~3 minutes).
+"""
+
+from __future__ import annotations
+
+import csv
+import statistics
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bench.english import MATERIAL, ROOT, reference_words, transcript_of
+from bench.generate import TARGET_SECONDS, build_input
+from cartoonface.animate import prosody
+from cartoonface.speech.analyse import analyse
+from cartoonface.speech.audio import Audio, load_audio
+
+COUNTS = range(15, 5, -1)  # Praat's default first: the reference
+FRAME = 1 / 30  # seconds: a peak moved by more than one frame at 30 fps is seen elsewhere
+SAMPLES = Path(__file__).resolve().parent.parent / "samples" / "speech"
+
+
+@dataclass(frozen=True)
+class Item:
+    """One aligned recording: its audio, syllable starts (n,) s, and the peaks and tracks per count."""
+
+    name: str
+    audio: Audio
+    starts: np.ndarray
+    peaks: dict[int, tuple[float, ...]]
+    tracks: dict[int, tuple[np.ndarray, np.ndarray]]
+
+
+def material() -> list[tuple[str, Path, str, str | None]]:
+    """(name, wav, transcript, language) of every recording used."""
+    zh = ROOT / "zh"
+    rows: list[tuple[str, Path, str, str | None]] = []
+    with (zh / "biaobei" / "transcripts.tsv").open(encoding="utf-8") as handle:
+        for row in csv.DictReader(handle, delimiter="\t"):
+            rows.append((f"biaobei/{row['id']}", zh / "biaobei" / "wav" / f"{row['id']}.wav", row["hanzi_meta"], "zh"))
+    for folder in ("aishell3_charsiu", "thchs30_mfa_example"):
+        with (zh / folder / "transcripts.tsv").open(encoding="utf-8") as handle:
+            for row in csv.DictReader(handle, delimiter="\t"):
+                if row["hanzi"].strip():
+                    rows.append((f"{folder}/{row['wav']}", zh / folder / row["wav"], row["hanzi"], "zh"))
+    for _, wav, reference, tier in MATERIAL:
+        rows.append((f"en/{Path(wav).stem}", ROOT / wav, transcript_of(ROOT / wav, reference_words(ROOT / reference, tier)), "en"))
+    rows.append(("sample/story", SAMPLES / "story.wav", (SAMPLES / "story.txt").read_text(encoding="utf-8"), None))
+    return rows
+
+
+def track(audio: Audio, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """prosody.pitch_track's (times, f0) with `count` candidates per frame."""
+    import parselmouth
+
+    sound = parselmouth.Sound(np.asarray(audio.samples, dtype=np.float64), sampling_frequency=float(audio.rate))
+    pitch = sound.to_pitch_ac(time_step=prosody.TIME_STEP, pitch_floor=prosody.PITCH_FLOOR,
+                              pitch_ceiling=prosody.PITCH_CEILING, max_number_of_candidates=count)
+    f0 = np.array(pitch.selected_array["frequency"], dtype=float)
+    f0[f0 <= 0] = np.nan
+    return np.array(pitch.xs(), dtype=float), f0
+
+
+def item(name: str, wav: Path, text: str, language: str | None) -> Item:
+    """Align `wav` once and compute its peaks for every count."""
+    audio = load_audio(wav)
+    alignment = analyse(audio, text, source=str(wav), language=language)
+    starts = np.array([s.start for sentence in alignment.sentences for s in sentence.syllables], dtype=float)
+    tracks = {count: track(audio, count) for count in COUNTS}
+    peaks = {count: prosody.pitch_peaks(audio, alignment, tracks[count]) for count in COUNTS}
+    return Item(name, audio, starts, peaks, tracks)
+
+
+def by_syllable(starts: np.ndarray, peaks: tuple[float, ...]) -> dict[int, float]:
+    """{syllable index: peak time} (a peak lies in its syllable, rounded to the ms)."""
+    return {int(np.searchsorted(starts, t + 5e-4, side="right")) - 1: t for t in peaks}
+
+
+def compare(items: list[Item], count: int) -> dict[str, float]:
+    """Figures of `count` against 15 over `items`."""
+    same = added = removed = moved = syllables = 0
+    shifts: list[float] = []
+    changed_frames = voiced_frames = 0
+    for it in items:
+        old, new = by_syllable(it.starts, it.peaks[15]), by_syllable(it.starts, it.peaks[count])
+        same += it.peaks[15] == it.peaks[count]
+        added += len(new.keys() - old.keys())
+        removed += len(old.keys() - new.keys())
+        moves = [abs(new[k] - old[k]) for k in old.keys() & new.keys() if new[k] != old[k]]
+        moved += len(moves)
+        shifts += moves
+        syllables += len(it.starts)
+        f_old, f_new = it.tracks[15][1], it.tracks[count][1]
+        voiced = np.isfinite(f_old) | np.isfinite(f_new)
+        voiced_frames += int(voiced.sum())
+        changed_frames += int((voiced & ~((f_old == f_new) | (np.isnan(f_old) & np.isnan(f_new)))).sum())
+    changed = added + removed + moved
+    return {"same": same / len(items), "added": added, "removed": removed, "moved": moved,
+            "changed_share": changed / syllables, "max_shift": max(shifts, default=0.0),
+            "frames": changed_frames / max(voiced_frames, 1), "syllables": syllables,
+            "peaks": sum(len(it.peaks[15]) for it in items)}
+
+
+def cpu(audio: Audio, count: int) -> float:
+    """Median CPU seconds of 3 tracks of `audio` with `count` candidates."""
+    spent = []
+    for _ in range(3):
+        started = time.process_time()
+        track(audio, count)
+        spent.append(time.process_time() - started)
+    return statistics.median(spent)
+
+
+def table(title: str, items: list[Item], book: Audio | None) -> None:
+    """Print the figures of every count on `items`."""
+    print(f"{title}: {len(items)} recordings")
+    print("| count | same peaks | added / removed / moved | changed, share of syllables | largest move | voiced frames with another F0 | track CPU, 190 s |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for count in COUNTS:
+        c = compare(items, count)
+        spent = f"{cpu(book, count):.3f} s" if book is not None else ""
+        print(f"| {count} | {100 * c['same']:.1f} % | {c['added']} / {c['removed']} / {c['moved']} "
+              f"| {100 * c['changed_share']:.2f} % of {c['syllables']} ({c['peaks']} peaks at 15) "
+              f"| {1000 * c['max_shift']:.0f} ms | {100 * c['frames']:.2f} % | {spent} |")
+
+
+def main() -> None:
+    """Align every recording, compare the peaks per count, print the tuning and held-out tables."""
+    with tempfile.TemporaryDirectory() as tmp:
+        book, text, _ = build_input(Path(tmp), TARGET_SECONDS)
+        rows = [*material(), ("thchs30_book_190s", book, text.read_text(encoding="utf-8"), "zh")]
+        items = sorted((item(*row) for row in rows), key=lambda it: it.name)
+    the_book = [it for it in items if it.name == "thchs30_book_190s"]
+    distinct = [it for it in items if it.name != "thchs30_book_190s"]
+    table("tuning half (even positions)", distinct[0::2], None)
+    table("held-out half (odd positions)", distinct[1::2], None)
+    table("the 190 s book", the_book, the_book[0].audio)
+
+
+if __name__ == "__main__":
+    main()
