@@ -10,12 +10,12 @@ appears complete or not at all.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import tempfile
 import time
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,7 +44,7 @@ from cartoonface.speech.audio_only import AUDIO_ONLY_NOTE, transcribed
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.english import LANGUAGES
 from cartoonface.speech.records import Alignment
-from cartoonface.speech.audio import Audio, load_audio, page_copy
+from cartoonface.speech.audio import Audio, load_audio, page_copy_begun
 from cartoonface.speech.textgrid import load_textgrid, write_textgrid
 from cartoonface.speech.transcript import emotion_marks
 from cartoonface.video.clip import Clip, VideoError, extract_audio, probe
@@ -250,10 +250,11 @@ def generate(
     # A forked helper (workers.py) computes the pitch track (unless `pitch` was begun before), then
     # aligns parts as this process does (none for a web job: its CPU-time limit counts per process),
     # then draws part of the frames (render/animation.py: no fork of this process, large by then).
-    # The page's compressed audio is made by ffmpeg in a thread once the frames are drawn (the pool
-    # is left, waiting for ffmpeg, before its folder is removed).
+    # The page's compressed audio is made by an ffmpeg begun as soon as the recording is known, at the
+    # lowest priority: it takes the core time this job leaves idle (speech/audio.py page_copy_begun;
+    # stopped, on leaving, before its folder is removed).
     with (helper_process(processes()) as helper,
-          tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, ThreadPoolExecutor(1) as pool):
+          tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as staging, contextlib.ExitStack() as stack):
         tracking = None
         decoded = None
         if clip is not None:
@@ -271,6 +272,7 @@ def generate(
             pitch = None
         elif pitch is None or clip is not None:  # none begun for this recording (a clip's sound is made here)
             pitch = None if helper.pool is None else offloaded(helper.pool, recording_pitch, sound)
+        compressed = stack.enter_context(page_copy_begun(sound, staging, AUDIO_STEM))
         recording = load_audio(sound) if decoded is None else decoded
         duration = recording.duration
         if clip is not None and not clip.has_audio:
@@ -314,18 +316,15 @@ def generate(
             states = states_at(timeline, times, sway(times, options.seed, style.sway_peak))
         states = on_twos(states)
         body = body_motion(states, sample_breaths(timeline, options.fps), options.fps)
-        compressed: Future[Path] | None = None
 
         def drawing(done: float) -> None:
-            """Tell `progress` the svg stage's share `done`; begin the page's compressed audio once the
-            frames are drawn (render/animation.DRAWN_SHARE: this process's part; the drawing helper's
-            ends about then). ffmpeg (0.4-0.5 s of CPU for 3 minutes) then runs on the core the drawing
-            helper leaves idle while this one tidies, not beside the analysis's two or the drawing's two
-            (docs/BENCHMARKS.md, "ffmpeg between the stages" and "gaps")."""
-            nonlocal compressed
+            """Tell `progress` the svg stage's share `done`; once this process's part of the frames is
+            drawn (render/animation.DRAWN_SHARE), the page's audio, if not made yet in the idle core
+            time so far, is made at this process's priority: on a busy machine it then runs when it ran
+            before it was begun early, not after everything (docs/BENCHMARKS.md, "early")."""
             report("svg", done)
-            if compressed is None and done >= DRAWN_SHARE:
-                compressed = pool.submit(page_copy, sound, staging, AUDIO_STEM)
+            if done >= DRAWN_SHARE:
+                compressed.hurry()
 
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
@@ -337,8 +336,7 @@ def generate(
         try:
             with atomic_directory(target) as folder:
                 sources = copy_audio(sound, folder, keep_original=options.keep_original,
-                                     # animation_svg reports 1.0 at its end: begun by then
-                                     compressed=(compressed or pool.submit(page_copy, sound, staging, AUDIO_STEM)).result())
+                                     compressed=compressed.finish())
                 captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
                 html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
                                  fps=options.fps, links=options.links, captions=captions)

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +14,7 @@ import pytest
 import soundfile
 
 from cartoonface.errors import AudioError
-from cartoonface.speech.audio import MAX_SECONDS, ffmpeg_exe, load_audio, page_copy
+from cartoonface.speech.audio import BEGUN_NICENESS, MAX_SECONDS, ffmpeg_exe, load_audio, page_copy, page_copy_begun
 from tests.conftest import speak
 
 needs_espeak = pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is a Debian dependency")
@@ -171,3 +174,88 @@ def test_page_copy_is_small_and_keeps_the_times(speech, suffix, tmp_path):
     best = max(lags, key=lambda lag: float(np.dot(a[max(lag, 0): len(a) + min(lag, 0)],
                                                   b[max(-lag, 0): len(b) - max(lag, 0)])))
     assert abs(best) / original.rate < 0.001
+
+
+def children_niceness() -> dict[int, int]:
+    """This process's child processes: pid -> niceness (from /proc)."""
+    found = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:  # ended meanwhile
+                continue
+            if int(fields[1]) == os.getpid():
+                found[int(entry.name)] = int(fields[16])
+    return found
+
+
+@pytest.fixture(scope="module")
+def long_speech(tmp_path_factory) -> Path:
+    """60 s of noise-like sound at 16 kHz: ffmpeg takes a while over it (~0.1 s of CPU)."""
+    path = tmp_path_factory.mktemp("long") / "long.wav"
+    rate = 16000
+    t = np.arange(60 * rate) / rate
+    soundfile.write(path, 0.3 * np.sin(2 * np.pi * 180 * t) * np.random.default_rng(3).random(t.size), rate,
+                    subtype="PCM_16")
+    return path
+
+
+def test_a_begun_page_copy_runs_at_the_lowest_priority_and_makes_page_copys_file(long_speech, tmp_path):
+    expected = page_copy(long_speech, tmp_path / "plain").read_bytes()
+    with page_copy_begun(long_speech, tmp_path / "begun") as begun:
+        assert BEGUN_NICENESS in children_niceness().values()  # ffmpeg, begun before we wait for it
+        copy = begun.finish()  # still running: raised to our priority (or stopped and made again), then waited for
+    assert copy == tmp_path / "begun" / "audio.m4a"
+    assert copy.read_bytes() == expected
+    assert sorted(p.name for p in copy.parent.iterdir()) == ["audio.m4a"]
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="only root may lower a niceness")
+def test_a_hurried_page_copy_runs_at_our_priority(long_speech, tmp_path):
+    before = set(children_niceness())
+    with page_copy_begun(long_speech, tmp_path) as begun:
+        begun.hurry()
+        ours = os.getpriority(os.PRIO_PROCESS, 0)
+        assert [nice for pid, nice in children_niceness().items() if pid not in before] in ([ours], [])  # [] : done
+        begun.finish()
+
+
+def test_leaving_a_begun_page_copy_stops_ffmpeg_and_leaves_no_part(long_speech, tmp_path):
+    before = set(children_niceness())
+    with page_copy_begun(long_speech, tmp_path):
+        assert set(children_niceness()) - before  # ffmpeg is running
+    assert not set(children_niceness()) - before
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_begun_page_copy_of_a_bad_file_names_it(tmp_path):
+    bad = tmp_path / "notes.wav"
+    bad.write_text("not a recording")
+    with page_copy_begun(bad, tmp_path / "out") as begun, pytest.raises(AudioError, match="notes.wav: cannot compress"):
+        begun.finish()
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="needs root to run the copy as another user")
+def test_a_begun_page_copy_that_cannot_be_raised_is_made_again(long_speech, tmp_path_factory):
+    # An unprivileged user cannot lower a niceness: finish() then stops the low-priority ffmpeg and
+    # begins it again at its own priority. Run as `nobody` in a child process, in a folder it may write.
+    shared = Path(tempfile.mkdtemp(prefix="cartoonface-nobody-"))
+    try:
+        shared.chmod(0o777)
+        source = shared / "long.wav"
+        shutil.copy(long_speech, source)
+        source.chmod(0o644)
+        script = (
+            "import sys; from cartoonface.speech.audio import page_copy_begun\n"
+            "with page_copy_begun(sys.argv[1], sys.argv[2]) as begun:\n"
+            "    print(begun.finish().stat().st_size)\n"
+        )
+        done = subprocess.run([sys.executable, "-c", script, str(source), str(shared / "out")],
+                              user=65534, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        made = shared / "out" / "audio.m4a"
+        assert made.read_bytes() == page_copy(source, shared / "plain").read_bytes()
+        assert sorted(p.name for p in made.parent.iterdir()) == ["audio.m4a"]
+    finally:
+        shutil.rmtree(shared)

@@ -10,9 +10,11 @@ rate is kept as recorded.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import tempfile
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,6 +58,10 @@ PAGE_BITRATE = "64k"
 # "twoloop", the same size, and no less faithful on speech (waveform SNR of the decoded copy
 # 29.1 dB against 27.7 dB on bench/generate.py's input; docs/BENCHMARKS.md, "Speed of the SVG stage").
 PAGE_CODER = ("-aac_coder", "fast")
+# page_copy_begun's niceness: the lowest CPU priority, so that ffmpeg runs on core time the job's own
+# processes leave idle (the start, the analysis's waits, the drawing's joins, the tail) rather than
+# beside them (docs/BENCHMARKS.md, "early": the command 0.93x on the 190 s book).
+BEGUN_NICENESS = 19
 # Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
 _SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
 
@@ -253,12 +259,100 @@ def page_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], ste
     source = Path(path)
     with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as tmp:
         m4a = Path(tmp) / "page.m4a"
-        command = [
-            ffmpeg_exe(), "-nostdin", "-v", "error", "-i", str(source),
-            "-map", "0:a:0", "-vn", "-ac", "1", "-c:a", "aac", *PAGE_CODER, "-b:a", PAGE_BITRATE,
-            "-movflags", "+faststart", str(m4a),
-        ]  # fmt: skip
-        done = subprocess.run(command, capture_output=True, text=True, errors="replace")
+        done = subprocess.run(_page_command(source, m4a), capture_output=True, text=True, errors="replace")
         if done.returncode != 0 or not m4a.is_file():
             raise AudioError(f"{source}: cannot compress for the page ({ffmpeg_reason(done.stderr)})")
         return write_bytes_atomic(Path(out_dir) / f"{stem}.m4a", m4a.read_bytes())
+
+
+@dataclass(frozen=True)
+class BegunCopy:
+    """page_copy_begun's handle. `hurry()`: from now on the copy is made at this process's priority;
+    `finish()`: hurry, wait, and return the file's path (AudioError when ffmpeg fails)."""
+
+    hurry: Callable[[], None]
+    finish: Callable[[], Path]
+
+
+@contextlib.contextmanager
+def page_copy_begun(path: str | os.PathLike[str], out_dir: str | os.PathLike[str],
+                    stem: str = "audio") -> Iterator[BegunCopy]:
+    """page_copy of the recording at `path` into `out_dir` (`stem`.m4a, the same bytes), begun now in
+    an ffmpeg at the lowest CPU priority (BEGUN_NICENESS): it takes core time the caller leaves idle.
+
+    Yields a BegunCopy. Its `hurry` gives that ffmpeg this process's priority; where that is not
+    allowed (only root may lower a niceness) it is stopped and begun again at this process's
+    priority. Hurried at the latest by `finish`, it never waits long behind other work. On leaving
+    the block an unfinished ffmpeg is stopped and its part removed, so nothing is written into
+    `out_dir` after it.
+    """
+    source, folder = Path(path), Path(out_dir)
+    partial = folder / f"{stem}.begun.m4a"
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryFile() as log:
+
+        def begin(niceness: int | None) -> subprocess.Popen[bytes]:
+            log.seek(0)
+            log.truncate()
+            ffmpeg = subprocess.Popen(_page_command(source, partial), stdin=subprocess.DEVNULL,
+                                      stdout=subprocess.DEVNULL, stderr=log)
+            if niceness is not None:  # lowered at once, before it starts its threads (they inherit it)
+                with contextlib.suppress(ProcessLookupError):
+                    os.setpriority(os.PRIO_PROCESS, ffmpeg.pid, niceness)
+            return ffmpeg
+
+        running, hurried = [begin(BEGUN_NICENESS)], [False]
+
+        def hurry() -> None:
+            if not hurried[0] and running[-1].poll() is None and not _raised(running[-1].pid):
+                _stopped(running[-1], partial)
+                running.append(begin(None))
+            hurried[0] = True
+
+        def finish() -> Path:
+            hurry()
+            if running[-1].wait() != 0 or not partial.is_file():
+                log.seek(0)
+                reason = ffmpeg_reason(log.read().decode("utf-8", "replace"))
+                raise AudioError(f"{source}: cannot compress for the page ({reason})")
+            return partial.replace(folder / f"{stem}.m4a")
+
+        try:
+            yield BegunCopy(hurry, finish)
+        finally:
+            if running[-1].poll() is None:
+                _stopped(running[-1], partial)
+
+
+def _stopped(ffmpeg: subprocess.Popen[bytes], partial: Path) -> None:
+    """Stop the running `ffmpeg` and remove the file it was writing, `partial`."""
+    ffmpeg.kill()
+    ffmpeg.wait()
+    partial.unlink(missing_ok=True)
+
+
+def _raised(pid: int) -> bool:
+    """Give every thread of process `pid` this process's niceness; False when that is not allowed.
+    A process or thread that has ended meanwhile counts as raised."""
+    niceness = os.getpriority(os.PRIO_PROCESS, 0)
+    try:
+        threads = os.listdir(f"/proc/{pid}/task")
+    except FileNotFoundError:  # ended (and reaped)
+        return True
+    for thread in threads:
+        try:
+            os.setpriority(os.PRIO_PROCESS, int(thread), niceness)
+        except ProcessLookupError:  # this thread ended meanwhile
+            continue
+        except PermissionError:
+            return False
+    return True
+
+
+def _page_command(source: Path, m4a: Path) -> list[str]:
+    """ffmpeg's arguments making page_copy's AAC file `m4a` of the recording `source`."""
+    return [
+        ffmpeg_exe(), "-nostdin", "-v", "error", "-i", str(source),
+        "-map", "0:a:0", "-vn", "-ac", "1", "-c:a", "aac", *PAGE_CODER, "-b:a", PAGE_BITRATE,
+        "-movflags", "+faststart", str(m4a),
+    ]  # fmt: skip
