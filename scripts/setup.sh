@@ -24,7 +24,7 @@ fi
 # The interpreter: Debian's python3 when it is 3.11 or newer, else the first python3 on PATH
 # (PYTHON=... chooses another). Debian builds it with profile-guided and link-time optimisation; an
 # interpreter built without them (pyenv's default build, this machine kind's python3) runs
-# `cartoonface generate` with ~3 % more CPU and pure-Python loops ~1.4x slower
+# `cartoonface generate` with ~4 % more CPU (0.95x the wall) and pure-Python loops ~1.4x slower
 # (docs/BENCHMARKS.md, "The interpreter").
 if [ -z "${PYTHON:-}" ]; then
   PYTHON=python3

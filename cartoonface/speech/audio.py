@@ -60,7 +60,7 @@ PAGE_BITRATE = "64k"
 PAGE_CODER = ("-aac_coder", "fast")
 # page_copy_begun's niceness: the lowest CPU priority, so that ffmpeg runs on core time the job's own
 # processes leave idle (the start, the analysis's waits, the drawing's joins, the tail) rather than
-# beside them (docs/BENCHMARKS.md, "early": the command 0.93x on the 190 s book).
+# beside them (docs/BENCHMARKS.md, "early": the command 0.96x on the 190 s book).
 BEGUN_NICENESS = 19
 # Containers libsndfile reads exactly (sample count from the header); the rest go through ffmpeg.
 _SOUNDFILE_MAGIC = (b"RIFF", b"RIFX", b"RF64", b"fLaC", b"FORM")
