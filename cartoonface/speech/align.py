@@ -318,8 +318,8 @@ def _duration_scores(ends: np.ndarray, d: np.ndarray, mean: float, pace: np.ndar
     expected duration is scaled by exp of the mean pace at its two ends (the same forwards and
     time-reversed)."""
     read = pace[max(ends[0] - d[-1], 0):ends[-1] + 1]
-    if np.all(read == read[0]):  # one pace (the usual case): the same sums, on one row
-        local = 0.5 * (read[:1, None] + read[:1, None])
+    if np.all(read == read[0]):  # one pace (the usual case): on one row, the mean of two equal paces is that pace
+        local = read[:1, None]
     else:
         local = 0.5 * (pace[ends][:, None] + _before(pace, ends, d, pace[0]))
     ratio = np.log(np.maximum(d, 1) / mean)[None, :] - local

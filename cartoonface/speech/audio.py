@@ -22,7 +22,6 @@ import numpy as np
 import soundfile
 
 from cartoonface.errors import AudioError
-from cartoonface.files import write_bytes_atomic
 
 # Longest recording accepted: 30 minutes (README, "Limits").
 MAX_SECONDS = 30 * 60
@@ -250,19 +249,15 @@ def ffmpeg_reason(stderr: str) -> str:
 
 
 def page_copy(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], stem: str = "audio") -> Path:
-    """Put the recording at `path` into `out_dir` compressed for the page; return the file's path.
+    """Put the recording at `path` into `out_dir` compressed for the page (by ffmpeg at this process's
+    priority, written beside as `stem`.begun.m4a and renamed); return the file's path.
 
     Any format ffmpeg reads becomes `stem`.m4a: AAC-LC, mono, PAGE_BITRATE (every browser plays it;
     the MP4 edit list tells players to skip the encoder's priming, so times stay those of the
     recording). Raises AudioError when the conversion fails.
     """
-    source = Path(path)
-    with tempfile.TemporaryDirectory(prefix="cartoonface-audio-") as tmp:
-        m4a = Path(tmp) / "page.m4a"
-        done = subprocess.run(_page_command(source, m4a), capture_output=True, text=True, errors="replace")
-        if done.returncode != 0 or not m4a.is_file():
-            raise AudioError(f"{source}: cannot compress for the page ({ffmpeg_reason(done.stderr)})")
-        return write_bytes_atomic(Path(out_dir) / f"{stem}.m4a", m4a.read_bytes())
+    with page_copy_begun(path, out_dir, stem, niceness=None) as copy:
+        return copy.finish()
 
 
 @dataclass(frozen=True)
@@ -275,16 +270,17 @@ class BegunCopy:
 
 
 @contextlib.contextmanager
-def page_copy_begun(path: str | os.PathLike[str], out_dir: str | os.PathLike[str],
-                    stem: str = "audio") -> Iterator[BegunCopy]:
+def page_copy_begun(path: str | os.PathLike[str], out_dir: str | os.PathLike[str], stem: str = "audio",
+                    niceness: int | None = BEGUN_NICENESS) -> Iterator[BegunCopy]:
     """page_copy of the recording at `path` into `out_dir` (`stem`.m4a, the same bytes), begun now in
-    an ffmpeg at the lowest CPU priority (BEGUN_NICENESS): it takes core time the caller leaves idle.
+    an ffmpeg at the lowest CPU priority (BEGUN_NICENESS; `niceness` None: this process's): it takes
+    core time the caller leaves idle.
 
     Yields a BegunCopy. Its `hurry` gives that ffmpeg this process's priority; where that is not
     allowed (only root may lower a niceness) it is stopped and begun again at this process's
     priority. Hurried at the latest by `finish`, it never waits long behind other work. On leaving
     the block an unfinished ffmpeg is stopped and its part removed, so nothing is written into
-    `out_dir` after it.
+    `out_dir` after it; a failed one leaves no part either.
     """
     source, folder = Path(path), Path(out_dir)
     partial = folder / f"{stem}.begun.m4a"
@@ -301,7 +297,7 @@ def page_copy_begun(path: str | os.PathLike[str], out_dir: str | os.PathLike[str
                     os.setpriority(os.PRIO_PROCESS, ffmpeg.pid, niceness)
             return ffmpeg
 
-        running, hurried = [begin(BEGUN_NICENESS)], [False]
+        running, hurried = [begin(niceness)], [False]
 
         def hurry() -> None:
             if not hurried[0] and running[-1].poll() is None and not _raised(running[-1].pid):
@@ -312,6 +308,7 @@ def page_copy_begun(path: str | os.PathLike[str], out_dir: str | os.PathLike[str
         def finish() -> Path:
             hurry()
             if running[-1].wait() != 0 or not partial.is_file():
+                partial.unlink(missing_ok=True)
                 log.seek(0)
                 reason = ffmpeg_reason(log.read().decode("utf-8", "replace"))
                 raise AudioError(f"{source}: cannot compress for the page ({reason})")
