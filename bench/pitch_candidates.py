@@ -42,13 +42,14 @@ SAMPLES = Path(__file__).resolve().parent.parent / "samples" / "speech"
 
 @dataclass(frozen=True)
 class Item:
-    """One aligned recording: its audio, syllable starts (n,) s, and the peaks and tracks per count."""
+    """One aligned recording: its audio, syllable starts (n,) s, and the peaks and tracks per
+    setting (a count here, a named time step in bench/pitch_step.py)."""
 
     name: str
     audio: Audio
     starts: np.ndarray
-    peaks: dict[int, tuple[float, ...]]
-    tracks: dict[int, tuple[np.ndarray, np.ndarray]]
+    peaks: dict[object, tuple[float, ...]]
+    tracks: dict[object, tuple[np.ndarray, np.ndarray]]
 
 
 def material() -> list[tuple[str, Path, str, str | None]]:
@@ -69,25 +70,32 @@ def material() -> list[tuple[str, Path, str, str | None]]:
     return rows
 
 
-def track(audio: Audio, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """prosody.pitch_track's (times, f0) with `count` candidates per frame."""
+def track(audio: Audio, count: int, step: float = prosody.TIME_STEP, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """prosody.pitch_track's (times, f0) with `count` candidates per frame, frames every `step` s;
+    `shift` s of silence put before the recording move Praat's frame grid by that much (the times
+    are given back on the recording's clock)."""
     import parselmouth
 
-    sound = parselmouth.Sound(np.asarray(audio.samples, dtype=np.float64), sampling_frequency=float(audio.rate))
-    pitch = sound.to_pitch_ac(time_step=prosody.TIME_STEP, pitch_floor=prosody.PITCH_FLOOR,
+    pad = round(shift * audio.rate)
+    samples = np.concatenate([np.zeros(pad), np.asarray(audio.samples, dtype=np.float64)])
+    sound = parselmouth.Sound(samples, sampling_frequency=float(audio.rate))
+    pitch = sound.to_pitch_ac(time_step=step, pitch_floor=prosody.PITCH_FLOOR,
                               pitch_ceiling=prosody.PITCH_CEILING, max_number_of_candidates=count)
     f0 = np.array(pitch.selected_array["frequency"], dtype=float)
     f0[f0 <= 0] = np.nan
-    return np.array(pitch.xs(), dtype=float), f0
+    return np.array(pitch.xs(), dtype=float) - pad / audio.rate, f0
 
 
-def item(name: str, wav: Path, text: str, language: str | None) -> Item:
-    """Align `wav` once and compute its peaks for every count."""
+def item(name: str, wav: Path, text: str, language: str | None,
+         settings: dict[object, dict[str, float]] | None = None) -> Item:
+    """Align `wav` once and compute its peaks for every setting: name -> track()'s keywords
+    (default: every count of COUNTS)."""
     audio = load_audio(wav)
     alignment = analyse(audio, text, source=str(wav), language=language)
     starts = np.array([s.start for sentence in alignment.sentences for s in sentence.syllables], dtype=float)
-    tracks = {count: track(audio, count) for count in COUNTS}
-    peaks = {count: prosody.pitch_peaks(audio, alignment, tracks[count]) for count in COUNTS}
+    chosen = settings or {count: {"count": count} for count in COUNTS}
+    tracks = {key: track(audio, **{"count": 15, **keywords}) for key, keywords in chosen.items()}  # type: ignore[arg-type]
+    peaks = {key: prosody.pitch_peaks(audio, alignment, tracks[key]) for key in chosen}
     return Item(name, audio, starts, peaks, tracks)
 
 
@@ -96,37 +104,44 @@ def by_syllable(starts: np.ndarray, peaks: tuple[float, ...]) -> dict[int, float
     return {int(np.searchsorted(starts, t + 5e-4, side="right")) - 1: t for t in peaks}
 
 
-def compare(items: list[Item], count: int) -> dict[str, float]:
-    """Figures of `count` against 15 over `items`."""
+def compare(items: list[Item], count: object, reference: object = 15) -> dict[str, float]:
+    """Figures of setting `count` against setting `reference` over `items`: same tuple, peaks added /
+    removed / moved, their share of syllables, the largest move and the moves past a frame, the
+    share of voiced frames with another F0 (when both tracks have the same frames, else NaN)."""
     same = added = removed = moved = syllables = 0
     shifts: list[float] = []
     changed_frames = voiced_frames = 0
+    other_grid = False
     for it in items:
-        old, new = by_syllable(it.starts, it.peaks[15]), by_syllable(it.starts, it.peaks[count])
-        same += it.peaks[15] == it.peaks[count]
+        old, new = by_syllable(it.starts, it.peaks[reference]), by_syllable(it.starts, it.peaks[count])
+        same += it.peaks[reference] == it.peaks[count]
         added += len(new.keys() - old.keys())
         removed += len(old.keys() - new.keys())
         moves = [abs(new[k] - old[k]) for k in old.keys() & new.keys() if new[k] != old[k]]
         moved += len(moves)
         shifts += moves
         syllables += len(it.starts)
-        f_old, f_new = it.tracks[15][1], it.tracks[count][1]
+        f_old, f_new = it.tracks[reference][1], it.tracks[count][1]
+        if len(f_old) != len(f_new):  # other frames: not compared frame by frame
+            other_grid = True
+            continue
         voiced = np.isfinite(f_old) | np.isfinite(f_new)
         voiced_frames += int(voiced.sum())
         changed_frames += int((voiced & ~((f_old == f_new) | (np.isnan(f_old) & np.isnan(f_new)))).sum())
     changed = added + removed + moved
     return {"same": same / len(items), "added": added, "removed": removed, "moved": moved,
             "changed_share": changed / syllables, "max_shift": max(shifts, default=0.0),
-            "frames": changed_frames / max(voiced_frames, 1), "syllables": syllables,
-            "peaks": sum(len(it.peaks[15]) for it in items)}
+            "frames": float("nan") if other_grid else changed_frames / max(voiced_frames, 1),
+            "past_frame": sum(shift > FRAME for shift in shifts), "syllables": syllables,
+            "peaks": sum(len(it.peaks[reference]) for it in items)}
 
 
-def cpu(audio: Audio, count: int) -> float:
-    """Median CPU seconds of 3 tracks of `audio` with `count` candidates."""
+def cpu(audio: Audio, count: int = 15, step: float = prosody.TIME_STEP) -> float:
+    """Median CPU seconds of 3 tracks of `audio` with `count` candidates and frames every `step` s."""
     spent = []
     for _ in range(3):
         started = time.process_time()
-        track(audio, count)
+        track(audio, count, step)
         spent.append(time.process_time() - started)
     return statistics.median(spent)
 

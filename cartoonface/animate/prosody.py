@@ -23,12 +23,15 @@ import numpy as np
 
 from cartoonface.speech.audio import load_audio
 
-# Praat's pitch analysis settings (our choice): 20 ms steps (a syllable of
-# 150-300 ms gets 7-15 frames; a peak's time is then known to 10 ms, well inside
-# the 100 ms a brow is judged by, and the analysis takes about 0.2 s per 3
-# minutes of speech instead of 0.5 s at 10 ms); 75-500 Hz covers adult male and
-# female speakers (Praat's defaults are 75 and 600 Hz).
-TIME_STEP = 0.02  # seconds
+# Praat's pitch analysis settings (our choice). 40 ms steps: Praat's window for To Pitch (ac) is
+# 3 periods of the floor, 40 ms at 75 Hz (Praat's manual, "Sound: To Pitch..."), so the windows
+# tile the recording and every sample is analysed once; a syllable of 150-300 ms gets 4-7 frames
+# and a peak's time is known to 20 ms, well inside the 100 ms a brow is judged by. Other syllables
+# peak than with 20 ms steps on 6-11 % of them, as many as with 20 ms steps whose frames are moved
+# by half a step (6-10 %: which frame of a flat top is highest), and the track takes 0.24 s of CPU
+# per 3 minutes instead of 0.47 s (`bench pitch_step`; docs/BENCHMARKS.md, "step"). 75-500 Hz
+# covers adult male and female speakers (Praat's defaults are 75 and 600 Hz).
+TIME_STEP = 0.04  # seconds
 PITCH_FLOOR = 75.0  # Hz
 PITCH_CEILING = 500.0  # Hz
 SEMITONES = 12.0  # semitones per octave
