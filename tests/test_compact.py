@@ -184,12 +184,23 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
 
 
 def test_two_processes_draw_the_same_bytes(face):
-    """Drawing the states in two processes gives the document one process gives."""
+    """Drawing the states in two processes gives the document one process gives; the caller's
+    `meanwhile` is called once, in this process, either way (and with no reuse search: tolerance 0)."""
+    import os
+
     from cartoonface.render.animation import POOL_STATES
 
     states = talking_about(POOL_STATES + 50)
     assert len(set(states)) >= POOL_STATES
-    assert animation_svg(face, states, FPS, workers=2) == animation_svg(face, states, FPS)
+    called: list[int] = []
+
+    def meanwhile() -> None:
+        called.append(os.getpid())
+
+    assert (animation_svg(face, states, FPS, workers=2, meanwhile=meanwhile)
+            == animation_svg(face, states, FPS, meanwhile=meanwhile))
+    animation_svg(face, states[:5], FPS, tolerance=0, meanwhile=meanwhile)
+    assert called == [os.getpid()] * 3
 
 
 def test_a_helper_begun_before_draws_the_same_bytes(face, monkeypatch):

@@ -12,6 +12,7 @@ and actions.json. docs/output.md describes the folder and the page behaviour.
 from __future__ import annotations
 
 import base64
+import functools
 import os
 import re
 from collections.abc import Sequence
@@ -94,14 +95,26 @@ def check_links(links: Sequence[tuple[str, str]]) -> tuple[Link, ...]:
     return tuple(checked)
 
 
+@functools.cache
 def _environment() -> jinja2.Environment:
-    """The Jinja environment over `templates/`, autoescaping everything."""
+    """The Jinja environment over `templates/`, autoescaping everything: one per process, which
+    keeps the templates it compiled (compile_pages)."""
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(TEMPLATES),
         autoescape=True,
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
     )
+
+
+def compile_page(page: str) -> None:
+    """Compile the templates of the `page` (one of PAGES) into the environment, which keeps them: its
+    own and the parts at the top of `templates/` (those of no page), ~7 ms a process, taken by generate
+    while it would wait (render/animation.py's `meanwhile`) rather than when the page is made."""
+    others = {f"{other}.html" for other in PAGES if other != page}
+    environment = _environment()
+    for name in environment.list_templates(filter_func=lambda name: "/" not in name and name not in others):
+        environment.get_template(name)
 
 
 def inline_svg(svg: bytes) -> Markup:
