@@ -390,13 +390,16 @@ def test_merging_many_drawings_at_once_is_merging_each_alone():
     apart = [path("m10,20c5-6,15-6,20,0l-20,4z"), path("m60,20 20,0 0,8-20,0z"), path("M90,20H110V28H90Z")]
     overlapping = path("m25,20c5-6,15-6,20,0l-20,4z")
     other = path("m200,20 5,0 0,5z", "o")
+    painted = [path("m10,20 5,0 0,5z", "p"), path("m60,20 5,0 0,5z", "p")]  # a paint server: never joined
     use = '<use href="#g1"/>'
     drawings = [apart[:2], [apart[0], use, apart[1]], [], [use, use], [apart[0], overlapping], [other, *apart],
-                [*apart, other, apart[0], apart[2]], [apart[1]], [apart[2], apart[0]], [other], [other, other], apart[:2]]
-    styles = {"n": BROW_STYLE, "o": BROW_STYLE}
+                [*apart, other, apart[0], apart[2]], [apart[1]], [apart[2], apart[0]], [other], [other, other], apart[:2],
+                painted, [*painted, *apart[:2]], [apart[0], *painted, apart[1]]]
+    styles = {"n": BROW_STYLE, "o": BROW_STYLE, "p": {"fill": "url(#g)"}}
     each = [merge_alike(drawing, styles) for drawing in drawings]
     assert merge_all_alike(drawings, styles) == each
-    assert sum(len(merged) < len(drawing) for merged, drawing in zip(each, drawings, strict=True)) >= 4  # some join
+    assert sum(len(merged) < len(drawing) for merged, drawing in zip(each, drawings, strict=True)) >= 5  # some join,
+    assert all(merged[:2] == painted for merged in each[-3:-1]) and each[-1] == drawings[-1]  # never the painted
 
 
 def test_short_ids_are_the_numbers_in_base_36_after_the_letter():
