@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+import os
 import signal
 import sys
 from types import FrameType
@@ -68,12 +69,21 @@ def command() -> int:
     """The `cartoonface` command (and `python -m cartoonface`): main() on sys.argv, its exit code.
     The heap is frozen (gc.freeze) before the process exits, so the interpreter's last collection
     skips what the job left behind: ~0.05 s of CPU after a 3-minute book (docs/BENCHMARKS.md,
-    "Issue 16, where it stands (end of the fourth session of 2026-11-27)").
+    "Issue 16, where it stands (end of the fourth session of 2026-11-27)"). `generate`, which leaves
+    nothing running, ends the process at once instead (os._exit once stdout and stderr are flushed).
 
     SIGTERM (`kill`, `timeout`) ends the command as an exception does (_terminated), so its helper
     processes end with it and nothing half-written is left; `serve` and `worker` set their own."""
     signal.signal(signal.SIGTERM, _terminated)
     code = main()
+    if sys.argv[1:2] == ["generate"]:
+        # its helpers have ended (or end on their own) and its folder is in place or removed: the
+        # interpreter's teardown (modules and objects let go one by one, ~10 ms after a 3-minute
+        # book) is skipped (docs/BENCHMARKS.md, "tail2"); `serve` and `worker` may leave processes
+        # that the interpreter's exit ends
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     gc.freeze()
     return code
 
