@@ -203,6 +203,27 @@ def test_two_processes_draw_the_same_bytes(face):
     assert called == [os.getpid()] * 3
 
 
+def test_a_failing_meanwhile_fails_the_document_and_leaves_no_child(face, capfd):
+    """An exception of `meanwhile` reaches animation_svg's caller; the child searching the rest ends,
+    reporting no error (its result is taken before the exception goes on)."""
+    import multiprocessing
+    import time
+
+    from cartoonface.render.animation import POOL_STATES
+
+    def failing() -> None:
+        raise RuntimeError("meanwhile failed")
+
+    with pytest.raises(RuntimeError, match="meanwhile failed"):
+        animation_svg(face, talking_about(POOL_STATES + 50), FPS, workers=2, meanwhile=failing)
+    waited = 0.0
+    while multiprocessing.active_children() and waited < 10:
+        time.sleep(0.05)
+        waited += 0.05
+    assert not multiprocessing.active_children()
+    assert "Error" not in capfd.readouterr().err
+
+
 def test_a_helper_begun_before_draws_the_same_bytes(face, monkeypatch):
     """A helper process forked before (generate's analysis helper, workers.helper_process) draws the
     second part, handed back through its memory file, which is emptied then: the document one

@@ -81,9 +81,11 @@ def command() -> int:
         # interpreter's teardown (modules and objects let go one by one, ~10 ms after a 3-minute
         # book) is skipped (docs/BENCHMARKS.md, "tail2"); `serve` and `worker` may leave processes
         # that the interpreter's exit ends
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(code)
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+        finally:  # a closed pipe (`| head -0`) loses the summary, not the exit code
+            os._exit(code)
     gc.freeze()
     return code
 

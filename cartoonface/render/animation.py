@@ -293,8 +293,10 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
         drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, parts_read,
                                   progress)
-        meanwhile()
-        other_drawings, other_moved = theirs()
+        try:
+            meanwhile()
+        finally:  # the child's result taken even when `meanwhile` fails: the child does not wait on its pipe
+            other_drawings, other_moved = theirs()
         both = {**drawings, **other_drawings}
         return {name: both[name] for name in names}, {**moved, **other_moved}
 
