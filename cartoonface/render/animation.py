@@ -696,7 +696,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
     shown as that (render/reuse.py); 0: every distinct drawing written in full.
     `meanwhile()` is called once, when this process has searched its share of the reused drawings and
-    would wait for the child searching the rest (the child's share usually takes ~10-20 ms longer:
+    would wait for the child searching the rest (the child's share usually takes ~5-20 ms longer:
     docs/BENCHMARKS.md, "tail2"): work of the caller's that does not need the document (generate's
     page texts) then costs no time.
     """

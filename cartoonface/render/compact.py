@@ -827,7 +827,7 @@ class _Classes(dict[str, str]):
     """The class of each element text asked for (_own_class), read from the text the first time, when
     paths of that class can join (_joinable by `styles`); of any other element, the text itself (no
     class is equal to it: it begins with "<"), so that the drawings holding only runs that cannot join
-    (the two cheeks, filled by a gradient: a third of a book's runs) are not read further."""
+    (the two cheeks, the two ears: filled by gradients; two fifths of a book's runs) are not read further."""
 
     def __init__(self, styles: dict[str, dict[str, str]]) -> None:
         super().__init__()
