@@ -54,10 +54,12 @@ MEDIA_TYPES = {
 }
 LINK_SCHEMES = ("", "http", "https", "mailto")
 # The inline SVG as render/animation.py writes it: a track and its drawings, the end of the
-# document's shared <defs> (the first), a clip path (lxml writes no nested ones).
+# document's shared <defs> (the first), a clip path (lxml writes no nested ones; its content read
+# up to the first "</clipPath>" a "<" at a time, not by a lazy ".*?" a character at a time; one
+# group, so that splitting on it gives the text between clip paths and the clip paths in turn).
 TRACK_DEFS = re.compile(r'(<g data-part="[^"]*">)<defs>')
 DEFS_END = "</defs>"
-CLIP_PATH = re.compile(r"<clipPath\b[^>]*?(?:/>|>.*?</clipPath>)", re.S)
+CLIP_PATH = re.compile(r"(<clipPath\b[^>]*?(?:/>|>[^<]*(?:<(?!/clipPath>)[^<]*)*</clipPath>))")
 HIDDEN_DEFS = '<defs style="display:none">'
 PARTS_DEFS = f'<defs id="{PARTS_ID}">'  # render/animation.py: the parts the tracks' drawings share
 
@@ -138,15 +140,9 @@ def inline_svg(svg: bytes) -> Markup:
     shared_end = text.find(DEFS_END)
     if first_track is None or not 0 <= shared_end < first_track.start():
         return Markup(text)
-    clips: list[str] = []
-
-    def moved(clip: re.Match[str]) -> str:
-        clips.append(clip.group(0))
-        return ""
-
-    tracks = CLIP_PATH.sub(moved, moved_tracks(text[shared_end:]))
-    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", tracks).replace(PARTS_DEFS, f'<defs id="{PARTS_ID}" style="display:none">', 1)
-    return Markup(text[:shared_end] + "".join(clips) + tracks)
+    pieces = CLIP_PATH.split(moved_tracks(text[shared_end:]))  # the text between clip paths, a clip path, ...
+    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", "".join(pieces[::2])).replace(PARTS_DEFS, f'<defs id="{PARTS_ID}" style="display:none">', 1)
+    return Markup(text[:shared_end] + "".join(pieces[1::2]) + tracks)
 
 
 def page_html(
