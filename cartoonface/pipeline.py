@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import os
 import tempfile
 import time
@@ -38,7 +39,7 @@ from cartoonface.face.emotion import EMOTIONS
 from cartoonface.face.model import FaceModel, load_face
 from cartoonface.files import atomic_directory, folder_size, read_user_text, write_text_atomic
 from cartoonface.render.animation import DRAWN_SHARE, animation_svg
-from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, copy_audio, page_html, write_site
+from cartoonface.render.pages import AUDIO_STEM, PAGES, check_links, compile_page, copy_audio, page_html, write_site
 from cartoonface.render.scenery import BACKGROUNDS, CLOTHES
 from cartoonface.speech.audio_only import AUDIO_ONLY_NOTE, transcribed
 from cartoonface.speech.analyse import analyse
@@ -326,10 +327,19 @@ def generate(
             if done >= DRAWN_SHARE:
                 compressed.hurry()
 
+        @functools.cache
+        def texts() -> tuple[str, str, str | None]:
+            """The folder's texts that need no animation: the TextGrid, actions.json and the captions (None:
+            no text, no captions); made, and the pages' templates compiled, while animation_svg would wait
+            for its search's child (its `meanwhile`), not after it."""
+            compile_page(options.page)
+            return (write_textgrid(alignment), actions_to_json(actions),
+                    captions_vtt(alignment) if transcribed(alignment) else None)
+
         report("svg")
         svg = animation_svg(model, states, options.fps, background=options.background, clothes=options.clothes,
                             wide=options.page == "announcer", title=options.title, body=body,
-                            progress=drawing, workers=processes(), helper=helper)
+                            progress=drawing, workers=processes(), helper=helper, meanwhile=texts)
         if helper.pool is not None:  # shut down by animation_svg once it has drawn; not when it drew none
             helper.pool.shutdown(wait=False)  # (few frames): it ends on its own meanwhile
         report("pages")
@@ -337,11 +347,10 @@ def generate(
             with atomic_directory(target) as folder:
                 sources = copy_audio(sound, folder, keep_original=options.keep_original,
                                      compressed=compressed.finish())
-                captions = captions_vtt(alignment) if transcribed(alignment) else None  # no text: no captions
+                textgrid, actions_json, captions = texts()
                 html = page_html(options.page, title=options.title, alignment=alignment, svg=svg, audio=sources,
                                  fps=options.fps, links=options.links, captions=captions)
-                write_site(folder, html=html, svg=svg, textgrid=write_textgrid(alignment),
-                           actions=actions_to_json(actions))
+                write_site(folder, html=html, svg=svg, textgrid=textgrid, actions=actions_json)
                 if captions is not None:
                     write_text_atomic(folder / CAPTIONS_NAME, captions)
                 cues = mouth_cues(alignment) if options.cues else ()  # asked for only

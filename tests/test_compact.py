@@ -184,12 +184,44 @@ def test_parts_collected_from_drawing_processes_tidy_as_collected_in_one(face):
 
 
 def test_two_processes_draw_the_same_bytes(face):
-    """Drawing the states in two processes gives the document one process gives."""
+    """Drawing the states in two processes gives the document one process gives; the caller's
+    `meanwhile` is called once, in this process, either way (and with no reuse search: tolerance 0)."""
+    import os
+
     from cartoonface.render.animation import POOL_STATES
 
     states = talking_about(POOL_STATES + 50)
     assert len(set(states)) >= POOL_STATES
-    assert animation_svg(face, states, FPS, workers=2) == animation_svg(face, states, FPS)
+    called: list[int] = []
+
+    def meanwhile() -> None:
+        called.append(os.getpid())
+
+    assert (animation_svg(face, states, FPS, workers=2, meanwhile=meanwhile)
+            == animation_svg(face, states, FPS, meanwhile=meanwhile))
+    animation_svg(face, states[:5], FPS, tolerance=0, meanwhile=meanwhile)
+    assert called == [os.getpid()] * 3
+
+
+def test_a_failing_meanwhile_fails_the_document_and_leaves_no_child(face, capfd):
+    """An exception of `meanwhile` reaches animation_svg's caller; the child searching the rest ends,
+    reporting no error (its result is taken before the exception goes on)."""
+    import multiprocessing
+    import time
+
+    from cartoonface.render.animation import POOL_STATES
+
+    def failing() -> None:
+        raise RuntimeError("meanwhile failed")
+
+    with pytest.raises(RuntimeError, match="meanwhile failed"):
+        animation_svg(face, talking_about(POOL_STATES + 50), FPS, workers=2, meanwhile=failing)
+    waited = 0.0
+    while multiprocessing.active_children() and waited < 10:
+        time.sleep(0.05)
+        waited += 0.05
+    assert not multiprocessing.active_children()
+    assert "Error" not in capfd.readouterr().err
 
 
 def test_a_helper_begun_before_draws_the_same_bytes(face, monkeypatch):
@@ -379,13 +411,16 @@ def test_merging_many_drawings_at_once_is_merging_each_alone():
     apart = [path("m10,20c5-6,15-6,20,0l-20,4z"), path("m60,20 20,0 0,8-20,0z"), path("M90,20H110V28H90Z")]
     overlapping = path("m25,20c5-6,15-6,20,0l-20,4z")
     other = path("m200,20 5,0 0,5z", "o")
+    painted = [path("m10,20 5,0 0,5z", "p"), path("m60,20 5,0 0,5z", "p")]  # a paint server: never joined
     use = '<use href="#g1"/>'
     drawings = [apart[:2], [apart[0], use, apart[1]], [], [use, use], [apart[0], overlapping], [other, *apart],
-                [*apart, other, apart[0], apart[2]], [apart[1]], [apart[2], apart[0]], [other], [other, other], apart[:2]]
-    styles = {"n": BROW_STYLE, "o": BROW_STYLE}
+                [*apart, other, apart[0], apart[2]], [apart[1]], [apart[2], apart[0]], [other], [other, other], apart[:2],
+                painted, [*painted, *apart[:2]], [apart[0], *painted, apart[1]]]
+    styles = {"n": BROW_STYLE, "o": BROW_STYLE, "p": {"fill": "url(#g)"}}
     each = [merge_alike(drawing, styles) for drawing in drawings]
     assert merge_all_alike(drawings, styles) == each
-    assert sum(len(merged) < len(drawing) for merged, drawing in zip(each, drawings, strict=True)) >= 4  # some join
+    assert sum(len(merged) < len(drawing) for merged, drawing in zip(each, drawings, strict=True)) >= 5  # some join,
+    assert all(merged[:2] == painted for merged in each[-3:-1]) and each[-1] == drawings[-1]  # never the painted
 
 
 def test_short_ids_are_the_numbers_in_base_36_after_the_letter():

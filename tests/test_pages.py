@@ -10,7 +10,7 @@ import soundfile
 from lxml import etree, html
 
 from cartoonface.errors import OptionError
-from cartoonface.render.pages import AudioSource, copy_audio, inline_svg, page_html, write_site
+from cartoonface.render.pages import AudioSource, compile_page, copy_audio, inline_svg, page_html, write_site
 from cartoonface.speech.records import Alignment, Sentence
 
 HOSTILE = '<script>alert("x")</script> & <b>bold</b>'
@@ -85,6 +85,27 @@ def test_announcer_has_caption_slot_and_no_links():
 def test_dangerous_links_are_refused(url):
     with pytest.raises(OptionError, match="link 1"):
         render(links=(("label", url),))
+
+
+@pytest.mark.parametrize("page", ["audiobook", "announcer"])
+def test_a_compiled_page_is_made_without_reading_a_template(page, monkeypatch):
+    """After compile_page (generate calls it while its animation waits for the reuse search) the page is
+    rendered from the templates kept: none is read again, and the page is the one a new environment makes."""
+    import cartoonface.render.pages as pages
+
+    pages._environment.cache_clear()  # a new environment, as a new process has
+    compile_page(page)
+    loader = pages._environment().loader
+    assert loader is not None
+
+    def unreadable(environment, name):
+        raise AssertionError(f"{name} read again")
+
+    with monkeypatch.context() as patched:
+        patched.setattr(loader, "get_source", unreadable)
+        made = html.tostring(render(page))
+    pages._environment.cache_clear()
+    assert made == html.tostring(render(page))
 
 
 def test_unknown_page_is_refused():

@@ -254,7 +254,8 @@ def _key_times(frames: int, fps: int) -> tuple[np.ndarray, str]:
 
 
 def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], tolerance: float,
-           progress: Callable[[float], None], parts_read: Read, workers: int = 1) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
+           progress: Callable[[float], None], parts_read: Read, workers: int = 1,
+           meanwhile: Callable[[], object] = lambda: None) -> Callable[[], tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]]:
     """A getter of the drawings of each of `tracks` shown as a transform of an earlier drawing of
     their track within `tolerance` px (render/reuse.py's find; none for 0), by track and drawing
     number; and of the ALONE parts (tidy part numbers: mouths, eyes, face outlines) of the drawings
@@ -268,9 +269,14 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     (workers.forked; the same result), the rest when the getter is called, which then waits for
     the child. `progress(fraction)` is told the share done (REUSE_STEPS) as this process has read
     the points, searched each of its tracks and its parts. `parts_read` (_drawings'): the parts as the
-    drawing processes read them, whose points the search takes (emptied by the search here, _search)."""
+    drawing processes read them, whose points the search takes (emptied by the search here, _search).
+    The getter calls `meanwhile()` once, after this process's search and before it waits for the child's."""
     if tolerance <= 0:
-        return lambda: ({name: {} for name in tracks}, {})
+        def none_reused() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
+            meanwhile()
+            return {name: {} for name in tracks}, {}
+
+        return none_reused
     first: dict[int, int] = {}
     for raw, tidy in enumerate(mapping):
         first.setdefault(tidy, raw)
@@ -287,7 +293,10 @@ def _reuse(tracks: dict[str, _Track], writer: Writer, mapping: Sequence[int], to
     def result() -> tuple[dict[str, dict[int, Reuse]], dict[int, Reuse]]:
         drawings, moved = _search({names[index]: tracks[names[index]] for index in here}, writer, first, tolerance, parts_read,
                                   progress)
-        other_drawings, other_moved = theirs()
+        try:
+            meanwhile()
+        finally:  # the child's result taken even when `meanwhile` fails: the child does not wait on its pipe
+            other_drawings, other_moved = theirs()
         both = {**drawings, **other_drawings}
         return {name: both[name] for name in names}, {**moved, **other_moved}
 
@@ -664,7 +673,8 @@ def _collected(writer: Writer, drawings: Numbered, drawn: Drawn, where: dict[Dra
 def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, background: str = "plain",
                   clothes: str = "none", wide: bool = False, title: str = "",
                   body: BodyMotion | None = None, progress: Callable[[float], None] | None = None,
-                  workers: int = 1, tolerance: float = TOLERANCE, helper: Helper | None = None) -> bytes:
+                  workers: int = 1, tolerance: float = TOLERANCE, helper: Helper | None = None,
+                  meanwhile: Callable[[], object] = lambda: None) -> bytes:
     """The animation of `states` (frame i shows time i / fps s) as a standalone SVG document (UTF-8 bytes).
 
     `background` and `clothes` name the scenery layers (render/scenery.py);
@@ -685,6 +695,10 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     is shut down once that part is back (the process ends on its own).
     `tolerance` (px): a drawing within it of a transform of an earlier drawing of its track is
     shown as that (render/reuse.py); 0: every distinct drawing written in full.
+    `meanwhile()` is called once, when this process has searched its share of the reused drawings and
+    would wait for the child searching the rest (the child's share usually takes ~5-20 ms longer:
+    docs/BENCHMARKS.md, "tail2"): work of the caller's that does not need the document (generate's
+    page texts) then costs no time.
     """
     report = progress or (lambda fraction: None)
     width, height = float(face.width), float(face.height)
@@ -713,7 +727,7 @@ def animation_svg(face: FaceModel, states: Sequence[FaceState], fps: int, *, bac
     tracks = _tracks(raw, distinct, shown, [part.label for part in writer.raw], mapping)
     # the reuse search begun (half the tracks in a child) before the tidy drawings are made here
     reuse = _reuse(tracks, writer, mapping, tolerance,
-                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), read, workers)
+                   lambda done: report(TIDIED_SHARE + (REUSED_SHARE - TIDIED_SHARE) * done), read, workers, meanwhile)
     tidy = writer.drawings()
     defs.extend(writer.definitions)  # clip paths several drawings share (an eye's, under any gaze)
     report(TIDIED_SHARE)

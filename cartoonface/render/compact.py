@@ -798,7 +798,7 @@ def merge_alike(elements: list[str], styles: dict[str, dict[str, str]],
     lie apart (MERGE_GAP beyond half the stroke) written as one path: the same pixels, one element
     (the two brows). A path data's extent is taken from `extents` (Writer.extents: read off its
     numbers) when it is there, else read (_extent)."""
-    labels = [_own_class(text) or text for text in elements]
+    labels = list(map(_Classes(styles).__getitem__, elements))
     if not any(map(operator.eq, labels, labels[1:])):
         return list(elements)  # only consecutive paths of one class join: none here (most drawings)
     return _joined(elements, labels, styles, extents)
@@ -811,7 +811,7 @@ def merge_all_alike(drawings: Sequence[list[str]], styles: dict[str, dict[str, s
     shared part's `<use>`); only the drawings with two consecutive elements of one class are read
     further (about one in eight of a book's). A loop over the drawings took twice as long."""
     elements = list(chain.from_iterable(drawings))
-    labels = list(map(_Classes().__getitem__, elements))
+    labels = list(map(_Classes(styles).__getitem__, elements))
     ends = list(accumulate(map(len, drawings)))  # of each drawing in `elements`: its first is the next's
     firsts = set(ends)
     alike = {bisect_right(ends, at) for at in compress(range(1, len(elements)), map(operator.eq, labels, labels[1:]))
@@ -824,12 +824,25 @@ def merge_all_alike(drawings: Sequence[list[str]], styles: dict[str, dict[str, s
 
 
 class _Classes(dict[str, str]):
-    """The class of each element text asked for (_own_class), read from the text the first time; of
-    an element without a class, the text itself (no class is equal to it: it begins with "<")."""
+    """The class of each element text asked for (_own_class), read from the text the first time, when
+    paths of that class can join (_joinable by `styles`); of any other element, the text itself (no
+    class is equal to it: it begins with "<"), so that the drawings holding only runs that cannot join
+    (the two cheeks, the two ears: filled by gradients; two fifths of a book's runs) are not read further."""
+
+    def __init__(self, styles: dict[str, dict[str, str]]) -> None:
+        super().__init__()
+        self.joinable = {name: _joinable(style) for name, style in styles.items()}
 
     def __missing__(self, text: str) -> str:
-        label = self[text] = _own_class(text) or text
+        own = _own_class(text)
+        label = self[text] = text if own is None or not self.joinable.get(own, False) else own
         return label
+
+
+def _joinable(style: dict[str, str] | None) -> bool:
+    """Whether paths of the class whose declarations are `style` (None: no such class) may be joined
+    into one: opaque, no paint server."""
+    return style is not None and not any("url(" in value or "opacity" in name for name, value in style.items())
 
 
 def _joined(elements: list[str], labels: list[str], styles: dict[str, dict[str, str]],
@@ -854,8 +867,8 @@ def _joined_run(elements: list[str], styles: dict[str, dict[str, str]], extents:
         label = attrs.get("class")
         style = styles.get(label or "")
         d = _text(attrs.get("d", ""))
-        extent = ((known.get(d) or _extent(d)) if tag == "path" and set(attrs) == {"d", "class"}
-                  and style is not None and not any("url(" in v or "opacity" in k for k, v in style.items()) else None)
+        extent = ((known.get(d) or _extent(d)) if tag == "path" and set(attrs) == {"d", "class"} and _joinable(style)
+                  else None)
         if extent is not None and merged and last_class == label and boxes:
             pad = float((style or {}).get("stroke-width", "1")) + MERGE_GAP
             if all(a[2] + pad < extent[0] or extent[2] + pad < a[0] or a[3] + pad < extent[1] or extent[3] + pad < a[1]

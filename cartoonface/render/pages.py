@@ -12,6 +12,7 @@ and actions.json. docs/output.md describes the folder and the page behaviour.
 from __future__ import annotations
 
 import base64
+import functools
 import os
 import re
 from collections.abc import Sequence
@@ -53,10 +54,12 @@ MEDIA_TYPES = {
 }
 LINK_SCHEMES = ("", "http", "https", "mailto")
 # The inline SVG as render/animation.py writes it: a track and its drawings, the end of the
-# document's shared <defs> (the first), a clip path (lxml writes no nested ones).
+# document's shared <defs> (the first), a clip path (lxml writes no nested ones; its content read
+# up to the first "</clipPath>" a "<" at a time, not by a lazy ".*?" a character at a time; one
+# group, so that splitting on it gives the text between clip paths and the clip paths in turn).
 TRACK_DEFS = re.compile(r'(<g data-part="[^"]*">)<defs>')
 DEFS_END = "</defs>"
-CLIP_PATH = re.compile(r"<clipPath\b[^>]*?(?:/>|>.*?</clipPath>)", re.S)
+CLIP_PATH = re.compile(r"(<clipPath\b[^>]*?(?:/>|>[^<]*(?:<(?!/clipPath>)[^<]*)*</clipPath>))")
 HIDDEN_DEFS = '<defs style="display:none">'
 PARTS_DEFS = f'<defs id="{PARTS_ID}">'  # render/animation.py: the parts the tracks' drawings share
 
@@ -94,14 +97,26 @@ def check_links(links: Sequence[tuple[str, str]]) -> tuple[Link, ...]:
     return tuple(checked)
 
 
+@functools.cache
 def _environment() -> jinja2.Environment:
-    """The Jinja environment over `templates/`, autoescaping everything."""
+    """The Jinja environment over `templates/`, autoescaping everything: one per process, which
+    keeps the templates it compiled (compile_pages)."""
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(TEMPLATES),
         autoescape=True,
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
     )
+
+
+def compile_page(page: str) -> None:
+    """Compile the templates of the `page` (one of PAGES) into the environment, which keeps them: its
+    own and the parts at the top of `templates/` (those of no page), ~7 ms a process, taken by generate
+    while it would wait (render/animation.py's `meanwhile`) rather than when the page is made."""
+    others = {f"{other}.html" for other in PAGES if other != page}
+    environment = _environment()
+    for name in environment.list_templates(filter_func=lambda name: "/" not in name and name not in others):
+        environment.get_template(name)
 
 
 def inline_svg(svg: bytes) -> Markup:
@@ -125,15 +140,9 @@ def inline_svg(svg: bytes) -> Markup:
     shared_end = text.find(DEFS_END)
     if first_track is None or not 0 <= shared_end < first_track.start():
         return Markup(text)
-    clips: list[str] = []
-
-    def moved(clip: re.Match[str]) -> str:
-        clips.append(clip.group(0))
-        return ""
-
-    tracks = CLIP_PATH.sub(moved, moved_tracks(text[shared_end:]))
-    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", tracks).replace(PARTS_DEFS, f'<defs id="{PARTS_ID}" style="display:none">', 1)
-    return Markup(text[:shared_end] + "".join(clips) + tracks)
+    pieces = CLIP_PATH.split(moved_tracks(text[shared_end:]))  # the text between clip paths, a clip path, ...
+    tracks = TRACK_DEFS.sub(rf"\1{HIDDEN_DEFS}", "".join(pieces[::2])).replace(PARTS_DEFS, f'<defs id="{PARTS_ID}" style="display:none">', 1)
+    return Markup(text[:shared_end] + "".join(pieces[1::2]) + tracks)
 
 
 def page_html(
