@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cartoonface.cli.generate import begun
@@ -174,3 +175,23 @@ def test_sigterm_during_the_analysis_ends_the_command_and_its_helpers(tmp_path):
             command.kill()
             for pid in _processes_naming(str(out)):
                 os.kill(pid, signal.SIGKILL)
+
+
+def test_an_early_error_is_the_only_thing_said_and_nothing_is_left_running(tmp_path):
+    # the transcript is refused before the pitch track begun in a child is taken: the child ends
+    # with the command and says nothing (it inherits the command's SIGTERM handler). The recording
+    # is long enough (175 s) that its track (~70 KB) does not fit in a pipe: the child is still
+    # sending it when the command ends
+    import soundfile
+
+    samples, rate = soundfile.read(STORY, dtype="float32")
+    long = tmp_path / "long.wav"
+    soundfile.write(long, np.tile(samples, -(-175 * rate // len(samples))), rate)
+    transcript = tmp_path / "empty.txt"
+    transcript.write_text("  \n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "cartoonface", *generate_args(long, transcript, tmp_path / "site")],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120)  # returns: no child holds its pipes
+    assert done.returncode == 2
+    errors = [line for line in done.stderr.splitlines() if line.startswith("cartoonface:")]
+    assert errors == [f"cartoonface: error: {transcript}: the transcript is empty; expected the text spoken in the recording"]
+    assert not (tmp_path / "site").exists()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+import multiprocessing
 import signal
 import sys
 from types import FrameType
@@ -81,6 +82,9 @@ def command() -> int:
 def _terminated(signum: int, frame: FrameType | None) -> None:
     """SIGTERM's handler: exit 143 (128 + 15) through the interpreter's exit, not the signal's
     default. The default ended this process alone: the helpers that `generate` forks (workers.py)
-    then waited forever to send their results, and its staging folder stayed behind."""
-    print("cartoonface: terminated", file=sys.stderr)
+    then waited forever to send their results, and its staging folder stayed behind. Said by the
+    command itself only: its helper processes inherit the handler, and a helper ended by the
+    command's own exit (an error before its result was taken) is no news to the user."""
+    if multiprocessing.parent_process() is None:
+        print("cartoonface: terminated", file=sys.stderr)
     raise SystemExit(128 + signum)
