@@ -34,6 +34,7 @@ from bench.generate import TARGET_SECONDS, build_input
 from cartoonface.animate import prosody
 from cartoonface.speech.analyse import analyse
 from cartoonface.speech.audio import Audio, load_audio
+from cartoonface.speech.pitch import pitch_track
 
 COUNTS = range(15, 5, -1)  # Praat's default first: the reference
 FRAME = 1 / 30  # seconds: a peak moved by more than one frame at 30 fps is seen elsewhere
@@ -70,14 +71,19 @@ def material() -> list[tuple[str, Path, str, str | None]]:
     return rows
 
 
-def track(audio: Audio, count: int, step: float = prosody.TIME_STEP, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """prosody.pitch_track's (times, f0) with `count` candidates per frame, frames every `step` s;
-    `shift` s of silence put before the recording move Praat's frame grid by that much (the times
-    are given back on the recording's clock)."""
+def track(audio: Audio, count: int, step: float = prosody.TIME_STEP, shift: float = 0.0,
+          ours: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Praat's To Pitch (ac) (times, f0) with `count` candidates per frame, frames every `step` s
+    (`ours`: speech/pitch.py's instead, prosody.pitch_track's tracker, its own count); `shift` s of
+    silence put before the recording move the frame grid by that much (the times are given back on
+    the recording's clock)."""
     import parselmouth
 
     pad = round(shift * audio.rate)
     samples = np.concatenate([np.zeros(pad), np.asarray(audio.samples, dtype=np.float64)])
+    if ours:
+        times, f0 = pitch_track(samples, audio.rate, step, prosody.PITCH_FLOOR, prosody.PITCH_CEILING)
+        return times - pad / audio.rate, f0
     sound = parselmouth.Sound(samples, sampling_frequency=float(audio.rate))
     pitch = sound.to_pitch_ac(time_step=step, pitch_floor=prosody.PITCH_FLOOR,
                               pitch_ceiling=prosody.PITCH_CEILING, max_number_of_candidates=count)
@@ -136,12 +142,13 @@ def compare(items: list[Item], count: object, reference: object = 15) -> dict[st
             "peaks": sum(len(it.peaks[reference]) for it in items)}
 
 
-def cpu(audio: Audio, count: int = 15, step: float = prosody.TIME_STEP) -> float:
-    """Median CPU seconds of 3 tracks of `audio` with `count` candidates and frames every `step` s."""
+def cpu(audio: Audio, count: int = 15, step: float = prosody.TIME_STEP, ours: bool = False) -> float:
+    """Median CPU seconds of 3 tracks of `audio` with `count` candidates and frames every `step` s
+    (`ours`: speech/pitch.py's)."""
     spent = []
     for _ in range(3):
         started = time.process_time()
-        track(audio, count, step)
+        track(audio, count, step, ours=ours)
         spent.append(time.process_time() - started)
     return statistics.median(spent)
 

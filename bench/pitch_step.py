@@ -33,6 +33,8 @@ SETTINGS: dict[object, dict[str, float]] = {
     "30 ms": {"step": 0.03},
     "40 ms": {"step": 0.04},
     "40 ms, frames moved 20 ms": {"step": 0.04, "shift": 0.02},
+    "speech/pitch.py, 40 ms": {"step": 0.04, "ours": True},
+    "speech/pitch.py, 40 ms, frames moved 20 ms": {"step": 0.04, "shift": 0.02, "ours": True},
 }
 
 
@@ -43,7 +45,8 @@ def table(title: str, items: list[Item], book: Item | None) -> None:
     print("| --- | --- | --- | --- | --- | --- |")
     for name, keywords in SETTINGS.items():
         c = compare(items, name, REFERENCE)
-        spent = f"{cpu(book.audio, step=keywords['step']):.3f} s" if book is not None and "shift" not in keywords else ""
+        spent = (f"{cpu(book.audio, step=keywords['step'], ours=bool(keywords.get('ours'))):.3f} s"
+                 if book is not None and "shift" not in keywords else "")
         print(f"| {name} | {c['added']} / {c['removed']} / {c['moved']} | {100 * (c['added'] + c['removed']) / c['syllables']:.1f} % of "
               f"{c['syllables']} ({c['peaks']} peaks at {REFERENCE}) | {c['past_frame']} | "
               f"{1000 * c['max_shift']:.0f} ms | {spent} |")

@@ -109,14 +109,14 @@ def test_unwritable_output_is_a_one_line_error(inputs, tmp_path):
 STORY = ROOT / "samples" / "speech" / "story.wav"
 # A fresh interpreter begins the track as `cartoonface generate` does, before the library's imports;
 # prints whether numpy was imported by then, the children it had, whether the track is the one
-# prosody computes here and whether this process ever imported parselmouth to get it.
+# prosody computes here and whether this process ever imported the tracker (speech/pitch.py) to get it.
 BEGUN = """
 import multiprocessing, sys
 from cartoonface.cli.generate import begun
 recording, pitch = begun(sys.argv[1:])
 print("numpy" in sys.modules, len(multiprocessing.active_children()))
 times, f0 = pitch()
-taken_here = "parselmouth" in sys.modules
+taken_here = "cartoonface.speech.pitch" in sys.modules
 import numpy as np
 from cartoonface.animate.prosody import recording_pitch
 mine = recording_pitch(recording)

@@ -4,7 +4,7 @@
 syllables that stand out from their neighbours, the places where speakers
 raise their brows and nod (Cave et al. 1996; Flecha-Garcia 2010; see
 docs/animation.md "On the voice"). F0 comes from Praat's autocorrelation
-pitch tracker through parselmouth (Boersma 1993).
+method (Boersma 1993), in numpy (speech/pitch.py).
 
 A syllable is a peak when its highest F0, in semitones above the median F0
 of the whole recording, is at least PEAK_MIN semitones and higher than the
@@ -21,6 +21,7 @@ import os
 
 import numpy as np
 
+from cartoonface.speech import pitch as speech_pitch
 from cartoonface.speech.audio import load_audio
 
 # Praat's pitch analysis settings (our choice). 40 ms steps: Praat's window for To Pitch (ac) is
@@ -28,9 +29,10 @@ from cartoonface.speech.audio import load_audio
 # tile the recording and every sample is analysed once; a syllable of 150-300 ms gets 4-7 frames
 # and a peak's time is known to 20 ms, well inside the 100 ms a brow is judged by. Other syllables
 # peak than with 20 ms steps on 6-11 % of them, as many as with 20 ms steps whose frames are moved
-# by half a step (6-10 %: which frame of a flat top is highest), and the track takes 0.24 s of CPU
-# per 3 minutes instead of 0.47 s (`bench pitch_step`; docs/BENCHMARKS.md, "step"). 75-500 Hz
-# covers adult male and female speakers (Praat's defaults are 75 and 600 Hz).
+# by half a step (6-10 %: which frame of a flat top is highest), and Praat's track took 0.24 s of
+# CPU per 3 minutes instead of 0.47 s (`bench pitch_step`; docs/BENCHMARKS.md, "step"; speech/pitch.py
+# does the same analysis in ~0.12 s, "track"). 75-500 Hz covers adult male and female speakers
+# (Praat's defaults are 75 and 600 Hz).
 TIME_STEP = 0.04  # seconds
 PITCH_FLOOR = 75.0  # Hz
 PITCH_CEILING = 500.0  # Hz
@@ -39,17 +41,12 @@ PEAK_MIN = 1.0  # semitones above the recording's median F0 for a peak (our choi
 
 
 def pitch_track(samples: np.ndarray, rate: int) -> tuple[np.ndarray, np.ndarray]:
-    """F0 of mono `samples` ((n,) float in [-1, 1]) at `rate` Hz.
+    """F0 of mono `samples` ((n,) float in [-1, 1]) at `rate` Hz (speech/pitch.py: Praat's
+    autocorrelation method) every TIME_STEP s between PITCH_FLOOR and PITCH_CEILING.
 
     Returns (times (m,) seconds, f0 (m,) Hz with NaN where unvoiced).
     """
-    import parselmouth  # here (0.1 s): generate's helper process computes the track, and imports it there
-
-    sound = parselmouth.Sound(np.asarray(samples, dtype=np.float64), sampling_frequency=float(rate))
-    pitch = sound.to_pitch(time_step=TIME_STEP, pitch_floor=PITCH_FLOOR, pitch_ceiling=PITCH_CEILING)
-    f0 = np.array(pitch.selected_array["frequency"], dtype=float)
-    f0[f0 <= 0] = np.nan
-    return np.array(pitch.xs(), dtype=float), f0
+    return speech_pitch.pitch_track(samples, rate, TIME_STEP, PITCH_FLOOR, PITCH_CEILING)
 
 
 def recording_pitch(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
