@@ -31,7 +31,9 @@ OCTAVE_COST = 0.01  # per octave: favours higher candidates (a perfectly periodi
 OCTAVE_JUMP_COST = 0.35  # per octave between voiced frames, for 10 ms steps
 VOICED_UNVOICED_COST = 0.14  # per change of voicing, for 10 ms steps
 COST_STEP = 0.01  # s: the step the two costs above are given for (Praat scales them by COST_STEP / step)
-CHUNK = 2048  # frames analysed at a time (their windows and spectra: a few MB)
+CHUNK = 128  # frames analysed at a time: their windows and spectra (~1 MB) are freed memory used again,
+# where 2048 at a time (~30 MB) made fresh pages for each: 9,000-13,000 page faults against 2,000-3,400
+# and 0.03 s more of CPU on 190 s
 
 
 def pitch_track(samples: np.ndarray, rate: int, step: float, floor: float, ceiling: float) -> tuple[np.ndarray, np.ndarray]:
