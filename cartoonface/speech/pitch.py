@@ -2,9 +2,9 @@
 (ac)..." with its standard settings and a Hanning window, in numpy.
 
 Praat through parselmouth took 0.09 s of CPU to import (its whole program is set up at load) and
-0.24 s per 3 minutes at 40 ms steps; this takes ~0.05 s and imports nothing. The accent peaks
-(animate/prosody.py) it gives differ from Praat's about as much as Praat's own differ when its
-frames are moved by half a step (`bench pitch_step`; docs/BENCHMARKS.md, "track").
+0.24 s per 3 minutes at 40 ms steps; this takes ~0.1 s and imports nothing but numpy. The accent
+peaks (animate/prosody.py) it gives differ from Praat's about as much as Praat's own differ when
+its frames are moved by half a step (`bench pitch_step`; docs/BENCHMARKS.md, "track").
 
 Per frame (every `step` s, centred in the recording as Praat places them): the samples of a window
 of PERIODS periods of the pitch floor less their local mean (over two floor periods), Hanning

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import parselmouth  # noqa: F401  (loaded in the forkserver that preloads this module, before a job's memory
-# limit: generate imports it only where the pitch track is made, and under RLIMIT_AS a library may fail to map)
+# limit: generate imports it only for the formants of a job without a transcript (speech/audio_only.py), and
+# under RLIMIT_AS a library may fail to map)
 
 from cartoonface.errors import InputError
 from cartoonface.exports.cues import FORMATS as CUE_FORMATS
