@@ -18,11 +18,7 @@ Run: `.venv/bin/python -m bench pitch_step` from the project root (~1 minute).
 
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
-
-from bench.generate import TARGET_SECONDS, build_input
-from bench.pitch_candidates import Item, compare, cpu, item, material
+from bench.pitch_candidates import Item, aligned_items, compare, cpu
 
 REFERENCE = "20 ms"
 # name -> bench/pitch_candidates.track's keywords: time step and frame shift (s)
@@ -54,15 +50,10 @@ def table(title: str, items: list[Item], book: Item | None) -> None:
 
 def main() -> None:
     """Align every recording, compare the peaks per setting, print the tuning, held-out and book tables."""
-    with tempfile.TemporaryDirectory() as tmp:
-        book, text, _ = build_input(Path(tmp), TARGET_SECONDS)
-        rows = [*material(), ("thchs30_book_190s", book, text.read_text(encoding="utf-8"), "zh")]
-        items = sorted((item(*row, settings=SETTINGS) for row in rows), key=lambda it: it.name)
-    the_book = next(it for it in items if it.name == "thchs30_book_190s")
-    distinct = [it for it in items if it is not the_book]
+    distinct, book = aligned_items(SETTINGS)
     table("tuning half (even positions)", distinct[0::2], None)
     table("held-out half (odd positions)", distinct[1::2], None)
-    table("the 190 s book", [the_book], the_book)
+    table("the 190 s book", [book], book)
 
 
 if __name__ == "__main__":
