@@ -8,6 +8,7 @@ import parselmouth
 import pytest
 
 from cartoonface.speech.audio import load_audio
+from cartoonface.speech.dsp import resample_poly
 from cartoonface.speech.pitch import pitch_track
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,6 +41,19 @@ def test_real_speech_gives_praats_frames_voicing_and_f0(path, step):
     both = voiced & their_voiced
     assert (np.abs(f0[both] / theirs[both] - 1) < 0.01).mean() > 0.99
     assert (np.abs(f0[both] / theirs[both] - 1) < 0.002).mean() > 0.96  # parabolic against Praat's sinc interpolation
+
+
+@pytest.mark.parametrize("rate", [8000, 11025])
+def test_a_recording_at_a_telephone_rate_gives_praats_f0_too(rate):
+    audio = load_audio(SPEECH[0])
+    low = resample_poly(audio.samples, rate, audio.rate).astype(np.float32)
+    times, f0 = pitch_track(low, rate, 0.04, 75.0, 500.0)
+    their_times, theirs = praat(low, rate, 0.04)
+    assert np.allclose(times, their_times, atol=1e-9)
+    voiced, their_voiced = np.isfinite(f0), np.isfinite(theirs)
+    assert (voiced == their_voiced).mean() > 0.99
+    both = voiced & their_voiced
+    assert (np.abs(f0[both] / theirs[both] - 1) < 0.01).mean() > 0.99
 
 
 @pytest.mark.parametrize("f0", [90.0, 180.0, 310.0])

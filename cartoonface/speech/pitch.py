@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cartoonface.speech.dsp import resample_poly
+
 # Praat's standard values for To Pitch (ac) (Praat's manual, "Sound: To Pitch (ac)..."): the window
 # is PERIODS periods of the pitch floor long; the candidates and the path's costs.
 PERIODS = 3.0
@@ -31,6 +33,10 @@ OCTAVE_COST = 0.01  # per octave: favours higher candidates (a perfectly periodi
 OCTAVE_JUMP_COST = 0.35  # per octave between voiced frames, for 10 ms steps
 VOICED_UNVOICED_COST = 0.14  # per change of voicing, for 10 ms steps
 COST_STEP = 0.01  # s: the step the two costs above are given for (Praat scales them by COST_STEP / step)
+# Below this rate the recording is first up-sampled by a whole factor: the autocorrelation's
+# parabolic interpolation is then as fine as Praat's sinc interpolation (the sample story at 8 kHz:
+# 7 % of F0s over 1 % from Praat's, none once up-sampled to 16 kHz; none at 16 kHz or above).
+MIN_RATE = 16000  # Hz
 CHUNK = 128  # frames analysed at a time: their windows and spectra (~1 MB) are freed memory used again,
 # where 2048 at a time (~30 MB) made fresh pages for each: 9,000-13,000 page faults against 2,000-3,400
 # and 0.03 s more of CPU on 190 s
@@ -41,6 +47,9 @@ def pitch_track(samples: np.ndarray, rate: int, step: float, floor: float, ceili
     `floor` and `ceiling` Hz. Returns (times (m,) s, f0 (m,) Hz with NaN where unvoiced); m = 0
     when the recording is shorter than a window."""
     x = np.asarray(samples, dtype=np.float32)
+    if rate < MIN_RATE:
+        factor = -(-MIN_RATE // rate)
+        x, rate = resample_poly(x, factor, 1).astype(np.float32, copy=False), rate * factor
     length = int(PERIODS / floor * rate) // 2 * 2  # window, samples (even, as Praat's)
     period = int(rate / floor)
     count = int(np.floor((len(x) / rate - PERIODS / floor) / step + 1e-9)) + 1 if len(x) >= length else 0
