@@ -78,13 +78,13 @@ def track(audio: Audio, count: int, step: float = prosody.TIME_STEP, shift: floa
     (`ours`: speech/pitch.py's instead, prosody.pitch_track's tracker, its own count); `shift` s of
     silence put before the recording move the frame grid by that much (the times are given back on
     the recording's clock)."""
-    import parselmouth
-
     pad = round(shift * audio.rate)
     samples = np.concatenate([np.zeros(pad), np.asarray(audio.samples, dtype=np.float64)])
     if ours:
         times, f0 = pitch_track(samples, audio.rate, step, prosody.PITCH_FLOOR, prosody.PITCH_CEILING)
         return times - pad / audio.rate, f0
+    import parselmouth  # Praat's own: imported only for its tracks
+
     sound = parselmouth.Sound(samples, sampling_frequency=float(audio.rate))
     pitch = sound.to_pitch_ac(time_step=step, pitch_floor=prosody.PITCH_FLOOR,
                               pitch_ceiling=prosody.PITCH_CEILING, max_number_of_candidates=count)

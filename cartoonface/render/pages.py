@@ -100,7 +100,7 @@ def check_links(links: Sequence[tuple[str, str]]) -> tuple[Link, ...]:
 @functools.cache
 def _environment() -> jinja2.Environment:
     """The Jinja environment over `templates/`, autoescaping everything: one per process, which
-    keeps the templates it compiled (compile_pages)."""
+    keeps the templates it compiled (compile_page)."""
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(TEMPLATES),
         autoescape=True,

@@ -136,7 +136,7 @@ def _path(frequency: np.ndarray, strength: np.ndarray, step: float) -> np.ndarra
         for i, move in enumerate(moves, first):
             total = score[:, None] + move
             back[i] = total.argmax(axis=0)
-            score = total[back[i], np.arange(used)]
+            score = total.max(axis=0)
     f0 = np.empty(len(gain))
     choice = int(score.argmax())
     for i in range(len(gain) - 1, -1, -1):
